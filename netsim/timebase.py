@@ -1,0 +1,165 @@
+"""Simulation time as integer nanoseconds.
+
+Every instant and duration inside netsim is an ``int`` number of nanoseconds. Seconds (floats) appear
+only at the plant integrator and at the user interface. Integer time keeps coincidences exact: a 2 ms
+and a 3 ms period meet every 6 ms forever, and a 20 us loop is exactly 20 us after a million periods.
+
+Examples
+--------
+>>> parse_time("20 us")
+20000
+>>> parse_time("1.5 ms")
+1500000
+>>> to_seconds(parse_time("2 s"))
+2.0
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from typing import Final
+
+__all__ = [
+    "NS",
+    "US",
+    "MS",
+    "S",
+    "UNITS",
+    "TimeParseError",
+    "parse_time",
+    "parse_duration",
+    "to_seconds",
+    "from_seconds",
+    "format_time",
+]
+
+NS: Final[int] = 1
+US: Final[int] = 1_000
+MS: Final[int] = 1_000_000
+S: Final[int] = 1_000_000_000
+
+#: Accepted unit spellings and their length in nanoseconds.
+UNITS: Final[dict[str, int]] = {
+    "ns": NS,
+    "us": US,
+    "µs": US,
+    "μs": US,
+    "ms": MS,
+    "s": S,
+    "min": 60 * S,
+    "h": 3600 * S,
+}
+
+_PATTERN = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*?)?\s*$")
+
+
+class TimeParseError(ValueError):
+    """A time string could not be understood; the message says what to change."""
+
+
+_LONG_NAMES: Final[dict[str, str]] = {
+    "nsec": "ns", "nanosecond": "ns", "nanoseconds": "ns",
+    "usec": "us", "microsecond": "us", "microseconds": "us", "micros": "us",
+    "msec": "ms", "millisecond": "ms", "milliseconds": "ms", "millis": "ms",
+    "sec": "s", "secs": "s", "second": "s", "seconds": "s",
+    "minute": "min", "minutes": "min", "mins": "min", "hour": "h", "hours": "h", "hr": "h",
+}
+
+
+def _suggest(unit: str) -> str:
+    lowered = unit.lower()
+    if lowered in _LONG_NAMES:
+        return _LONG_NAMES[lowered]
+    if lowered in UNITS:
+        return lowered
+    close = difflib.get_close_matches(lowered, list(UNITS), n=1, cutoff=0.5)
+    return close[0] if close else ""
+
+
+def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int:
+    """Parse a time into integer nanoseconds.
+
+    Parameters
+    ----------
+    value
+        A string with a number and a unit (``"20 us"``, ``"1.5 ms"``, ``"2 s"``, ``"1e-3 s"``), or a plain
+        number, which is read as **seconds** (the unit of the user interface).
+    allow_negative
+        Accept negative values (offsets); durations and periods are non-negative by default.
+
+    Returns
+    -------
+    int
+        The time in nanoseconds, rounded to the nearest nanosecond.
+
+    Raises
+    ------
+    TimeParseError
+        For an unknown unit (with a suggestion), a missing number, a non-finite value, a value that is
+        not a whole number of nanoseconds after rounding by more than 1e-6 ns, or a negative value when
+        not allowed.
+    """
+    if isinstance(value, bool):
+        raise TimeParseError(f"expected a time such as '1 ms', got {value!r}")
+    if isinstance(value, int):
+        ns = value * S
+    elif isinstance(value, float):
+        if not math.isfinite(value):
+            raise TimeParseError(f"time must be finite, got {value!r}")
+        ns = round(value * S)
+    elif isinstance(value, str):
+        match = _PATTERN.match(value)
+        if match is None:
+            raise TimeParseError(f"cannot read {value!r} as a time; write a number and a unit, e.g. '1.5 ms'")
+        number, unit = match.group(1), (match.group(2) or "").strip()
+        if not unit:
+            raise TimeParseError(
+                f"time {value!r} has no unit; write e.g. '{number} ms' (units: ns, us, ms, s, min, h)"
+            )
+        if unit not in UNITS:
+            hint = _suggest(unit)
+            tip = f"; did you mean '{hint}'?" if hint else " (units: ns, us, ms, s, min, h)"
+            raise TimeParseError(f"unknown unit '{unit}'{tip}")
+        scale = UNITS[unit]
+        if re.fullmatch(r"[-+]?\d+", number):
+            ns = int(number) * scale
+        else:
+            x = float(number) * scale
+            if not math.isfinite(x):
+                raise TimeParseError(f"time must be finite, got {value!r}")
+            ns = round(x)
+    else:
+        raise TimeParseError(f"expected a time such as '1 ms', got {type(value).__name__} {value!r}")
+    if ns < 0 and not allow_negative:
+        raise TimeParseError(f"time must not be negative, got {value!r}")
+    return int(ns)
+
+
+def parse_duration(value: str | int | float) -> int:
+    """Parse a strictly positive duration (a period, a step) into nanoseconds."""
+    ns = parse_time(value)
+    if ns <= 0:
+        raise TimeParseError(f"duration must be positive, got {value!r}")
+    return ns
+
+
+def to_seconds(ns: int) -> float:
+    """Convert integer nanoseconds to float seconds."""
+    return ns / S
+
+
+def from_seconds(seconds: float) -> int:
+    """Convert float seconds to integer nanoseconds (nearest)."""
+    return int(round(seconds * S))
+
+
+def format_time(ns: int) -> str:
+    """Format nanoseconds with the largest unit that keeps the value readable (``'1.5 ms'``)."""
+    for unit, scale in (("s", S), ("ms", MS), ("us", US)):
+        if abs(ns) >= scale:
+            value = ns / scale
+            text = f"{value:.6f}".rstrip("0").rstrip(".")
+            return f"{text} {unit}"
+    return f"{ns} ns"

@@ -1,0 +1,7 @@
+"""Shared pytest set-up: single-threaded BLAS (tiny matrices) and a non-interactive plot backend."""
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MPLBACKEND", "Agg")
