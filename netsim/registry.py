@@ -6,6 +6,7 @@ gives an import path (``"models.hdd:HddPlant"``). ``netsim list`` prints the reg
 
 Kinds used by netsim: ``plant``, ``controller``, ``estimator``, ``trigger``, ``network``, ``policy``,
 ``program`` (task/handler bodies that scenario tasks run), ``signal`` (reference/disturbance shapes),
+``metric`` (functions computing a run's metrics from its tables),
 ``report`` (case-study report generators).
 
 Examples
@@ -25,7 +26,18 @@ from netsim.errors import ConfigError
 
 __all__ = ["Entry", "register", "lookup", "entries", "kinds", "load_plugins", "resolve"]
 
-KINDS = ("plant", "controller", "estimator", "trigger", "network", "policy", "program", "signal", "report")
+KINDS = (
+    "plant",
+    "controller",
+    "estimator",
+    "trigger",
+    "network",
+    "policy",
+    "program",
+    "signal",
+    "metric",
+    "report",
+)
 
 T = TypeVar("T")
 
