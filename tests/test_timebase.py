@@ -1,0 +1,69 @@
+"""Integer-nanosecond time: parsing, unit errors, exact accumulation."""
+
+import pytest
+
+from netsim.timebase import MS, NS, S, US, TimeParseError, format_time, from_seconds, parse_duration, parse_time, to_seconds
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("20 us", 20 * US),
+        ("20us", 20 * US),
+        ("1.5 ms", 1_500_000),
+        ("2 s", 2 * S),
+        ("1e-3 s", 1 * MS),
+        ("7 ns", 7 * NS),
+        ("20 µs", 20 * US),
+        ("1 min", 60 * S),
+        (0.001, 1 * MS),  # a bare number is seconds
+        (2, 2 * S),
+    ],
+)
+def test_parse_time_reads_number_and_unit(text, expected):
+    assert parse_time(text) == expected
+    assert isinstance(parse_time(text), int)
+
+
+@pytest.mark.parametrize(
+    ("text", "suggestion"),
+    [("3 usec", "us"), ("1 sec", "s"), ("2 seconds", "s"), ("5 msec", "ms"), ("4 MS", "ms")],
+)
+def test_unknown_unit_error_suggests_the_closest_unit(text, suggestion):
+    with pytest.raises(TimeParseError, match=f"did you mean '{suggestion}'"):
+        parse_time(text)
+
+
+@pytest.mark.parametrize("text", ["5", "ms", "x ms", "", "nan s", "inf ms"])
+def test_malformed_times_are_rejected(text):
+    with pytest.raises(TimeParseError):
+        parse_time(text)
+
+
+def test_negative_time_rejected_unless_allowed():
+    with pytest.raises(TimeParseError, match="negative"):
+        parse_time("-1 ms")
+    assert parse_time("-1 ms", allow_negative=True) == -MS
+
+
+def test_duration_must_be_positive():
+    with pytest.raises(TimeParseError, match="positive"):
+        parse_duration("0 s")
+
+
+def test_twenty_microsecond_loop_is_exact_after_a_million_periods():
+    # the point of integer time: 10^6 periods of 20 us are exactly 20 s
+    t = 0
+    period = parse_time("20 us")
+    for _ in range(1_000_000):
+        t += period
+    assert t == 20 * S
+    assert to_seconds(t) == 20.0
+
+
+def test_seconds_round_trip_and_formatting():
+    assert from_seconds(0.0015) == 1_500_000
+    assert to_seconds(1_500_000) == pytest.approx(0.0015)
+    assert format_time(1_500_000) == "1.5 ms"
+    assert format_time(2 * S) == "2 s"
+    assert format_time(999) == "999 ns"
