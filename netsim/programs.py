@@ -1,0 +1,320 @@
+"""Generic task and handler programs that scenario files name (registry kind ``"program"``).
+
+A program is a class with a nested ``Params`` (:class:`~netsim.units.StrictModel`) for its YAML ``params:``;
+the builder constructs it once per task/handler as ``Program(ctx, params)`` and the kernel calls the instance
+once per job: ``instance(job)`` returns the job's generator. The numerics live in plain objects (here the
+:class:`~netsim.control.pid.PID`); a program only adds the kernel requests around them (``analog_in``,
+``execute``, ``send`` ...), in the order TrueTime's example code functions use:
+
+``sampler``
+    ``y = analog_in(channel)``; ``execute``; send ``y`` to ``to`` on ``network`` (or store it in the node's
+    ``shared[key]`` without a network); optional ``after_send`` execution.
+``controller``
+    take the newest measurement (from the node inbox on ``input_network``/``network``, from ``shared[key]``, or
+    ``analog_in(channel)``), read the reference signal, compute the PID/PD output, ``execute``, then send it to
+    ``to`` on ``network`` or write ``output_channel``.
+``actuator``
+    take the newest control value from the inbox, ``execute``, ``analog_out(channel, u)``.
+``interference``
+    dummy frames of ``bits`` on ``network``: per job with probability ``share`` (TrueTime's bandwidth share)
+    or, with ``rate`` set, a Poisson stream from a single long-running job.
+``periodic_controller``
+    one-node loop: ``analog_in``, PID, ``execute``, ``analog_out`` (TrueTime's ``pid_code1``).
+
+Message payloads are floats; messages carry ``tag`` (``"y"``/``"u"`` by default) for the messages table.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Any, Callable, Generator
+
+from pydantic import model_validator
+
+from netsim.control.pid import PID, PIDParams
+from netsim.registry import register
+from netsim.units import StrictModel, Time
+
+__all__ = [
+    "ProgramContext",
+    "Sampler",
+    "Controller",
+    "Actuator",
+    "Interference",
+    "PeriodicController",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class ProgramContext:
+    """What a program gets to know about where it runs.
+
+    Attributes
+    ----------
+    env : netsim.env.SimEnv
+    kernel : netsim.kernel.Kernel
+        The node the program runs on.
+    node, task : str
+        Node name and task/handler name.
+    execution : ExecTime | None
+        The task's ``execution:`` from YAML (programs pass it to ``job.execute``).
+    signals : dict
+        Scenario signals (references, disturbances) by name: ``t_ns -> float``.
+    scenario : Any
+        The validated scenario (read-only).
+    period : int | None
+        The task's period in ns (``None`` for aperiodic tasks and handlers).
+    spec : Any
+        The task's or handler's own validated YAML entry.
+    """
+
+    env: Any
+    kernel: Any
+    node: str
+    task: str
+    execution: Any
+    signals: dict[str, Callable[[int], float]] = field(default_factory=dict)
+    scenario: Any = None
+    period: int | None = None
+    spec: Any = None
+
+    def record(self, name: str, value: Any, t_ns: int | None = None) -> None:
+        """Record a signal sample (see :meth:`netsim.env.SimEnv.record`)."""
+        self.env.record(name, value, t_ns)
+
+    def signal(self, name: str) -> Callable[[int], float]:
+        """The scenario signal ``name``."""
+        try:
+            return self.signals[name]
+        except KeyError:
+            from netsim.errors import BuildError
+
+            raise BuildError(
+                f"task '{self.node}.{self.task}' refers to signal '{name}', which the scenario does not define "
+                f"(known: {', '.join(sorted(self.signals)) or 'none'})"
+            ) from None
+
+
+Body = Generator[Any, Any, None]
+
+
+def _run(ctx: ProgramContext, job: Any) -> Generator[Any, Any, None]:
+    """``execute`` the task's execution time, if it has one."""
+    if ctx.execution is not None:
+        yield job.execute(ctx.execution)
+
+
+def _newest(job: Any, network: str) -> Generator[Any, Any, Any]:
+    """Drain the node's inbox on ``network``; return the newest message (or ``None``)."""
+    newest = None
+    while True:
+        msg = yield job.receive(network)
+        if msg is None:
+            return newest
+        newest = msg
+
+
+def _value(msg: Any) -> float:
+    payload = msg.payload
+    if isinstance(payload, dict):
+        payload = payload.get("value")
+    return float(payload)
+
+
+@register("program", "sampler", "analog_in(channel), execute, send to `to` on `network` (or post to shared[key])")
+class Sampler:
+    """Time-driven sensor: sample, execute, send."""
+
+    class Params(StrictModel):
+        channel: str
+        network: str | None = None
+        to: str | None = None
+        bits: int = 80
+        priority: int = 0
+        tag: str = "y"
+        key: str = "y"
+        after_send: Time = 0
+        record_as: str | None = None
+
+    def __init__(self, ctx: ProgramContext, params: Params) -> None:
+        self.ctx = ctx
+        self.p = params
+
+    def __call__(self, job: Any) -> Body:
+        p = self.p
+        y = yield job.analog_in(p.channel)
+        if p.record_as:
+            self.ctx.record(p.record_as, y, job.now)
+        yield from _run(self.ctx, job)
+        if p.network is not None:
+            yield job.send(p.network, p.to, float(y), p.bits, priority=p.priority, tag=p.tag)
+        else:
+            job.shared[p.key] = float(y)
+        if p.after_send:
+            yield job.execute(p.after_send)
+
+
+class _ControllerParams(PIDParams):
+    reference: str | None = None
+    channel: str | None = None
+    input_network: str | None = None
+    network: str | None = None
+    to: str | None = None
+    output_channel: str | None = None
+    key: str = "y"
+    bits: int = 80
+    priority: int = 0
+    tag: str = "u"
+    record_as: str | None = None
+
+    @model_validator(mode="after")
+    def _output(self) -> "_ControllerParams":
+        if self.network is None and self.output_channel is None:
+            raise ValueError("give 'network' (and 'to') to send the control signal, or 'output_channel' to write it")
+        if self.network is not None and self.output_channel is not None:
+            raise ValueError("give either 'network' or 'output_channel' for the control signal, not both")
+        return self
+
+
+@register("program", "controller", "PID/PD on a received or sampled measurement; output sent or written")
+class Controller:
+    """Event- or time-driven PID/PD controller node program."""
+
+    Params = _ControllerParams
+
+    def __init__(self, ctx: ProgramContext, params: _ControllerParams) -> None:
+        self.ctx = ctx
+        self.p = params
+        self.pid = PID.from_params(params, ctx.period)
+        self.ref = ctx.signal(params.reference) if params.reference else (lambda t: 0.0)
+        self.y_last = 0.0
+        # measurement source: explicit channel, else inbox of input_network / network, else shared[key]
+        self.in_net = params.input_network or (params.network if params.channel is None else None)
+
+    def _measure(self, job: Any) -> Generator[Any, Any, float]:
+        p = self.p
+        if p.channel is not None:
+            return float((yield job.analog_in(p.channel)))
+        if self.in_net is not None:
+            msg = yield from _newest(job, self.in_net)
+            if msg is None:
+                log.warning("%s.%s: no measurement in the inbox at t=%d ns; reusing the last one",
+                            self.ctx.node, self.ctx.task, job.now)
+                return self.y_last
+            return _value(msg)
+        return float(job.shared.get(p.key, self.y_last))
+
+    def __call__(self, job: Any) -> Body:
+        p = self.p
+        y = yield from self._measure(job)
+        self.y_last = y
+        r = self.ref(job.now)
+        u = self.pid.step(r, y)
+        if p.record_as:
+            self.ctx.record(p.record_as, u, job.now)
+        yield from _run(self.ctx, job)
+        if p.output_channel is not None:
+            yield job.analog_out(p.output_channel, u)
+        else:
+            yield job.send(p.network, p.to, u, p.bits, priority=p.priority, tag=p.tag)
+
+
+@register("program", "actuator", "take the newest control value from `network`, execute, analog_out(channel)")
+class Actuator:
+    """Event-driven actuator: receive, execute, write the DAC."""
+
+    class Params(StrictModel):
+        network: str
+        channel: str
+        record_as: str | None = None
+
+    def __init__(self, ctx: ProgramContext, params: Params) -> None:
+        self.ctx = ctx
+        self.p = params
+
+    def __call__(self, job: Any) -> Body:
+        msg = yield from _newest(job, self.p.network)
+        yield from _run(self.ctx, job)
+        if msg is None:
+            log.warning("%s.%s: released without a control message at t=%d ns", self.ctx.node, self.ctx.task, job.now)
+            return
+        u = _value(msg)
+        yield job.analog_out(self.p.channel, u)
+        if self.p.record_as:
+            self.ctx.record(self.p.record_as, u, job.now)
+
+
+@register("program", "interference", "dummy frames of `bits` on `network`: per job with probability, or at a rate")
+class Interference:
+    """Interfering traffic (TrueTime's interference node)."""
+
+    class Params(StrictModel):
+        network: str
+        to: str | None = None
+        bits: int = 80
+        priority: int = 0
+        share: float = 1.0
+        rate: float | None = None
+        tag: str = "interference"
+
+        @model_validator(mode="after")
+        def _check(self) -> "Interference.Params":
+            if not 0.0 <= self.share <= 1.0:
+                raise ValueError(f"share is a probability in [0, 1], got {self.share}")
+            if self.rate is not None and not self.rate > 0:
+                raise ValueError(f"rate (frames per second) must be positive, got {self.rate}")
+            return self
+
+    def __init__(self, ctx: ProgramContext, params: Params) -> None:
+        self.ctx = ctx
+        self.p = params
+        self.rng = ctx.env.rng(f"program.{ctx.node}.{ctx.task}")
+
+    def __call__(self, job: Any) -> Body:
+        p = self.p
+        if p.rate is None:
+            yield from _newest(job, p.network)  # discard frames addressed to this node
+            if p.share >= 1.0 or self.rng.random() < p.share:
+                yield job.send(p.network, p.to, 0.0, p.bits, priority=p.priority, tag=p.tag)
+            yield from _run(self.ctx, job)
+            return
+        from netsim.timebase import from_seconds
+
+        while True:
+            gap = max(1, from_seconds(float(self.rng.exponential(1.0 / p.rate))))
+            yield job.sleep(gap)
+            yield from _newest(job, p.network)
+            yield job.send(p.network, p.to, 0.0, p.bits, priority=p.priority, tag=p.tag)
+
+
+class _PeriodicControllerParams(PIDParams):
+    channel: str
+    output_channel: str
+    reference: str | None = None
+    record_as: str | None = None
+
+
+@register("program", "periodic_controller", "analog_in, PID, execute, analog_out on one node (TrueTime pid_code1)")
+class PeriodicController:
+    """Single-node periodic PID loop."""
+
+    Params = _PeriodicControllerParams
+
+    def __init__(self, ctx: ProgramContext, params: _PeriodicControllerParams) -> None:
+        self.ctx = ctx
+        self.p = params
+        self.pid = PID.from_params(params, ctx.period)
+        self.ref = ctx.signal(params.reference) if params.reference else (lambda t: 0.0)
+
+    def __call__(self, job: Any) -> Body:
+        p = self.p
+        r = self.ref(job.now)
+        y = yield job.analog_in(p.channel)
+        u = self.pid.step(r, float(y))
+        if p.record_as:
+            self.ctx.record(p.record_as, u, job.now)
+        yield from _run(self.ctx, job)
+        yield job.analog_out(p.output_channel, u)

@@ -1,0 +1,300 @@
+"""The result of one run: tidy tables, metrics and metadata, and the run folder they are written to.
+
+A :class:`RunResult` holds
+
+``signals``
+    wide table, ``time_s`` first, then one column per recorded signal; one row per instant at which any
+    signal was sampled; each column holds its last value (forward fill) between its own samples and is empty
+    before its first sample.
+``jobs``
+    one row per job: ``node, task, job_id, release_s, start_s, finish_s, response_s, deadline_s,
+    deadline_met, preemptions, cpu_time_s, killed`` (empty cells for jobs unfinished at the end).
+``messages``
+    one row per message copy: ``msg_id, network, sender, receiver, tag, bits, priority, sent_s,
+    tx_start_s, delivered_s, dropped, drop_reason, delay_s, tx_end_s``.
+``metrics``
+    a :class:`pandas.Series` metric name -> value.
+``meta``
+    seed, scenario name and hash, package versions, wall time, status (``ok``, ``error``,
+    ``diverged at t = ... s``) and error text.
+``schedule``
+    the kernels' schedule traces ``node, task, state, start_s, end_s`` (for Gantt charts; not written).
+
+Run folder layout (see :meth:`RunResult.to_csv`): ``scenario.yaml``, ``signals.csv``, ``jobs.csv``,
+``messages.csv``, ``metrics.csv`` (``metric,value``), ``meta.json``. CSVs use a fixed float format and a
+stable column order, so the same scenario and seed give byte-identical files.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+import pandas as pd
+
+from netsim.timebase import S
+
+__all__ = [
+    "RunResult",
+    "JOB_COLUMNS",
+    "MESSAGE_COLUMNS",
+    "SCHEDULE_COLUMNS",
+    "FLOAT_FORMAT",
+    "signals_table",
+    "jobs_table",
+    "messages_table",
+    "schedule_table",
+    "write_csv",
+]
+
+#: printf format of every float in the run folder's CSVs (12 significant digits: ns resolution up to 1000 s).
+FLOAT_FORMAT = "%.12g"
+
+JOB_COLUMNS = [
+    "node",
+    "task",
+    "job_id",
+    "release_s",
+    "start_s",
+    "finish_s",
+    "response_s",
+    "deadline_s",
+    "deadline_met",
+    "preemptions",
+    "cpu_time_s",
+    "killed",
+]
+MESSAGE_COLUMNS = [
+    "msg_id",
+    "network",
+    "sender",
+    "receiver",
+    "tag",
+    "bits",
+    "priority",
+    "sent_s",
+    "tx_start_s",
+    "delivered_s",
+    "dropped",
+    "drop_reason",
+    "delay_s",
+    "tx_end_s",
+]
+SCHEDULE_COLUMNS = ["node", "task", "state", "start_s", "end_s"]
+
+
+def _sec(ns: Any) -> float:
+    """ns -> s, with None -> NaN."""
+    if ns is None:
+        return math.nan
+    return int(ns) / S
+
+
+def _field(rec: Any, name: str, default: Any = None) -> Any:
+    if isinstance(rec, dict):
+        return rec.get(name, default)
+    return getattr(rec, name, default)
+
+
+def signals_table(
+    times: dict[str, list[int]], values: dict[str, list[float]], order: Iterable[str] | None = None
+) -> pd.DataFrame:
+    """The wide signals table from per-signal sample lists.
+
+    Parameters
+    ----------
+    times, values
+        Sample instants (int ns) and values per signal name (as in :class:`netsim.env.Recorder`).
+    order
+        Preferred column order (names, or base names whose ``name[i]`` columns follow); the remaining
+        columns come after, sorted by name.
+
+    When a signal has several samples at one instant, the last one counts.
+    """
+    names = list(times)
+    ordered: list[str] = []
+    if order is not None:
+        for want in order:
+            group = [n for n in names if n not in ordered and (n == want or n.split("[", 1)[0] == want)]
+            ordered += sorted(group, key=lambda n: (len(n), n))
+    ordered += sorted(n for n in names if n not in ordered)
+    if not ordered:
+        return pd.DataFrame({"time_s": pd.Series([], dtype=float)})
+    cols: dict[str, pd.Series] = {}
+    for n in ordered:
+        s = pd.Series(np.asarray(values[n], dtype=float), index=np.asarray(times[n], dtype=np.int64))
+        if not s.index.is_unique:
+            s = s[~s.index.duplicated(keep="last")]
+        if not s.index.is_monotonic_increasing:
+            s = s.sort_index(kind="stable")
+        cols[n] = s
+    union = np.unique(np.concatenate([c.index.to_numpy() for c in cols.values()]))
+    frame = pd.DataFrame({n: c.reindex(union).ffill() for n, c in cols.items()})
+    frame.insert(0, "time_s", union / S)
+    return frame.reset_index(drop=True)
+
+
+def jobs_table(records: Iterable[Any], node: str | None = None) -> pd.DataFrame:
+    """Jobs table from kernel :class:`JobRecord` objects (times in ns, converted to seconds)."""
+    rows = []
+    for r in records:
+        rows.append(
+            {
+                "node": _field(r, "node", node),
+                "task": _field(r, "task"),
+                "job_id": _field(r, "job_id"),
+                "release_s": _sec(_field(r, "release")),
+                "start_s": _sec(_field(r, "start")),
+                "finish_s": _sec(_field(r, "finish")),
+                "response_s": _sec(_field(r, "response")),
+                "deadline_s": _sec(_field(r, "deadline")),
+                "deadline_met": _field(r, "deadline_met"),
+                "preemptions": _field(r, "preemptions", 0),
+                "cpu_time_s": _sec(_field(r, "cpu_time", 0)),
+                "killed": bool(_field(r, "killed", False)),
+            }
+        )
+    frame = pd.DataFrame(rows, columns=JOB_COLUMNS)
+    return frame
+
+
+def messages_table(records: Iterable[Any]) -> pd.DataFrame:
+    """Messages table from network :class:`MessageRecord` objects (times in ns, converted to seconds)."""
+    rows = []
+    for r in records:
+        delivered = _field(r, "delivered_ns")
+        delay = _field(r, "delay_ns")
+        if delay is None and delivered is not None:
+            delay = int(delivered) - int(_field(r, "sent_ns"))
+        rows.append(
+            {
+                "msg_id": _field(r, "msg_id"),
+                "network": _field(r, "network"),
+                "sender": _field(r, "sender"),
+                "receiver": _field(r, "receiver"),
+                "tag": _field(r, "tag", ""),
+                "bits": _field(r, "bits"),
+                "priority": _field(r, "priority"),
+                "sent_s": _sec(_field(r, "sent_ns")),
+                "tx_start_s": _sec(_field(r, "tx_start_ns")),
+                "delivered_s": _sec(delivered),
+                "dropped": bool(_field(r, "dropped", False)),
+                "drop_reason": _field(r, "drop_reason", "") or "",
+                "delay_s": _sec(delay),
+                "tx_end_s": _sec(_field(r, "tx_end_ns")),
+            }
+        )
+    return pd.DataFrame(rows, columns=MESSAGE_COLUMNS)
+
+
+def schedule_table(node: str, intervals: Iterable[Any]) -> pd.DataFrame:
+    """Schedule trace ``(task, state, t0, t1)`` of one kernel as a table in seconds."""
+    rows = []
+    for iv in intervals:
+        if isinstance(iv, (tuple, list)):
+            task, state, t0, t1 = iv[:4]
+        else:
+            task, state, t0, t1 = (_field(iv, k) for k in ("task", "state", "t0", "t1"))
+        rows.append({"node": node, "task": task, "state": state, "start_s": _sec(t0), "end_s": _sec(t1)})
+    return pd.DataFrame(rows, columns=SCHEDULE_COLUMNS)
+
+
+def write_csv(frame: pd.DataFrame, path: Path) -> None:
+    """Write ``frame`` with the run folder's fixed float format and ``\\n`` line ends."""
+    frame.to_csv(path, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (np.floating,)):
+        return float(obj)
+    if isinstance(obj, Path):
+        return str(obj)
+    return str(obj)
+
+
+@dataclass
+class RunResult:
+    """Tables, metrics and metadata of one run (see the module docstring for the columns)."""
+
+    signals: pd.DataFrame = field(default_factory=lambda: pd.DataFrame({"time_s": pd.Series([], dtype=float)}))
+    jobs: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=JOB_COLUMNS))
+    messages: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=MESSAGE_COLUMNS))
+    metrics: pd.Series = field(default_factory=lambda: pd.Series(dtype=float, name="value"))
+    meta: dict[str, Any] = field(default_factory=dict)
+    scenario: dict[str, Any] | None = None
+    schedule: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=SCHEDULE_COLUMNS))
+    out_dir: Path | None = None
+
+    @property
+    def status(self) -> str:
+        """``"ok"``, ``"error"`` or ``"diverged at t = ... s"``."""
+        return str(self.meta.get("status", "ok"))
+
+    @property
+    def ok(self) -> bool:
+        """True when the run finished normally."""
+        return self.status == "ok"
+
+    def signal(self, name: str) -> pd.Series:
+        """One signal column indexed by ``time_s``."""
+        if name not in self.signals.columns:
+            raise KeyError(f"no recorded signal '{name}'; recorded: {', '.join(self.signals.columns[1:])}")
+        return pd.Series(self.signals[name].to_numpy(), index=self.signals["time_s"].to_numpy(), name=name)
+
+    def metrics_frame(self) -> pd.DataFrame:
+        """Metrics as a two-column table ``metric, value``."""
+        return pd.DataFrame({"metric": list(self.metrics.index), "value": list(self.metrics.to_numpy(dtype=float))})
+
+    def to_csv(self, out_dir: str | Path) -> Path:
+        """Write the run folder into ``out_dir`` (created if needed); returns the folder."""
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        if self.scenario is not None:
+            import yaml
+
+            (out / "scenario.yaml").write_text(
+                yaml.safe_dump(self.scenario, sort_keys=False, allow_unicode=True), encoding="utf-8"
+            )
+        write_csv(self.signals, out / "signals.csv")
+        write_csv(self.jobs, out / "jobs.csv")
+        write_csv(self.messages, out / "messages.csv")
+        write_csv(self.metrics_frame(), out / "metrics.csv")
+        (out / "meta.json").write_text(
+            json.dumps(self.meta, indent=2, sort_keys=True, default=_json_default) + "\n", encoding="utf-8"
+        )
+        self.out_dir = out
+        return out
+
+    def plot(self, out_dir: str | Path | None = None) -> list[Path]:
+        """Write PNG figures (responses, schedule Gantt chart, network timeline); returns their paths."""
+        from netsim.plotting import plot_run
+
+        target = Path(out_dir) if out_dir is not None else self.out_dir
+        if target is None:
+            raise ValueError("RunResult.plot needs an output folder (none was written yet)")
+        return plot_run(self, target)
+
+    @classmethod
+    def read(cls, run_dir: str | Path) -> "RunResult":
+        """Load a run folder written by :meth:`to_csv`."""
+        folder = Path(run_dir)
+        signals = pd.read_csv(folder / "signals.csv")
+        jobs = pd.read_csv(folder / "jobs.csv")
+        messages = pd.read_csv(folder / "messages.csv", keep_default_na=False, na_values=[""])
+        metrics_frame = pd.read_csv(folder / "metrics.csv")
+        metrics = pd.Series(
+            metrics_frame["value"].to_numpy(dtype=float), index=list(metrics_frame["metric"]), name="value"
+        )
+        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8")) if (folder / "meta.json").exists() else {}
+        scenario = None
+        if (folder / "scenario.yaml").exists():
+            import yaml
+
+            scenario = yaml.safe_load((folder / "scenario.yaml").read_text(encoding="utf-8"))
+        return cls(signals, jobs, messages, metrics, meta, scenario, out_dir=folder)

@@ -1,0 +1,276 @@
+"""Metrics every run gets, and the registered metrics ``control_error`` and ``latency``.
+
+Generic metrics (:func:`generic_metrics`, always added by the runner), named with dots:
+
+``cpu.<node>.utilization``
+    busy fraction of the node's CPU over the run (tasks, handlers and context switches, from the kernel).
+``task.<node>.<task>.jobs`` / ``.deadline_misses`` / ``.max_response_s`` / ``.mean_response_s``
+    from the jobs table (finished jobs; a job unfinished at the end whose deadline passed counts as a miss).
+``net.<network>.messages`` / ``.utilization`` / ``.lost`` / ``.loss_rate`` / ``.mean_delay_s`` / ``.max_delay_s``
+    from the messages table, plus everything the network's own ``metrics(t_end)`` reports (prefixed).
+
+Registered metrics (scenario ``metrics:`` list, ``fn(result, params, baseline) -> dict``):
+
+``control_error``
+    ``IAE`` = ∫|r - y| dt and ``ISE`` = ∫(r - y)² dt over ``[t0, t1]`` from the signals table. The table holds
+    each signal constant between its samples, so the integrals are exact sums over the table's rows
+    (left-rectangle rule on the held values). Keys ``<name>.IAE``, ``<name>.ISE``, ``<name>.max_abs_error``.
+``latency``
+    sample-to-actuation latency along a chain of tasks, e.g. ``[sensor.sample, controller.control,
+    actuator.actuate]``: for every job of the last task, the chain is followed backwards through the messages
+    table (the message delivered to the job's node last at or before its release, sent by the previous task
+    during one of its jobs) to the first task's job; latency = actuation job finish - sampling job start.
+    Keys ``<name>.mean_s``, ``.max_s``, ``.min_s``, ``.count``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from pydantic import ValidationError
+
+from netsim.errors import ConfigError
+from netsim.registry import lookup, register
+from netsim.timebase import S
+from netsim.units import StrictModel, Time
+
+__all__ = [
+    "generic_metrics",
+    "control_error",
+    "latency",
+    "chain_latencies",
+    "compute_metrics",
+    "held_integrals",
+    "ControlErrorParams",
+    "LatencyParams",
+]
+
+
+def _task_metrics(jobs: pd.DataFrame, t_end_s: float) -> dict[str, float]:
+    out: dict[str, float] = {}
+    if jobs is None or jobs.empty:
+        return out
+    for (node, task), grp in jobs.groupby(["node", "task"], sort=True):
+        finished = grp[grp["finish_s"].notna()]
+        met = finished["deadline_met"]
+        misses = int((met.astype(str).str.lower() == "false").sum())
+        unfinished = grp[grp["finish_s"].isna()]
+        misses += int((unfinished["deadline_s"].notna() & (unfinished["deadline_s"] < t_end_s)).sum())
+        resp = finished["response_s"].astype(float)
+        key = f"task.{node}.{task}"
+        out[f"{key}.jobs"] = float(len(grp))
+        out[f"{key}.deadline_misses"] = float(misses)
+        out[f"{key}.max_response_s"] = float(resp.max()) if len(resp) else math.nan
+        out[f"{key}.mean_response_s"] = float(resp.mean()) if len(resp) else math.nan
+    return out
+
+
+def _network_metrics(messages: pd.DataFrame) -> dict[str, float]:
+    out: dict[str, float] = {}
+    if messages is None or messages.empty:
+        return out
+    for net, grp in messages.groupby("network", sort=True):
+        dropped = grp["dropped"].astype(str).str.lower() == "true"
+        delivered = grp[~dropped & grp["delivered_s"].notna()]
+        key = f"net.{net}"
+        out[f"{key}.messages"] = float(len(grp))
+        out[f"{key}.lost"] = float(dropped.sum())
+        out[f"{key}.loss_rate"] = float(dropped.mean()) if len(grp) else math.nan
+        delays = delivered["delay_s"].astype(float)
+        out[f"{key}.mean_delay_s"] = float(delays.mean()) if len(delays) else math.nan
+        out[f"{key}.max_delay_s"] = float(delays.max()) if len(delays) else math.nan
+    return out
+
+
+def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = None) -> dict[str, float]:
+    """The metrics the runner always adds (see the module docstring).
+
+    Parameters
+    ----------
+    result
+        The :class:`~netsim.results.RunResult` (its ``jobs`` and ``messages`` tables are used).
+    sim
+        The built simulation (kernels and networks), for CPU utilization and network statistics; optional.
+    t_end_ns
+        End of the measured window (the time the run reached).
+    """
+    t_end_s = (t_end_ns / S) if t_end_ns is not None else float(result.signals["time_s"].max() or 0.0)
+    out: dict[str, float] = {}
+    if sim is not None:
+        for name in sorted(getattr(sim, "kernels", {})):
+            kernel = sim.kernels[name]
+            try:
+                out[f"cpu.{name}.utilization"] = float(kernel.utilization(0, t_end_ns))
+            except Exception:  # noqa: BLE001 - a kernel without accounting must not lose the run
+                pass
+    elif not result.jobs.empty and t_end_s > 0:
+        for node, grp in result.jobs.groupby("node", sort=True):
+            out[f"cpu.{node}.utilization"] = float(grp["cpu_time_s"].astype(float).sum() / t_end_s)
+    out.update(_task_metrics(result.jobs, t_end_s))
+    out.update(_network_metrics(result.messages))
+    if sim is not None:
+        for name in sorted(getattr(sim, "networks", {})):
+            net = sim.networks[name]
+            try:
+                extra = net.metrics(t_end_ns)
+            except Exception:  # noqa: BLE001
+                continue
+            for k in sorted(extra):
+                v = extra[k]
+                if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+                    out[f"net.{name}.{k}"] = float(v)
+    return out
+
+
+# ----------------------------------------------------------------------------------------------- control_error
+class ControlErrorParams(StrictModel):
+    """Parameters of the ``control_error`` metric."""
+
+    reference: str | None = None
+    output: str
+    name: str | None = None
+    t0: Time = 0
+    t1: Time | None = None
+
+
+def _column(result: Any, name: str) -> np.ndarray:
+    if name not in result.signals.columns:
+        raise ConfigError(
+            f"metric needs signal '{name}', which was not recorded "
+            f"(recorded: {', '.join(result.signals.columns[1:]) or 'none'}); add it to 'record:'"
+        )
+    return result.signals[name].to_numpy(dtype=float)
+
+
+def _validate(model: type[StrictModel], params: Any, what: str) -> Any:
+    if isinstance(params, model):
+        return params
+    try:
+        return model.model_validate(dict(params or {}))
+    except ValidationError as exc:
+        problems = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in exc.errors())
+        raise ConfigError(f"metric '{what}': {problems}") from None
+
+
+def held_integrals(t: np.ndarray, e: np.ndarray, t0: float, t1: float) -> tuple[float, float, float]:
+    """IAE, ISE and max |e| of a held (piecewise-constant) signal ``e`` sampled at ``t`` over ``[t0, t1]``."""
+    if len(t) == 0 or t1 <= t0:
+        return 0.0, 0.0, 0.0
+    edges = np.clip(np.append(t, max(t1, t[-1])), t0, t1)
+    dt = np.diff(edges)
+    valid = ~np.isnan(e) & (dt > 0)
+    ev = e[valid]
+    iae = float(np.sum(np.abs(ev) * dt[valid]))
+    ise = float(np.sum(ev * ev * dt[valid]))
+    mx = float(np.max(np.abs(ev))) if ev.size else 0.0
+    return iae, ise, mx
+
+
+@register("metric", "control_error", "IAE and ISE of reference minus output over [t0, t1]")
+def control_error(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
+    """IAE/ISE of ``reference - output`` (reference 0 when not given) from the signals table."""
+    p = _validate(ControlErrorParams, params, "control_error")
+    t = result.signals["time_s"].to_numpy(dtype=float)
+    y = _column(result, p.output)
+    r = _column(result, p.reference) if p.reference else np.zeros_like(y)
+    e = r - y
+    t_end = float(t[-1]) if len(t) else 0.0
+    if "t_end_s" in getattr(result, "meta", {}):
+        t_end = float(result.meta["t_end_s"])
+    t1 = t_end if p.t1 is None else p.t1 / S
+    iae, ise, mx = held_integrals(t, e, p.t0 / S, t1)
+    name = p.name or p.output
+    return {f"{name}.IAE": iae, f"{name}.ISE": ise, f"{name}.max_abs_error": mx}
+
+
+# ----------------------------------------------------------------------------------------------------- latency
+class LatencyParams(StrictModel):
+    """Parameters of the ``latency`` metric: the task chain as ``node.task`` names."""
+
+    chain: list[str]
+    name: str = "latency"
+
+
+def _split_task(ref: str) -> tuple[str, str]:
+    node, sep, task = ref.partition(".")
+    if not sep or not node or not task:
+        raise ConfigError(f"latency chain entries are 'node.task', got '{ref}'")
+    return node, task
+
+
+def chain_latencies(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[str]) -> list[float]:
+    """Sample-to-actuation latencies (s) along ``chain`` (see the module docstring), one per complete chain."""
+    if len(chain) < 1:
+        return []
+    steps = [_split_task(c) for c in chain]
+    by_task = {}
+    for node, task in steps:
+        sel = jobs[(jobs["node"] == node) & (jobs["task"] == task)]
+        by_task[(node, task)] = sel.sort_values("release_s", kind="stable")
+    msgs = messages
+    if msgs is not None and not msgs.empty:
+        dropped = msgs["dropped"].astype(str).str.lower() == "true"
+        msgs = msgs[~dropped & msgs["delivered_s"].notna()]
+    out: list[float] = []
+    last = by_task[steps[-1]]
+    eps = 1e-12
+    for _, job in last.iterrows():
+        if pd.isna(job["finish_s"]):
+            continue
+        cur = job
+        ok = True
+        for i in range(len(steps) - 1, 0, -1):
+            node, _task = steps[i]
+            prev_node, _prev_task = steps[i - 1]
+            cand = msgs[
+                (msgs["receiver"] == node)
+                & (msgs["sender"] == prev_node)
+                & (msgs["delivered_s"] <= cur["release_s"] + eps)
+            ]
+            if cand.empty:
+                ok = False
+                break
+            msg = cand.loc[cand["delivered_s"].idxmax()]
+            prev_jobs = by_task[steps[i - 1]]
+            hit = prev_jobs[
+                (prev_jobs["start_s"] <= msg["sent_s"] + eps)
+                & ((prev_jobs["finish_s"] >= msg["sent_s"] - eps) | prev_jobs["finish_s"].isna())
+            ]
+            if hit.empty:
+                ok = False
+                break
+            cur = hit.iloc[-1]
+        if ok:
+            out.append(float(job["finish_s"] - cur["start_s"]))
+    return out
+
+
+@register("metric", "latency", "sample-to-actuation latency along a task chain, from the jobs/messages tables")
+def latency(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
+    """Mean/max/min latency and the number of complete chains."""
+    p = _validate(LatencyParams, params, "latency")
+    values = np.asarray(chain_latencies(result.jobs, result.messages, p.chain), dtype=float)
+    n = p.name
+    if values.size == 0:
+        return {f"{n}.mean_s": math.nan, f"{n}.max_s": math.nan, f"{n}.min_s": math.nan, f"{n}.count": 0.0}
+    return {
+        f"{n}.mean_s": float(values.mean()),
+        f"{n}.max_s": float(values.max()),
+        f"{n}.min_s": float(values.min()),
+        f"{n}.count": float(values.size),
+    }
+
+
+def compute_metrics(result: Any, specs: list[Any], baseline: Any = None) -> dict[str, float]:
+    """Run the scenario's listed metrics; each spec has ``type`` and ``params``."""
+    out: dict[str, float] = {}
+    for spec in specs or []:
+        if hasattr(spec, "model_dump"):
+            spec = spec.model_dump()
+        fn = lookup("metric", spec["type"])
+        values = fn(result, spec.get("params") or {}, baseline)
+        out.update({str(k): float(v) for k, v in values.items()})
+    return out
