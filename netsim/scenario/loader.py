@@ -1,0 +1,328 @@
+"""Load a scenario from YAML (or a dict), validate it completely, and report every problem at once.
+
+The file is read with ruamel.yaml's round-trip loader, which keeps the line of every key and list item, so
+each problem is reported as ``file:line: path: message``. Validation runs in three layers that all run even
+when an earlier one finds problems: the base schema (:mod:`netsim.scenario.schema`), every plugin's own
+``Params`` model, and the cross references (:mod:`netsim.scenario.validate`).
+
+Examples
+--------
+>>> sc = load_scenario({"name": "idle", "duration": "1 s"})
+>>> sc.duration
+1000000000
+>>> check_scenario({"name": "idle", "duration": "1 sec"})[0].message
+"unknown unit 'sec'; did you mean 's'?"
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import io
+import json
+import logging
+import os
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from pydantic import BaseModel, ValidationError
+
+from netsim.errors import ConfigError
+from netsim.scenario.messages import problems_from_validation_error
+from netsim.scenario.paths import PathPart, parse_path, set_path
+from netsim.scenario.problems import ERROR, Problem, ScenarioError, sort_problems
+from netsim.scenario.schema import PluginSpec, Scenario
+
+__all__ = [
+    "LineIndex",
+    "read_yaml",
+    "load_scenario",
+    "check_scenario",
+    "resolved_dict",
+    "dump_resolved",
+    "scenario_hash",
+]
+
+log = logging.getLogger(__name__)
+
+Source = str | os.PathLike[str] | Mapping[str, Any] | Scenario
+
+
+class LineIndex:
+    """Lines (1-based) of the keys and list items of a YAML document, addressable by path parts."""
+
+    def __init__(self) -> None:
+        self._lines: dict[tuple[PathPart, ...], int] = {}
+
+    def add(self, parts: tuple[PathPart, ...], line: int) -> None:
+        """Record that the value at ``parts`` starts on ``line``."""
+        self._lines.setdefault(parts, line)
+
+    def line_of(self, path: str | Sequence[PathPart]) -> int | None:
+        """The line of ``path``, or of its nearest existing ancestor (None for an empty index)."""
+        try:
+            parts = tuple(parse_path(path)) if path else ()
+        except ConfigError:
+            return None
+        while parts:
+            if parts in self._lines:
+                return self._lines[parts]
+            parts = parts[:-1]
+        return self._lines.get((), None)
+
+
+def _to_plain(node: Any, parts: tuple[PathPart, ...], index: LineIndex) -> Any:
+    """Plain Python (dict/list/str/int/float/bool/None) from ruamel nodes, recording lines on the way."""
+    from ruamel.yaml.comments import CommentedMap, CommentedSeq
+
+    if isinstance(node, dict):
+        out: dict[Any, Any] = {}
+        for key, value in node.items():
+            plain_key = _scalar(key)
+            if isinstance(node, CommentedMap):
+                try:
+                    index.add((*parts, plain_key), node.lc.key(key)[0] + 1)
+                except (KeyError, TypeError, AttributeError):
+                    pass
+            out[plain_key] = _to_plain(value, (*parts, plain_key), index)
+        return out
+    if isinstance(node, (list, tuple)):
+        items = []
+        for i, value in enumerate(node):
+            if isinstance(node, CommentedSeq):
+                try:
+                    index.add((*parts, i), node.lc.item(i)[0] + 1)
+                except (KeyError, TypeError, AttributeError, IndexError):
+                    pass
+            items.append(_to_plain(value, (*parts, i), index))
+        return items
+    return _scalar(node)
+
+
+def _scalar(value: Any) -> Any:
+    if value is None or type(value) in (str, int, float, bool):
+        return value
+    if isinstance(value, bool):
+        return bool(value)
+    if isinstance(value, int):
+        return int(value)
+    if isinstance(value, float):
+        return float(value)
+    if isinstance(value, str):
+        return str(value)
+    return value
+
+
+def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
+    """Read a YAML file into plain Python data and the line index of its keys.
+
+    Raises
+    ------
+    ScenarioError
+        For a missing or unreadable file, or a YAML syntax error (with its line).
+    """
+    from ruamel.yaml import YAML
+    from ruamel.yaml.error import MarkedYAMLError, YAMLError
+
+    name = os.fspath(path)
+    p = Path(name)
+    if not p.exists():
+        raise ScenarioError([Problem("", f"file not found: {name}", None, name)])
+    if p.is_dir():
+        raise ScenarioError([Problem("", f"{name} is a directory, not a scenario file", None, name)])
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError([Problem("", f"cannot read file: {exc}", None, name)]) from None
+    yaml = YAML(typ="rt", pure=True)
+    try:
+        data = yaml.load(io.StringIO(text))
+    except MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line = mark.line + 1 if mark is not None else None
+        what = exc.problem or "syntax error"
+        context = f" ({exc.context})" if exc.context else ""
+        raise ScenarioError([Problem("", f"YAML syntax error: {what}{context}", line, name)]) from None
+    except YAMLError as exc:
+        raise ScenarioError([Problem("", f"YAML error: {str(exc).splitlines()[0]}", None, name)]) from None
+    index = LineIndex()
+    index.add((), 1)
+    return _to_plain(data, (), index), index
+
+
+def _plain_copy(data: Any) -> Any:
+    return _to_plain(copy.deepcopy(data), (), LineIndex())
+
+
+def _gather(source: Source, overrides: Mapping[str, Any] | None) -> tuple[list[Problem], Scenario | None]:
+    """Every problem of ``source`` (located) and the scenario when there is no error."""
+    file: str | None = None
+    index = LineIndex()
+    if isinstance(source, Scenario):
+        if not overrides:
+            return [], source
+        raw: Any = resolved_dict(source)
+        file = source.source
+    elif isinstance(source, Mapping):
+        raw = _plain_copy(dict(source))
+    elif isinstance(source, (str, os.PathLike)):
+        file = os.fspath(source)
+        try:
+            raw, index = read_yaml(file)
+        except ScenarioError as exc:
+            return exc.problems, None
+    else:
+        return [Problem("", f"expected a scenario file path or mapping, got {type(source).__name__}")], None
+
+    def done(problems: list[Problem]) -> list[Problem]:
+        located = [p.located(index.line_of(p.path), file) for p in problems]
+        return sort_problems(located)
+
+    if raw is None:
+        return done([Problem("", "the file is empty; a scenario needs at least 'name' and 'duration'", 1)]), None
+    if not isinstance(raw, dict):
+        kind = "a list" if isinstance(raw, list) else repr(raw)
+        return done([Problem("", f"the top level must be a mapping (name: ..., duration: ...), got {kind}", 1)]), None
+
+    problems: list[Problem] = []
+    for key, value in (overrides or {}).items():
+        try:
+            set_path(raw, key, _plain_copy(value))
+        except ConfigError as exc:
+            problems.append(Problem(key, f"cannot apply override: {exc.message}"))
+
+    scenario: Scenario | None = None
+    try:
+        scenario = Scenario.model_validate(raw)
+    except ValidationError as exc:
+        problems += problems_from_validation_error(exc, model=Scenario)
+
+    from netsim.scenario.validate import check_raw
+
+    more, validated = check_raw(raw)
+    problems += more
+    if scenario is not None and not any(p.severity == ERROR for p in problems):
+        _attach(scenario, validated)
+        scenario._source = file
+        scenario._raw = raw
+    elif any(p.severity == ERROR for p in problems):
+        scenario = None
+    return done(problems), scenario
+
+
+def _attach(scenario: Scenario, validated: Mapping[str, Any]) -> None:
+    for path, spec in scenario.plugin_specs():
+        if path in validated:
+            spec.attach_validated(validated[path])
+
+
+def check_scenario(source: Source, overrides: Mapping[str, Any] | None = None) -> list[Problem]:
+    """Every problem (errors and warnings) in a scenario file or dict; never raises for user mistakes.
+
+    Parameters
+    ----------
+    source
+        Path of a YAML file, a raw mapping, or a :class:`Scenario`.
+    overrides
+        ``{"dotted.path": value}`` applied to the raw data before validation.
+
+    Returns
+    -------
+    list[Problem]
+        Sorted by line; empty when the scenario is valid and clean.
+    """
+    problems, _ = _gather(source, overrides)
+    return problems
+
+
+def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None) -> Scenario:
+    """Load and validate a scenario; warnings are logged.
+
+    Parameters
+    ----------
+    source
+        Path of a YAML file, a raw mapping (copied, never modified), or a :class:`Scenario` (returned as is
+        unless ``overrides`` are given).
+    overrides
+        ``{"dotted.path": value}`` applied before validation (``{"networks.can.bitrate": "1 Mbit/s"}``).
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem (with path, line and file) when there is at least one error.
+    """
+    problems, scenario = _gather(source, overrides)
+    if scenario is None:
+        raise ScenarioError(problems or [Problem("", "invalid scenario")])
+    for p in problems:
+        log.warning("%s", p)
+    return scenario
+
+
+# --------------------------------------------------------------------------------------------- resolved form
+def _params_json(spec: PluginSpec) -> dict[str, Any]:
+    validated = spec._validated
+    if isinstance(validated, BaseModel):
+        try:
+            return validated.model_dump(mode="json")
+        except Exception:  # a Params model with values JSON cannot hold: keep what the user wrote
+            log.debug("cannot serialize validated params of %s", spec.plugin_name(), exc_info=True)
+    elif isinstance(validated, dict):
+        return _plain_copy(validated)
+    return _plain_copy(spec.raw_params())
+
+
+def resolved_dict(scenario: Scenario) -> dict[str, Any]:
+    """Plain data of ``scenario`` with every default filled in and times as text (``"10 ms"``).
+
+    Network and signal parameters are written inline (``{type: can, nodes: [...], bitrate: ...}``), as in
+    scenario files, so the result loads back into an equal scenario.
+    """
+    data = scenario.model_dump(mode="json")
+    for path, spec in scenario.plugin_specs():
+        params = _params_json(spec)
+        parts = parse_path(path)
+        if parts[0] == "networks":
+            params.pop("nodes", None)
+            data["networks"][parts[1]] = {"type": spec.plugin_name(), "nodes": list(spec.nodes), **params}  # type: ignore[attr-defined]
+        elif parts[0] == "signals":
+            data["signals"][parts[1]] = {"type": spec.plugin_name(), **params}
+        else:
+            node: Any = data
+            for part in parts:
+                node = node[part]
+            node["params"] = params
+    return data
+
+
+def dump_resolved(scenario: Scenario) -> str:
+    """The resolved scenario (:func:`resolved_dict`) as YAML text, keys in schema order."""
+    from ruamel.yaml import YAML
+
+    yaml = YAML(typ="rt", pure=True)
+    yaml.default_flow_style = False
+    yaml.width = 100
+    yaml.representer.add_representer(
+        type(None), lambda rep, _: rep.represent_scalar("tag:yaml.org,2002:null", "null")
+    )
+    buf = io.StringIO()
+    yaml.dump(resolved_dict(scenario), buf)
+    return buf.getvalue()
+
+
+def scenario_hash(raw_or_scenario: Source) -> str:
+    """SHA-256 (hex) of the canonical JSON of the resolved scenario, without its ``output`` section.
+
+    Two files that differ only in formatting, comments, key order, defaults written out or time spelling
+    (``"0.01 s"`` vs ``"10 ms"``) hash the same; any change that can alter results changes the hash.
+
+    Raises
+    ------
+    ScenarioError
+        When ``raw_or_scenario`` is not a valid scenario.
+    """
+    scenario = raw_or_scenario if isinstance(raw_or_scenario, Scenario) else load_scenario(raw_or_scenario)
+    data = resolved_dict(scenario)
+    data.pop("output", None)
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()

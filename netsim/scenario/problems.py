@@ -1,0 +1,97 @@
+"""Problems found in a scenario, and the error that carries all of them at once.
+
+Every check (YAML syntax, schema, plugin parameters, cross references) produces :class:`Problem` records
+with the dotted YAML path of the offending value; the loader adds the file and line. A scenario that has
+at least one problem of severity ``"error"`` raises :class:`ScenarioError`, which lists them all.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Iterable
+
+from netsim.errors import ConfigError
+
+__all__ = ["Problem", "ScenarioError", "ERROR", "WARNING", "sort_problems"]
+
+ERROR = "error"
+WARNING = "warning"
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong (or suspicious) in a scenario.
+
+    Attributes
+    ----------
+    path
+        Dotted YAML path (``nodes.controller.tasks[1].period``); empty for the whole file.
+    message
+        What is wrong and what to change.
+    line
+        1-based line in ``file``, when known.
+    file
+        The scenario file, when the scenario came from a file.
+    severity
+        ``"error"`` (the scenario cannot run) or ``"warning"`` (it runs, but look again).
+    """
+
+    path: str
+    message: str
+    line: int | None = None
+    file: str | None = None
+    severity: str = ERROR
+
+    @property
+    def is_error(self) -> bool:
+        """True for problems that stop the scenario from running."""
+        return self.severity == ERROR
+
+    def located(self, line: int | None, file: str | None) -> Problem:
+        """A copy with ``line`` and ``file`` filled in where still missing."""
+        return replace(self, line=self.line if self.line is not None else line, file=self.file or file)
+
+    def __str__(self) -> str:
+        where = ""
+        if self.file:
+            where = f"{self.file}:{self.line}: " if self.line is not None else f"{self.file}: "
+        elif self.line is not None:
+            where = f"line {self.line}: "
+        tag = "warning: " if self.severity == WARNING else ""
+        body = f"{self.path}: {self.message}" if self.path else self.message
+        return f"{where}{tag}{body}"
+
+
+def sort_problems(problems: Iterable[Problem]) -> list[Problem]:
+    """Problems without duplicates, ordered by file and line (problems without a line keep their order, last)."""
+    seen: set[tuple[str, str, str]] = set()
+    unique: list[Problem] = []
+    for p in problems:
+        key = (p.path, p.message, p.severity)
+        if key not in seen:
+            seen.add(key)
+            unique.append(p)
+    order = {id(p): i for i, p in enumerate(unique)}
+    return sorted(unique, key=lambda p: (p.file or "", p.line is None, p.line or 0, order[id(p)]))
+
+
+class ScenarioError(ConfigError):
+    """A scenario has problems; ``problems`` lists every one (errors and warnings).
+
+    The message is one problem per line, as ``netsim validate`` prints them.
+    """
+
+    def __init__(self, problems: list[Problem]) -> None:
+        self.problems = list(problems)
+        errors = [p for p in self.problems if p.is_error] or self.problems
+        first = errors[0] if errors else None
+        n = len(errors)
+        head = f"scenario has {n} problem{'s' if n != 1 else ''}"
+        lines = "\n".join(f"  {p}" for p in self.problems)
+        super().__init__(f"{head}:\n{lines}" if lines else head)
+        self.path = first.path if first else None
+
+    @property
+    def errors(self) -> list[Problem]:
+        """Only the problems of severity ``"error"``."""
+        return [p for p in self.problems if p.is_error]

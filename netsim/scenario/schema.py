@@ -1,0 +1,654 @@
+"""The scenario schema: pydantic models of a netsim YAML scenario.
+
+A scenario is a frozen, validated description (the SimSo split: static description here, runtime objects
+in :mod:`netsim.scenario.builder`). Every model forbids unknown keys; every time field accepts ``"1.5 ms"``
+style text (a bare number is seconds) and holds **integer nanoseconds**. Plugin parameters (plant model,
+programs, networks, signals, metrics) are kept raw here and validated against the plugin's own ``Params``
+model by :mod:`netsim.scenario.validate`; after :func:`netsim.scenario.load_scenario` the validated
+``Params`` instance of each plugin is available from ``spec.validated_params()``.
+
+Public classes and their fields (times in ns)
+---------------------------------------------
+``Scenario``
+    ``name, description, seed, duration, plant: PlantSpec | None, io: dict[str, IOChannel],
+    signals: dict[str, SignalSpec], nodes: dict[str, NodeSpec], networks: dict[str, NetworkSpec],
+    record: list[str] | None, metrics: list[MetricSpec], baseline: BaselineSpec | None,
+    output: OutputSpec``; methods ``resolved_dict()``, ``node_networks(node)``, ``baseline_scenario()``;
+    property ``source`` (the file it came from, or None).
+``PlantSpec``
+    ``model, params, x0, disturbances (plant input -> signal name), record_grid, process_noise``.
+``AdcChannel`` / ``DacChannel`` / ``EncoderChannel`` (the ``IOChannel`` union, discriminated by ``type``)
+    adc: ``output, noise_std, quant_step, saturation``; dac: ``input, saturation, resolution``;
+    encoder: ``output, step, tick, mode``.
+``SignalSpec``
+    ``type`` and ``params`` (the other keys of the YAML mapping).
+``NodeSpec``
+    ``policy, context_switch, tasks: list[TaskSpec], handlers: list[HandlerSpec]``.
+``TaskSpec``
+    ``name, program, params, period, offset, deadline (default: period), priority, execution, wcet,
+    release ("periodic" | "aperiodic" | "on_message:<net>"; default periodic when a period is given),
+    preemptible, wcet_handler, deadline_handler``; properties ``release_kind``, ``release_network``;
+    method ``execution_spec()``.
+``HandlerSpec``
+    ``name, program, params, priority, latency, execution, trigger: HandlerTrigger | None``.
+``HandlerTrigger``
+    exactly one of ``timer: TimerTrigger(period, start)``, ``on_message: str``,
+    ``external: ExternalTrigger(min_interarrival)``; property ``kind``.
+``ConstantExec`` / ``UniformExec`` / ``NormalExec`` / ``EmpiricalExec``
+    execution-time distributions (``dist`` = constant | uniform | normal | empirical); an execution time
+    is either an ``int`` (constant ns) or one of these.
+``NetworkSpec``
+    ``type, nodes`` and ``params`` (the other keys of the YAML mapping; ``validated_params()`` includes
+    ``nodes``).
+``MetricSpec``
+    ``type, params``.
+``BaselineSpec``
+    ``overrides: dict[str, Any]`` (dotted path -> value).
+``OutputSpec``
+    ``dir, plot``.
+
+Every plugin spec (``PlantSpec``, ``TaskSpec``, ``HandlerSpec``, ``NetworkSpec``, ``SignalSpec``,
+``MetricSpec``) has ``plugin()`` (the registered object) and ``validated_params()`` (its ``Params`` model
+instance, or the raw dict when the plugin declares no ``Params``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Annotated, Any, ClassVar, Literal, Union
+
+from pydantic import (
+    BeforeValidator,
+    ConfigDict,
+    Discriminator,
+    Field,
+    PrivateAttr,
+    StringConstraints,
+    Tag,
+    model_validator,
+)
+
+from netsim.units import Duration, StrictModel, Time
+
+__all__ = [
+    "NAME_PATTERN",
+    "TAG_MARK",
+    "BUILTIN_POLICIES",
+    "EXEC_DISTS",
+    "IO_TYPES",
+    "SpecModel",
+    "PluginSpec",
+    "ConstantExec",
+    "UniformExec",
+    "NormalExec",
+    "EmpiricalExec",
+    "Execution",
+    "AdcChannel",
+    "DacChannel",
+    "EncoderChannel",
+    "IOChannel",
+    "PlantSpec",
+    "SignalSpec",
+    "TaskSpec",
+    "TimerTrigger",
+    "ExternalTrigger",
+    "HandlerTrigger",
+    "HandlerSpec",
+    "NodeSpec",
+    "NetworkSpec",
+    "MetricSpec",
+    "BaselineSpec",
+    "OutputSpec",
+    "Scenario",
+]
+
+#: Names of scenarios, nodes, tasks, networks, channels and signals.
+NAME_PATTERN = r"^[A-Za-z0-9_-]+$"
+#: Prefix of the internal tags of discriminated unions (dropped from error paths).
+TAG_MARK = "§"
+#: Scheduling policies every kernel knows; anything else must be a registered ``policy`` or ``module:Class``.
+BUILTIN_POLICIES = ("fp", "rm", "dm", "edf")
+EXEC_DISTS = ("constant", "uniform", "normal", "empirical")
+IO_TYPES = ("adc", "dac", "encoder")
+
+Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN)]
+
+
+# --------------------------------------------------------------------------------------------- helpers
+def _plant_port(value: Any) -> int | str:
+    """A plant input/output: index ``0, 1, ...`` or a signal name (digit-only text becomes an index)."""
+    if isinstance(value, bool):
+        raise ValueError(f"expected a plant port index (0, 1, ...) or name, got {value!r}")
+    if isinstance(value, int):
+        if value < 0:
+            raise ValueError(f"plant port index must be >= 0, got {value}")
+        return value
+    if isinstance(value, str) and value.strip():
+        text = value.strip()
+        return int(text) if text.isdigit() else text
+    raise ValueError(f"expected a plant port index (0, 1, ...) or name, got {value!r}")
+
+
+PlantPort = Annotated[Union[int, str], BeforeValidator(_plant_port)]
+
+
+def _range(value: Any) -> tuple[float, float]:
+    if isinstance(value, (list, tuple)) and len(value) == 2:
+        lo, hi = value
+        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (lo, hi)):
+            if not lo < hi:
+                raise ValueError(f"expected [low, high] with low < high, got [{lo}, {hi}]")
+            return float(lo), float(hi)
+    raise ValueError(f"expected [low, high] (two numbers), got {value!r}")
+
+
+Range = Annotated[tuple[float, float], BeforeValidator(_range)]
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(float(v))
+
+
+def _noise(value: Any) -> Any:
+    """Process noise: a number (same intensity on every state), a list (per state) or a matrix."""
+    if value is None:
+        return None
+    if _is_number(value):
+        if value < 0:
+            raise ValueError(f"noise intensity must be >= 0, got {value}")
+        return float(value)
+    if isinstance(value, (list, tuple)) and value:
+        if all(_is_number(v) for v in value):
+            return [float(v) for v in value]
+        if all(isinstance(row, (list, tuple)) and row and all(_is_number(v) for v in row) for row in value):
+            if len({len(row) for row in value}) != 1:
+                raise ValueError("noise matrix rows must all have the same length")
+            return [[float(v) for v in row] for row in value]
+    raise ValueError(f"expected a number, a list of numbers or a matrix (list of lists), got {value!r}")
+
+
+ProcessNoise = Annotated[Any, BeforeValidator(_noise)]
+
+_RELEASE = re.compile(r"^on_message:([A-Za-z0-9_-]+)$")
+
+
+def _release(value: Any) -> str:
+    if isinstance(value, str):
+        text = value.strip().replace(" ", "")
+        if text in ("periodic", "aperiodic") or _RELEASE.match(text):
+            return text
+    raise ValueError(f"release must be 'periodic', 'aperiodic' or 'on_message:<network>', got {value!r}")
+
+
+Release = Annotated[str, BeforeValidator(_release)]
+
+
+# --------------------------------------------------------------------------------------------- bases
+class SpecModel(StrictModel):
+    """Base of every scenario model: unknown keys are errors, instances are read-only."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, validate_assignment=False)
+
+
+class PluginSpec(SpecModel):
+    """A scenario entry that names a registered plugin and carries parameters for it."""
+
+    #: Registry kind of the plugin this spec names.
+    plugin_kind: ClassVar[str] = ""
+    _validated: Any = PrivateAttr(default=None)
+
+    def plugin_name(self) -> str:
+        """The registered name (or ``module:attr``) of the plugin."""
+        raise NotImplementedError
+
+    def raw_params(self) -> dict[str, Any]:
+        """The parameters as written in the scenario (what the plugin's ``Params`` validates)."""
+        return dict(getattr(self, "params", {}) or {})
+
+    def plugin(self) -> Any:
+        """The registered object (class or function) this spec names.
+
+        Raises
+        ------
+        ConfigError
+            When the name is not registered (with a "did you mean").
+        """
+        from netsim import registry
+
+        return registry.lookup(self.plugin_kind, self.plugin_name())
+
+    def validated_params(self) -> Any:
+        """The plugin's ``Params`` instance for these parameters (raw dict if the plugin has no ``Params``).
+
+        Cached; filled by :func:`netsim.scenario.load_scenario`. Validates now when the scenario was built
+        without the loader.
+
+        Raises
+        ------
+        ScenarioError
+            When the parameters do not fit the plugin's ``Params``.
+        """
+        if self._validated is None:
+            from netsim.scenario.validate import validate_params
+
+            self._validated = validate_params(self.plugin(), self.raw_params())
+        return self._validated
+
+    def attach_validated(self, params: Any) -> None:
+        """Store the validated parameters (used by the loader)."""
+        self._validated = params
+
+
+# --------------------------------------------------------------------------------------------- execution
+class ConstantExec(SpecModel):
+    """A constant execution time: ``{dist: constant, value: 0.5 ms}`` (same as writing ``0.5 ms``)."""
+
+    dist: Literal["constant"]
+    value: Time
+
+
+class UniformExec(SpecModel):
+    """Uniformly distributed execution time in ``[low, high]``."""
+
+    dist: Literal["uniform"]
+    low: Time
+    high: Time
+
+    @model_validator(mode="after")
+    def _order(self) -> UniformExec:
+        if self.low > self.high:
+            raise ValueError("low must not exceed high")
+        return self
+
+
+class NormalExec(SpecModel):
+    """Normally distributed execution time, clipped to ``[min, max]``."""
+
+    dist: Literal["normal"]
+    mean: Time
+    std: Time
+    min: Time = 0
+    max: Time | None = None
+
+    @model_validator(mode="after")
+    def _order(self) -> NormalExec:
+        if self.max is not None and self.max < self.min:
+            raise ValueError("max must not be below min")
+        return self
+
+
+class EmpiricalExec(SpecModel):
+    """Execution times drawn (uniformly, with replacement) from measured ``values``."""
+
+    dist: Literal["empirical"]
+    values: list[Time] = Field(min_length=1)
+
+
+def _exec_tag(value: Any) -> str | None:
+    if isinstance(value, dict):
+        dist = value.get("dist")
+        return f"{TAG_MARK}{dist}" if dist in EXEC_DISTS else None
+    if isinstance(value, SpecModel):
+        return f"{TAG_MARK}{getattr(value, 'dist', None)}"
+    if isinstance(value, (str, int, float)) and not isinstance(value, bool):
+        return f"{TAG_MARK}const"
+    return None
+
+
+#: An execution time: constant ns (from ``"0.5 ms"``) or a distribution model.
+Execution = Annotated[
+    Union[
+        Annotated[Time, Tag(f"{TAG_MARK}const")],
+        Annotated[ConstantExec, Tag(f"{TAG_MARK}constant")],
+        Annotated[UniformExec, Tag(f"{TAG_MARK}uniform")],
+        Annotated[NormalExec, Tag(f"{TAG_MARK}normal")],
+        Annotated[EmpiricalExec, Tag(f"{TAG_MARK}empirical")],
+    ],
+    Discriminator(_exec_tag, custom_error_type="execution_spec", custom_error_message="bad execution time"),
+]
+
+
+def _exec_spec(execution: Any) -> Any:
+    """The execution time in the text form ``ExecTime.from_spec`` reads (``"0.5 ms"`` or a dict)."""
+    from netsim.timebase import format_time
+
+    if execution is None:
+        return None
+    if isinstance(execution, int):
+        return format_time(execution)
+    return execution.model_dump(mode="json")
+
+
+# --------------------------------------------------------------------------------------------- io
+class AdcChannel(SpecModel):
+    """Analog input: samples plant output ``output`` (index or name), with noise, quantization, saturation."""
+
+    type: Literal["adc"]
+    output: PlantPort = 0
+    noise_std: float = Field(default=0.0, ge=0)
+    quant_step: float | None = Field(default=None, gt=0)
+    saturation: Range | None = None
+
+
+class DacChannel(SpecModel):
+    """Analog output: sets plant input ``input`` (zero-order hold), with saturation and resolution."""
+
+    type: Literal["dac"]
+    input: PlantPort = 0
+    saturation: Range | None = None
+    resolution: float | None = Field(default=None, gt=0)
+
+
+class EncoderChannel(SpecModel):
+    """Incremental encoder on plant output ``output``: quantization ``step``, read by an ISR every ``tick``."""
+
+    type: Literal["encoder"]
+    output: PlantPort = 0
+    step: float = Field(gt=0)
+    tick: Duration
+    mode: Literal["exact", "polling"] = "exact"
+
+
+def _io_tag(value: Any) -> str | None:
+    kind = value.get("type") if isinstance(value, dict) else getattr(value, "type", None)
+    return f"{TAG_MARK}{kind}" if kind in IO_TYPES else None
+
+
+#: One named I/O channel, discriminated by ``type``.
+IOChannel = Annotated[
+    Union[
+        Annotated[AdcChannel, Tag(f"{TAG_MARK}adc")],
+        Annotated[DacChannel, Tag(f"{TAG_MARK}dac")],
+        Annotated[EncoderChannel, Tag(f"{TAG_MARK}encoder")],
+    ],
+    Discriminator(_io_tag, custom_error_type="io_type", custom_error_message="bad io channel type"),
+]
+
+
+# --------------------------------------------------------------------------------------------- plant, signals
+class PlantSpec(PluginSpec):
+    """The plant: a registered model (kind ``plant``) or ``module:attr`` factory with its parameters."""
+
+    plugin_kind: ClassVar[str] = "plant"
+    model: str = Field(min_length=1)
+    params: dict[str, Any] = Field(default_factory=dict)
+    x0: list[float] | None = None
+    disturbances: dict[PlantPort, Name] = Field(default_factory=dict)
+    record_grid: Duration | None = None
+    process_noise: ProcessNoise = None
+
+    def plugin_name(self) -> str:
+        return self.model
+
+
+def _gather_params(data: Any, fixed: tuple[str, ...]) -> Any:
+    """Move every key not in ``fixed`` into ``params`` (inline parameters, as scenarios write them)."""
+    if not isinstance(data, dict):
+        return data
+    out = {k: v for k, v in data.items() if k in fixed}
+    params: dict[str, Any] = {}
+    explicit = data.get("params")
+    if isinstance(explicit, dict):
+        params.update(explicit)
+    elif "params" in data:
+        params["params"] = explicit
+    params.update({k: v for k, v in data.items() if k not in fixed and k != "params"})
+    out["params"] = params
+    return out
+
+
+class SignalSpec(PluginSpec):
+    """A reference or disturbance signal: ``{type: square, amplitude: 1, period: 2 s}``.
+
+    The keys other than ``type`` are the signal's parameters (validated by the registered ``signal``).
+    """
+
+    plugin_kind: ClassVar[str] = "signal"
+    type: str = Field(min_length=1)
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _inline(cls, data: Any) -> Any:
+        return _gather_params(data, ("type",))
+
+    def plugin_name(self) -> str:
+        return self.type
+
+
+# --------------------------------------------------------------------------------------------- nodes
+class TaskSpec(PluginSpec):
+    """A task on a node: the program it runs, when it is released and how long it executes."""
+
+    plugin_kind: ClassVar[str] = "program"
+    name: Name
+    program: str = Field(min_length=1)
+    params: dict[str, Any] = Field(default_factory=dict)
+    period: Duration | None = None
+    offset: Time = 0
+    deadline: Duration | None = None
+    priority: int | None = None
+    execution: Execution | None = None
+    wcet: Duration | None = None
+    release: Release | None = None
+    preemptible: bool = True
+    wcet_handler: Name | None = None
+    deadline_handler: Name | None = None
+
+    @model_validator(mode="after")
+    def _defaults(self) -> TaskSpec:
+        if self.release is None:
+            object.__setattr__(self, "release", "periodic" if self.period is not None else "aperiodic")
+        if self.deadline is None and self.period is not None:
+            object.__setattr__(self, "deadline", self.period)
+        return self
+
+    def plugin_name(self) -> str:
+        return self.program
+
+    @property
+    def release_kind(self) -> str:
+        """``"periodic"``, ``"aperiodic"`` or ``"on_message"``."""
+        return str(self.release).split(":", 1)[0]
+
+    @property
+    def release_network(self) -> str | None:
+        """The network whose messages release this task (``release: on_message:<net>``), else None."""
+        kind, _, net = str(self.release).partition(":")
+        return net if kind == "on_message" else None
+
+    def execution_spec(self) -> Any:
+        """``execution`` in the form ``ExecTime.from_spec`` reads (``"0.5 ms"`` or a dict), or None."""
+        return _exec_spec(self.execution)
+
+
+class TimerTrigger(SpecModel):
+    """Timer interrupt: periodic with ``period`` from ``start``, or one-shot at ``start`` without a period."""
+
+    period: Duration | None = None
+    start: Time = 0
+
+
+class ExternalTrigger(SpecModel):
+    """External interrupt raised by program code (``kernel.trigger``), at most once per ``min_interarrival``."""
+
+    min_interarrival: Time = 0
+
+
+class HandlerTrigger(SpecModel):
+    """What raises an interrupt handler: exactly one of ``timer``, ``on_message`` (a network), ``external``."""
+
+    timer: TimerTrigger | None = None
+    on_message: Name | None = None
+    external: ExternalTrigger | None = None
+
+    @model_validator(mode="after")
+    def _exactly_one(self) -> HandlerTrigger:
+        given = [k for k in ("timer", "on_message", "external") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "give exactly one of 'timer', 'on_message' or 'external'"
+                + (f" (got {', '.join(given)})" if given else "")
+            )
+        return self
+
+    @property
+    def kind(self) -> str:
+        """``"timer"``, ``"on_message"`` or ``"external"``."""
+        for k in ("timer", "on_message", "external"):
+            if getattr(self, k) is not None:
+                return k
+        raise AssertionError("unreachable: validated trigger has one kind")
+
+
+class HandlerSpec(PluginSpec):
+    """An interrupt handler on a node: beats every task; lower ``priority`` value is more urgent."""
+
+    plugin_kind: ClassVar[str] = "program"
+    name: Name
+    program: str = Field(min_length=1)
+    params: dict[str, Any] = Field(default_factory=dict)
+    priority: int = 0
+    latency: Time = 0
+    execution: Execution | None = None
+    trigger: HandlerTrigger | None = None
+
+    def plugin_name(self) -> str:
+        return self.program
+
+    def execution_spec(self) -> Any:
+        """``execution`` in the form ``ExecTime.from_spec`` reads, or None."""
+        return _exec_spec(self.execution)
+
+
+class NodeSpec(SpecModel):
+    """A node: one real-time kernel with its scheduling policy, tasks and interrupt handlers."""
+
+    policy: str = Field(default="fp", min_length=1)
+    context_switch: Time = 0
+    tasks: list[TaskSpec] = Field(default_factory=list)
+    handlers: list[HandlerSpec] = Field(default_factory=list)
+
+    def task(self, name: str) -> TaskSpec:
+        """The task called ``name`` (KeyError if none)."""
+        for t in self.tasks:
+            if t.name == name:
+                return t
+        raise KeyError(name)
+
+    def handler(self, name: str) -> HandlerSpec:
+        """The handler called ``name`` (KeyError if none)."""
+        for h in self.handlers:
+            if h.name == name:
+                return h
+        raise KeyError(name)
+
+
+# --------------------------------------------------------------------------------------------- networks etc.
+class NetworkSpec(PluginSpec):
+    """A network: its registered ``type``, the ``nodes`` attached, and the type's other parameters inline."""
+
+    plugin_kind: ClassVar[str] = "network"
+    type: str = Field(min_length=1)
+    nodes: list[Name] = Field(default_factory=list)
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _inline(cls, data: Any) -> Any:
+        return _gather_params(data, ("type", "nodes"))
+
+    def plugin_name(self) -> str:
+        return self.type
+
+    def raw_params(self) -> dict[str, Any]:
+        return {"nodes": list(self.nodes), **self.params}
+
+
+class MetricSpec(PluginSpec):
+    """A metric computed after the run: ``{type: control_error, params: {reference: r, output: y}}``."""
+
+    plugin_kind: ClassVar[str] = "metric"
+    type: str = Field(min_length=1)
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    def plugin_name(self) -> str:
+        return self.type
+
+
+class BaselineSpec(SpecModel):
+    """A baseline run of the same scenario with ``overrides`` (dotted path -> value) applied."""
+
+    overrides: dict[str, Any] = Field(default_factory=dict)
+
+
+class OutputSpec(SpecModel):
+    """Where the run folder goes (None: ``reports/<name>/<run-id>``) and whether to draw figures."""
+
+    dir: str | None = None
+    plot: bool = False
+
+
+# --------------------------------------------------------------------------------------------- scenario
+class Scenario(SpecModel):
+    """A complete, validated scenario (see the module docstring for every field)."""
+
+    name: Name
+    description: str = ""
+    seed: int = Field(default=0, ge=0)
+    duration: Duration
+    plant: PlantSpec | None = None
+    io: dict[Name, IOChannel] = Field(default_factory=dict)
+    signals: dict[Name, SignalSpec] = Field(default_factory=dict)
+    nodes: dict[Name, NodeSpec] = Field(default_factory=dict)
+    networks: dict[Name, NetworkSpec] = Field(default_factory=dict)
+    record: list[str] | None = None
+    metrics: list[MetricSpec] = Field(default_factory=list)
+    baseline: BaselineSpec | None = None
+    output: OutputSpec = Field(default_factory=OutputSpec)
+
+    _source: str | None = PrivateAttr(default=None)
+    _raw: Any = PrivateAttr(default=None)
+
+    @property
+    def source(self) -> str | None:
+        """The scenario file this came from (None for a dict)."""
+        return self._source
+
+    def node_networks(self, node: str) -> list[str]:
+        """Names of the networks ``node`` is attached to, in file order."""
+        return [name for name, net in self.networks.items() if node in net.nodes]
+
+    def plugin_specs(self) -> list[tuple[str, PluginSpec]]:
+        """Every plugin spec with the YAML path of its parameters' owner (``nodes.n.tasks[0]``, ...)."""
+        out: list[tuple[str, PluginSpec]] = []
+        if self.plant is not None:
+            out.append(("plant", self.plant))
+        out += [(f"signals.{n}", s) for n, s in self.signals.items()]
+        for node_name, node in self.nodes.items():
+            out += [(f"nodes.{node_name}.tasks[{i}]", t) for i, t in enumerate(node.tasks)]
+            out += [(f"nodes.{node_name}.handlers[{i}]", h) for i, h in enumerate(node.handlers)]
+        out += [(f"networks.{n}", s) for n, s in self.networks.items()]
+        out += [(f"metrics[{i}]", m) for i, m in enumerate(self.metrics)]
+        return out
+
+    def resolved_dict(self) -> dict[str, Any]:
+        """Plain YAML/JSON-ready data with every default filled in and times as text (``"10 ms"``).
+
+        Plugin parameters appear with their plugin's defaults when they have been validated (always the case
+        for a scenario from :func:`~netsim.scenario.load_scenario`). Loading the result gives an equal scenario.
+        """
+        from netsim.scenario.loader import resolved_dict
+
+        return resolved_dict(self)
+
+    def baseline_scenario(self) -> Scenario | None:
+        """The baseline scenario (this one with ``baseline.overrides`` applied and no baseline), or None."""
+        if self.baseline is None:
+            return None
+        from netsim.scenario.loader import load_scenario
+
+        raw = self.resolved_dict()
+        raw["baseline"] = None
+        return load_scenario(raw, overrides=dict(self.baseline.overrides))

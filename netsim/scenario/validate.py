@@ -1,0 +1,479 @@
+"""Checks beyond the base schema: plugin parameters and cross references.
+
+These checks work on the **raw** scenario data (plain dicts from YAML) and skip anything malformed, so they
+run even when the base schema found problems and ``netsim validate`` reports everything in one go.
+
+What is checked
+---------------
+- Every plugin named in the scenario exists (plant ``model``, signal ``type``, task/handler ``program``,
+  network ``type``, metric ``type``, node ``policy`` unless fp/rm/dm/edf), with a "did you mean"; its
+  ``params`` fit the plugin's ``Params`` model (paths such as ``nodes.sensor.tasks[0].params.bits``).
+- Task and handler names are unique per node; ``wcet_handler``/``deadline_handler`` name handlers of the node.
+- A network's ``nodes`` exist; ``release: on_message:<net>`` and ``trigger: {on_message: <net>}`` name a
+  network the node is attached to.
+- A periodic task has a period, an aperiodic or message-released task has none; under policy ``fp`` every
+  task has a priority. A deadline longer than the period is allowed (TrueTime semantics: jobs continue and
+  may queue up) but reported as a **warning**.
+- Program parameter naming conventions: ``network``/``*_network`` (and ``networks``/``*_networks``) name a
+  network the node is on; ``to`` names a node on that network (null = broadcast); ``channel``/``*_channel``
+  (and plurals) name an ``io`` channel; ``signal``, ``reference``, ``*_signal`` (and plurals) name a signal.
+- I/O channel plant ports lie within the plant's inputs/outputs when the plant factory declares them
+  (``ports(params) -> (input_names, output_names)``, or attributes ``input_names``/``output_names`` or
+  ``n_inputs``/``n_outputs``); plant ``disturbances`` name plant inputs and scenario signals.
+- ``record`` names an io channel, a signal or a plant output; other names get a **warning** (programs may
+  record them under that name).
+- ``baseline.overrides`` paths can be applied and give a valid scenario.
+"""
+
+from __future__ import annotations
+
+import copy
+import importlib
+import logging
+from typing import Any, Iterable
+
+from pydantic import BaseModel, ValidationError
+
+from netsim.errors import ConfigError
+from netsim.scenario.messages import problems_from_validation_error
+from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path, set_path
+from netsim.scenario.problems import WARNING, Problem, ScenarioError
+from netsim.scenario.schema import BUILTIN_POLICIES
+from netsim.timebase import TimeParseError, parse_time
+
+__all__ = ["validate_params", "check_raw", "plugin_load_problems"]
+
+log = logging.getLogger(__name__)
+
+_PLUGIN_WARNINGS: list[Problem] | None = None
+
+
+def plugin_load_problems() -> list[Problem]:
+    """Load the registry's plugin modules once; a module that fails to import becomes a warning.
+
+    A half-written or broken plugin module must not stop validation: its plugins are then reported as
+    unknown names, and this warning says why.
+    """
+    global _PLUGIN_WARNINGS
+    if _PLUGIN_WARNINGS is not None:
+        return list(_PLUGIN_WARNINGS)
+    from netsim import registry
+
+    warnings: list[Problem] = []
+    try:
+        registry.load_plugins()
+    except Exception:  # noqa: BLE001 - a broken plugin module is reported, not raised
+        for module in registry.PLUGIN_MODULES:
+            try:
+                importlib.import_module(module)
+            except ModuleNotFoundError as exc:
+                if exc.name is None or not module.startswith(exc.name):
+                    warnings.append(_load_warning(module, exc))
+            except Exception as exc:  # noqa: BLE001
+                warnings.append(_load_warning(module, exc))
+    _PLUGIN_WARNINGS = warnings
+    return list(warnings)
+
+
+def _load_warning(module: str, exc: BaseException) -> Problem:
+    log.warning("plugin module %s failed to import", module, exc_info=exc)
+    return Problem("", f"plugin module '{module}' failed to import ({type(exc).__name__}: {exc}); its plugins are unavailable", severity=WARNING)
+
+
+def _params_model(plugin: Any) -> type[BaseModel] | None:
+    cls = getattr(plugin, "Params", None)
+    return cls if isinstance(cls, type) and issubclass(cls, BaseModel) else None
+
+
+def validate_params(plugin: Any, raw: dict[str, Any]) -> Any:
+    """Validate ``raw`` parameters with ``plugin.Params``; the raw dict when the plugin has no ``Params``.
+
+    Raises
+    ------
+    ScenarioError
+        With one problem per invalid parameter (paths relative to the parameters).
+    """
+    cls = _params_model(plugin)
+    if cls is None:
+        return dict(raw)
+    try:
+        return cls.model_validate(raw)
+    except ValidationError as exc:
+        raise ScenarioError(problems_from_validation_error(exc, model=cls)) from None
+
+
+def _d(x: Any) -> dict[str, Any]:
+    return x if isinstance(x, dict) else {}
+
+
+def _l(x: Any) -> list[Any]:
+    return x if isinstance(x, list) else []
+
+
+def _names(x: Any) -> list[str]:
+    return [k for k in _d(x) if isinstance(k, str)]
+
+
+class _Checker:
+    """Collects problems and validated plugin parameters for one raw scenario."""
+
+    def __init__(self, raw: dict[str, Any]) -> None:
+        self.raw = raw
+        self.problems: list[Problem] = []
+        self.validated: dict[str, Any] = {}
+        self.nodes = _names(raw.get("nodes"))
+        self.networks = _d(raw.get("networks"))
+        self.io = _names(raw.get("io"))
+        self.signals = _names(raw.get("signals"))
+        self.attached: dict[str, set[str]] = {}
+        for net_name, net in self.networks.items():
+            for node in _l(_d(net).get("nodes")):
+                if isinstance(node, str):
+                    self.attached.setdefault(node, set()).add(net_name)
+
+    # ------------------------------------------------------------------ helpers
+    def error(self, parts: Iterable[PathPart], message: str) -> None:
+        self.problems.append(Problem(format_path(list(parts)), message))
+
+    def warn(self, parts: Iterable[PathPart], message: str) -> None:
+        self.problems.append(Problem(format_path(list(parts)), message, severity=WARNING))
+
+    def lookup(self, kind: str, name: Any, at: list[PathPart]) -> Any:
+        """The registered plugin or None (after recording a problem)."""
+        if not isinstance(name, str) or not name:
+            return None  # the schema reports the type problem
+        from netsim import registry
+
+        try:
+            return registry.lookup(kind, name)
+        except ConfigError as exc:
+            self.error(at, exc.message)
+        except Exception as exc:  # noqa: BLE001 - importing a user's "module:attr" may raise anything
+            self.error(at, f"cannot load {kind} '{name}': {type(exc).__name__}: {exc}")
+        return None
+
+    def params(self, plugin: Any, raw: Any, prefix: list[PathPart], key: str) -> Any:
+        """Validate plugin parameters; stores and returns the validated object (None when invalid)."""
+        if plugin is None or not isinstance(raw, dict):
+            return None
+        cls = _params_model(plugin)
+        if cls is None:
+            self.validated[key] = dict(raw)
+            return dict(raw)
+        try:
+            model = cls.model_validate(raw)
+        except ValidationError as exc:
+            self.problems += problems_from_validation_error(exc, prefix=prefix, model=cls)
+            return None
+        except Exception as exc:  # noqa: BLE001 - a plugin validator that crashes is reported at its path
+            self.error(prefix, f"parameters rejected: {type(exc).__name__}: {exc}")
+            return None
+        self.validated[key] = model
+        return model
+
+    def network_ref(self, node: str, net: Any, at: list[PathPart]) -> bool:
+        """Check that ``net`` is a network ``node`` is attached to; True when it is."""
+        if not isinstance(net, str):
+            return False
+        if net not in self.networks:
+            self.error(at, f"unknown network '{net}'{did_you_mean(net, self.networks, what='networks')}")
+            return False
+        if net not in self.attached.get(node, set()):
+            on = ", ".join(_l(_d(self.networks[net]).get("nodes"))) or "none"
+            self.error(at, f"node '{node}' is not attached to network '{net}' (its nodes: {on}); add '{node}' to networks.{net}.nodes")
+            return False
+        return True
+
+    # ------------------------------------------------------------------ sections
+    def run(self) -> None:
+        self.problems += plugin_load_problems()
+        outputs, inputs = self.plant()
+        self.io_channels(outputs, inputs)
+        self.signal_specs()
+        self.network_specs()
+        for name, node in _d(self.raw.get("nodes")).items():
+            if isinstance(name, str) and isinstance(node, dict):
+                self.node(name, node)
+        self.metrics()
+        self.record(outputs)
+        self.baseline()
+
+    def plant(self) -> tuple[list[Any] | None, list[Any] | None]:
+        plant = self.raw.get("plant")
+        if not isinstance(plant, dict):
+            return None, None
+        factory = self.lookup("plant", plant.get("model"), ["plant", "model"])
+        params = self.params(factory, plant.get("params", {}) if plant.get("params") is not None else {}, ["plant", "params"], "plant")
+        inputs, outputs = _ports(factory, params)
+        for key, sig in _d(plant.get("disturbances")).items():
+            self.port_ref(key, inputs, "input", ["plant", "disturbances", str(key)])
+            if isinstance(sig, str) and sig not in self.signals:
+                self.error(["plant", "disturbances", str(key)], f"unknown signal '{sig}'{did_you_mean(sig, self.signals, what='signals')}")
+        return outputs, inputs
+
+    def port_ref(self, port: Any, ports: list[Any] | None, what: str, at: list[PathPart]) -> None:
+        if ports is None or isinstance(port, bool):
+            return
+        if isinstance(port, str) and port.strip().isdigit():
+            port = int(port)
+        if isinstance(port, int):
+            if not 0 <= port < len(ports):
+                self.error(at, f"plant {what} index {port} out of range: the plant has {len(ports)} {what}s (0..{len(ports) - 1})")
+        elif isinstance(port, str):
+            names = [p for p in ports if isinstance(p, str)]
+            if names and port not in names:
+                self.error(at, f"the plant has no {what} '{port}'{did_you_mean(port, names, what=what + 's')}")
+
+    def io_channels(self, outputs: list[Any] | None, inputs: list[Any] | None) -> None:
+        for name, ch in _d(self.raw.get("io")).items():
+            if not isinstance(ch, dict):
+                continue
+            if self.raw.get("plant") is None:
+                self.error(["io", name], "io channels connect to a plant, but the scenario has no 'plant:' section")
+                continue
+            kind = ch.get("type")
+            if kind in ("adc", "encoder"):
+                self.port_ref(ch.get("output", 0), outputs, "output", ["io", name, "output"])
+            elif kind == "dac":
+                self.port_ref(ch.get("input", 0), inputs, "input", ["io", name, "input"])
+
+    def signal_specs(self) -> None:
+        for name, sig in _d(self.raw.get("signals")).items():
+            if not isinstance(sig, dict):
+                continue
+            plugin = self.lookup("signal", sig.get("type"), ["signals", name, "type"])
+            raw = {k: v for k, v in sig.items() if k not in ("type", "params")}
+            if isinstance(sig.get("params"), dict):
+                raw = {**sig["params"], **raw}
+            self.params(plugin, raw, ["signals", name], f"signals.{name}")
+
+    def network_specs(self) -> None:
+        for name, net in self.networks.items():
+            if not isinstance(net, dict):
+                continue
+            seen: set[str] = set()
+            for i, node in enumerate(_l(net.get("nodes"))):
+                if not isinstance(node, str):
+                    continue
+                if node not in self.nodes:
+                    self.error(["networks", name, "nodes", i], f"unknown node '{node}'{did_you_mean(node, self.nodes, what='nodes')}")
+                if node in seen:
+                    self.error(["networks", name, "nodes", i], f"node '{node}' is listed twice")
+                seen.add(node)
+            plugin = self.lookup("network", net.get("type"), ["networks", name, "type"])
+            raw = {k: v for k, v in net.items() if k not in ("type", "params")}
+            if isinstance(net.get("params"), dict):
+                raw = {**net["params"], **raw}
+            raw.setdefault("nodes", [])
+            self.params(plugin, raw, ["networks", name], f"networks.{name}")
+
+    def node(self, name: str, node: dict[str, Any]) -> None:
+        base: list[PathPart] = ["nodes", name]
+        policy = node.get("policy", "fp")
+        if isinstance(policy, str) and policy not in BUILTIN_POLICIES:
+            from netsim import registry
+
+            try:
+                registry.lookup("policy", policy)
+            except ConfigError as exc:
+                known = [*BUILTIN_POLICIES, *(e.name for e in registry.entries("policy"))]
+                msg = exc.message if ":" in policy else f"unknown policy '{policy}'{did_you_mean(policy, known, what='policies')}"
+                self.error([*base, "policy"], msg)
+            except Exception as exc:  # noqa: BLE001
+                self.error([*base, "policy"], f"cannot load policy '{policy}': {type(exc).__name__}: {exc}")
+        handlers = [h.get("name") for h in _l(node.get("handlers")) if isinstance(h, dict)]
+        seen: dict[str, str] = {}
+        for kind in ("tasks", "handlers"):
+            for i, item in enumerate(_l(node.get(kind))):
+                if not isinstance(item, dict):
+                    continue
+                at: list[PathPart] = [*base, kind, i]
+                item_name = item.get("name")
+                if isinstance(item_name, str):
+                    if item_name in seen:
+                        self.error([*at, "name"], f"duplicate name '{item_name}' on node '{name}' (also {seen[item_name]}); task and handler names must be unique per node")
+                    else:
+                        seen[item_name] = format_path(at)
+                if kind == "tasks":
+                    self.task(name, node, item, at, handlers)
+                else:
+                    self.handler(name, item, at)
+                program = self.lookup("program", item.get("program"), [*at, "program"])
+                raw = item.get("params", {})
+                raw = {} if raw is None else raw
+                model = self.params(program, raw, [*at, "params"], format_path(at))
+                values = _values(model) if model is not None else _d(raw)
+                self.conventions(name, values, [*at, "params"])
+
+    def task(self, node_name: str, node: dict[str, Any], task: dict[str, Any], at: list[PathPart], handlers: list[Any]) -> None:
+        period = task.get("period")
+        release = task.get("release")
+        rel = release.strip().replace(" ", "") if isinstance(release, str) else None
+        if rel is None and release is None:
+            rel = "periodic" if period is not None else "aperiodic"
+        if rel == "periodic" and period is None:
+            self.error([*at, "period"], "a periodic task needs a period; add e.g. 'period: 10 ms', or set 'release: aperiodic' or 'release: on_message:<network>'")
+        if rel is not None and rel != "periodic" and period is not None:
+            self.error([*at, "period"], f"only periodic tasks have a period (this one is released '{rel}'); remove 'period' or set 'release: periodic'")
+        if rel is not None and rel.startswith("on_message:"):
+            self.network_ref(node_name, rel.split(":", 1)[1], [*at, "release"])
+        policy = node.get("policy", "fp")
+        if policy == "fp" and task.get("priority") is None:
+            self.error([*at, "priority"], "policy 'fp' needs a priority for every task; add e.g. 'priority: 1' (lower is more urgent) or use policy rm, dm or edf")
+        p_ns, d_ns = _time_or_none(period), _time_or_none(task.get("deadline"))
+        if p_ns is not None and d_ns is not None and p_ns > 0 and d_ns > p_ns:
+            self.warn([*at, "deadline"], f"deadline {task.get('deadline')} is longer than the period {period}; jobs may overlap (allowed)")
+        for key in ("wcet_handler", "deadline_handler"):
+            ref = task.get(key)
+            if isinstance(ref, str) and ref not in handlers:
+                known = [h for h in handlers if isinstance(h, str)]
+                self.error([*at, key], f"node '{node_name}' has no handler '{ref}'{did_you_mean(ref, known, what='handlers')}")
+
+    def handler(self, node_name: str, handler: dict[str, Any], at: list[PathPart]) -> None:
+        trigger = handler.get("trigger")
+        if isinstance(trigger, dict) and isinstance(trigger.get("on_message"), str):
+            self.network_ref(node_name, trigger["on_message"], [*at, "trigger", "on_message"])
+
+    def conventions(self, node: str, values: dict[str, Any], at: list[PathPart]) -> None:
+        """Check program parameters that name networks, nodes, channels and signals (see module doc)."""
+        for key, value in values.items():
+            if not isinstance(key, str):
+                continue
+            where = [*at, key]
+            if key == "network" or key.endswith("_network"):
+                self.network_ref(node, value, where)
+            elif key == "networks" or key.endswith("_networks"):
+                for i, v in enumerate(_l(value)):
+                    self.network_ref(node, v, [*where, i])
+            elif key == "channel" or key.endswith("_channel"):
+                self.name_ref(value, self.io, "io channel", where)
+            elif key == "channels" or key.endswith("_channels"):
+                for i, v in enumerate(_l(value)):
+                    self.name_ref(v, self.io, "io channel", [*where, i])
+            elif key in ("signal", "reference") or key.endswith("_signal"):
+                self.name_ref(value, self.signals, "signal", where)
+            elif key == "signals" or key.endswith("_signals"):
+                for i, v in enumerate(_l(value)):
+                    self.name_ref(v, self.signals, "signal", [*where, i])
+            elif key == "to":
+                self.to_ref(node, value, values.get("network"), where)
+
+    def name_ref(self, value: Any, known: list[str], what: str, at: list[PathPart]) -> None:
+        if isinstance(value, str) and value not in known:
+            self.error(at, f"unknown {what} '{value}'{did_you_mean(value, known, what=what + 's')}")
+
+    def to_ref(self, node: str, to: Any, net: Any, at: list[PathPart]) -> None:
+        if to is None or not isinstance(to, str):
+            return
+        if to not in self.nodes:
+            self.error(at, f"unknown node '{to}'{did_you_mean(to, self.nodes, what='nodes')}")
+            return
+        if isinstance(net, str) and net in self.networks:
+            members = [n for n in _l(_d(self.networks[net]).get("nodes")) if isinstance(n, str)]
+            if to not in members:
+                self.error(at, f"node '{to}' is not on network '{net}' (its nodes: {', '.join(members) or 'none'}); add it to networks.{net}.nodes or send to one of those")
+        elif net is None and not (self.attached.get(node, set()) & self.attached.get(to, set())):
+            self.error(at, f"nodes '{node}' and '{to}' share no network; attach both to one in 'networks'")
+
+    def metrics(self) -> None:
+        for i, metric in enumerate(_l(self.raw.get("metrics"))):
+            if not isinstance(metric, dict):
+                continue
+            plugin = self.lookup("metric", metric.get("type"), ["metrics", i, "type"])
+            raw = metric.get("params", {})
+            self.params(plugin, {} if raw is None else raw, ["metrics", i, "params"], f"metrics[{i}]")
+
+    def record(self, outputs: list[Any] | None) -> None:
+        known = set(self.io) | set(self.signals) | {o for o in outputs or [] if isinstance(o, str)}
+        for i, name in enumerate(_l(self.raw.get("record"))):
+            if not isinstance(name, str):
+                continue
+            base = name.split("[", 1)[0]
+            if base not in known:
+                hint = did_you_mean(base, known)
+                self.warn(["record", i], f"'{name}' is not an io channel, signal or plant output{hint}; it is recorded only if a program records it")
+
+    def baseline(self) -> None:
+        baseline = self.raw.get("baseline")
+        if not isinstance(baseline, dict) or not isinstance(baseline.get("overrides"), dict):
+            return
+        copy_raw = copy.deepcopy(self.raw)
+        copy_raw["baseline"] = None
+        keys: list[list[PathPart]] = []
+        for key, value in baseline["overrides"].items():
+            try:
+                set_path(copy_raw, str(key), copy.deepcopy(value))
+                keys.append(parse_path(str(key)))
+            except ConfigError as exc:
+                self.error(["baseline", "overrides"], f"override '{key}': {exc.message}")
+        if not keys:
+            return
+        from netsim.scenario.schema import Scenario
+
+        try:
+            Scenario.model_validate(copy_raw)
+        except ValidationError as exc:
+            for p in problems_from_validation_error(exc, model=Scenario):
+                try:
+                    parts = parse_path(p.path)
+                except ConfigError:
+                    continue
+                if any(parts[: len(k)] == k for k in keys):
+                    self.error(["baseline", "overrides"], f"override gives {p.path}: {p.message}")
+
+
+def _values(model: Any) -> dict[str, Any]:
+    if isinstance(model, BaseModel):
+        return {name: getattr(model, name, None) for name in type(model).model_fields}
+    return _d(model)
+
+
+def _time_or_none(value: Any) -> int | None:
+    if value is None:
+        return None
+    try:
+        return parse_time(value)
+    except (TimeParseError, TypeError):
+        return None
+
+
+def _ports(factory: Any, params: Any) -> tuple[list[Any] | None, list[Any] | None]:
+    """(inputs, outputs) of the plant when its factory declares them cheaply, else (None, None)."""
+    if factory is None:
+        return None, None
+    ports = getattr(factory, "ports", None)
+    if callable(ports) and params is not None:
+        try:
+            ins, outs = ports(params)
+            return list(ins), list(outs)
+        except Exception:  # noqa: BLE001 - ports are a convenience; a failure only skips the check
+            log.debug("plant ports() failed", exc_info=True)
+            return None, None
+
+    def side(names_attr: str, count_attr: str) -> list[Any] | None:
+        names = getattr(factory, names_attr, None)
+        if isinstance(names, (list, tuple)):
+            return list(names)
+        count = getattr(factory, count_attr, None)
+        if isinstance(count, int) and not isinstance(count, bool):
+            return list(range(count))
+        return None
+
+    return side("input_names", "n_inputs"), side("output_names", "n_outputs")
+
+
+def check_raw(raw: dict[str, Any]) -> tuple[list[Problem], dict[str, Any]]:
+    """Plugin and cross-reference problems of a raw scenario, and the validated plugin parameters.
+
+    Returns
+    -------
+    problems
+        Problems with paths (no lines yet).
+    validated
+        Validated ``Params`` instances (or raw dicts) keyed by the owner's path: ``"plant"``,
+        ``"signals.r"``, ``"nodes.n.tasks[0]"``, ``"nodes.n.handlers[0]"``, ``"networks.can"``,
+        ``"metrics[0]"``.
+    """
+    checker = _Checker(raw)
+    checker.run()
+    return checker.problems, checker.validated
