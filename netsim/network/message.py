@@ -47,6 +47,9 @@ class Message:
         Free label used in tables (e.g. ``"y"``, ``"u"``); defaults to the sending task's name.
     delivered_ns, dropped, drop_reason
         Filled as the message goes through the pipeline.
+    tx_start_ns, tx_end_ns
+        When the frame's first bit went on the medium and when its transmission ended (filled by the network;
+        ``None`` while queued, or when the frame never reached the medium).
     """
 
     sender: str
@@ -62,6 +65,8 @@ class Message:
     delivered_ns: int | None = None
     dropped: bool = False
     drop_reason: str = ""
+    tx_start_ns: int | None = None
+    tx_end_ns: int | None = None
 
     def copy_for(self, receiver: str) -> "Message":
         """A copy addressed to ``receiver`` (broadcast fan-out)."""

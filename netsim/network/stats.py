@@ -1,0 +1,79 @@
+"""Busy-time accounting of a channel: total busy time and a binned utilization-over-time series."""
+
+from __future__ import annotations
+
+__all__ = ["BusyMeter"]
+
+
+class BusyMeter:
+    """Accumulates the intervals during which one channel (a bus, a link, a switch port) carries bits.
+
+    Parameters
+    ----------
+    bin_ns
+        Width of the bins of the utilization series.
+    weight
+        Share of the network's capacity this channel represents (FDMA sub-channels); 1 otherwise.
+    """
+
+    __slots__ = ("bin_ns", "weight", "total", "open_since", "bins")
+
+    def __init__(self, bin_ns: int, weight: float = 1.0) -> None:
+        self.bin_ns = int(bin_ns)
+        self.weight = float(weight)
+        self.total = 0
+        self.open_since: int | None = None
+        self.bins: dict[int, int] = {}
+
+    def start(self, t: int) -> None:
+        """The channel becomes busy at ``t``."""
+        self.open_since = t
+
+    def stop(self, t: int) -> None:
+        """The channel becomes idle at ``t`` (closes the interval opened by :meth:`start`)."""
+        s = self.open_since
+        if s is None:
+            return
+        self.open_since = None
+        self.add(s, t)
+
+    def add(self, s: int, t: int) -> None:
+        """Count the closed busy interval ``[s, t)``."""
+        if t <= s:
+            return
+        self.total += t - s
+        b = self.bin_ns
+        k = s // b
+        bins = self.bins
+        while s < t:
+            edge = min(t, (k + 1) * b)
+            bins[k] = bins.get(k, 0) + (edge - s)
+            s = edge
+            k += 1
+
+    def busy(self, t_end: int) -> int:
+        """Busy time in ``[0, t_end]`` (an interval still open counts up to ``t_end``)."""
+        extra = 0
+        if self.open_since is not None and t_end > self.open_since:
+            extra = t_end - self.open_since
+        return self.total + extra
+
+    def fraction(self, t_end: int) -> float:
+        """Busy time divided by ``t_end``."""
+        return self.busy(t_end) / t_end if t_end > 0 else 0.0
+
+    def series(self, t_end: int) -> list[float]:
+        """Busy fraction of each bin ``[k*bin, (k+1)*bin)`` up to ``t_end`` (last bin may be partial)."""
+        if t_end <= 0:
+            return []
+        b = self.bin_ns
+        n = -(-t_end // b)
+        out = []
+        for k in range(n):
+            width = min(b, t_end - k * b)
+            busy = self.bins.get(k, 0)
+            if self.open_since is not None:
+                lo, hi = max(self.open_since, k * b), min(t_end, (k + 1) * b)
+                busy += max(0, hi - lo)
+            out.append(min(1.0, busy / width) if width > 0 else 0.0)
+        return out
