@@ -1,0 +1,136 @@
+"""Performance metrics of a cart run (paper section VII-A).
+
+Over the *stationary* part of the run -- the last 0.7 m of the 1 m, after 0.3 m of startup:
+
+``sigma_u = std(u) / mean(u)``
+    Control signal activity (``u = Ku uV``, the applied command). The paper normalises by the mean over all
+    experiments with the same ``vref``; :func:`cart_metrics` also returns ``mean_u`` and ``std_u`` so a report
+    can pool the means.
+``Ev = RMS(v / vref - 1)``
+    Velocity tracking error of the *true* velocity (``Ev``), of the controller's own estimate (``Ev_est``)
+    and of the offline JMAP reconstruction from the full-resolution encoder (``Ev_jmap`` with the paper's
+    one-sample timing relaxation, ``Ev_jmap0`` without it -- our samples have no timing jitter).
+``events_per_tfilter``
+    Encoder events (edges at the controller's resolution) per ``Tfilter`` in the stationary part.
+
+Undefined cases give NaN with a flag instead of a division by zero: ``vref = 0`` (``defined = 0``) and a
+cart that does not reach the end of the run within the duration (``reached = 0``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+__all__ = ["STARTUP", "DISTANCE", "cart_metrics", "stationary_mask"]
+
+log = logging.getLogger(__name__)
+
+#: Startup distance excluded from the stationary metrics (m).
+STARTUP = 0.3
+#: Length of the run (m).
+DISTANCE = 1.0
+
+_KEYS = (
+    "sigma_u", "mean_u", "std_u", "Ev", "Ev_est", "Ev_jmap", "Ev_jmap0", "Ev_startup", "events_per_tfilter",
+    "reached", "t_reach", "defined", "n_stationary",
+)
+
+
+def stationary_mask(p: np.ndarray, startup: float = STARTUP, distance: float = DISTANCE) -> np.ndarray:
+    """Samples taken while ``startup <= p <= distance`` before the cart first passes ``distance``."""
+    p = np.asarray(p, dtype=float)
+    past = np.nonzero(p > distance)[0]
+    end = int(past[0]) if past.size else len(p)
+    mask = np.zeros(len(p), dtype=bool)
+    mask[:end] = p[:end] >= startup
+    return mask
+
+
+def _rms_rel(v: np.ndarray, vref: float) -> float:
+    return float(np.sqrt(np.mean((v / vref - 1.0) ** 2))) if v.size else math.nan
+
+
+def cart_metrics(
+    t: np.ndarray,
+    p: np.ndarray,
+    v: np.ndarray,
+    u: np.ndarray,
+    vref: float,
+    *,
+    v_hat: np.ndarray | None = None,
+    edge_times: np.ndarray | None = None,
+    tfilter: float | None = None,
+    counts_full: np.ndarray | None = None,
+    delta_full: float = 5e-5,
+    jmap: bool = True,
+    startup: float = STARTUP,
+    distance: float = DISTANCE,
+) -> dict[str, float]:
+    """Metrics of one run sampled at the control instants.
+
+    Parameters
+    ----------
+    t, p, v, u
+        Sample times (s), true position (m) and velocity (m/s), applied command ``Ku uV`` (m/s^2).
+    vref
+        The step reference (m/s).
+    v_hat
+        The controller's velocity estimate, for ``Ev_est``.
+    edge_times
+        Times of the encoder events the controller saw (s), for ``events_per_tfilter``.
+    tfilter
+        The controller's filter time constant (s).
+    counts_full
+        Full-resolution encoder counts at the sample instants, for the JMAP ``Ev_jmap``.
+    delta_full
+        Step of ``counts_full`` (m).
+    jmap
+        Compute ``Ev_jmap`` (a QP over the whole run, ~0.1 s).
+    """
+    out = {k: math.nan for k in _KEYS}
+    t = np.asarray(t, dtype=float)
+    p = np.asarray(p, dtype=float)
+    reached = bool(np.any(p >= distance))
+    out["reached"] = float(reached)
+    out["defined"] = 1.0
+    if reached:
+        out["t_reach"] = float(t[int(np.argmax(p >= distance))])
+    if vref == 0.0:
+        out["defined"] = 0.0
+        log.warning("cart metrics: vref = 0, so sigma_u (normalised by the mean command) and Ev are undefined")
+        return out
+    if not reached:
+        log.warning(
+            "cart metrics: the cart reached only %.3f m of %.3f m within %.3f s (friction too high for the "
+            "command limit, or an unstable loop); stationary metrics are undefined", float(np.max(p)), distance,
+            float(t[-1]) if t.size else 0.0,
+        )
+        return out
+    mask = stationary_mask(p, startup, distance)
+    out["n_stationary"] = float(mask.sum())
+    uw = np.asarray(u, dtype=float)[mask]
+    out["mean_u"] = float(np.mean(uw))
+    out["std_u"] = float(np.std(uw))
+    out["sigma_u"] = out["std_u"] / out["mean_u"] if out["mean_u"] != 0.0 else math.nan
+    vv = np.asarray(v, dtype=float)
+    out["Ev"] = _rms_rel(vv[mask], vref)
+    start = (p < startup) & (np.cumsum(p >= startup) == 0)
+    out["Ev_startup"] = _rms_rel(vv[start], vref)
+    if v_hat is not None:
+        out["Ev_est"] = _rms_rel(np.asarray(v_hat, dtype=float)[mask], vref)
+    if edge_times is not None and tfilter is not None and mask.any():
+        t0, t1 = float(t[mask][0]), float(t[mask][-1])
+        et = np.asarray(edge_times, dtype=float)
+        n_ev = int(np.count_nonzero((et > t0) & (et <= t1)))
+        out["events_per_tfilter"] = n_ev * tfilter / (t1 - t0) if t1 > t0 else math.nan
+    if jmap and counts_full is not None and len(t) >= 3:
+        from models.cart.jmap import reconstruct
+
+        h = float(np.median(np.diff(t)))
+        for key, slack in (("Ev_jmap", 1), ("Ev_jmap0", 0)):
+            rec = reconstruct(np.asarray(counts_full), h, delta_full, slack=slack, v0=0.0)
+            out[key] = _rms_rel(rec.v[mask], vref)
+    return out
