@@ -1,0 +1,456 @@
+"""The ``netsim`` command: run, batch, sweep, report, validate and list.
+
+Every command catches the errors a user can cause (:class:`~netsim.errors.NetsimError`, including
+:class:`~netsim.scenario.ScenarioError`) and prints them without a traceback. Exit codes:
+
+- ``0`` success;
+- ``1`` a run failed, diverged, or some batch/sweep runs failed;
+- ``2`` the scenario or the command line is invalid (nothing ran);
+- ``validate``: the number of problems found (0 when every file is valid), capped at 255;
+- ``130`` interrupted (Ctrl-C).
+
+Heavy modules (numpy, pandas, control, the simulation engine) are imported inside the commands, so
+``netsim --help`` is fast. BLAS is pinned to one thread (tiny matrices; parallelism comes from processes).
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+
+import argparse  # noqa: E402
+import logging  # noqa: E402
+import re  # noqa: E402
+import sys  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any, Callable, Sequence, TextIO  # noqa: E402
+
+__all__ = ["main", "build_parser", "LIST_KINDS"]
+
+log = logging.getLogger("netsim.cli")
+
+#: Registry kinds shown by ``netsim list`` (in this order), with their plural spellings.
+LIST_KINDS: dict[str, str] = {
+    "plants": "plant",
+    "controllers": "controller",
+    "estimators": "estimator",
+    "triggers": "trigger",
+    "networks": "network",
+    "policies": "policy",
+    "programs": "program",
+    "signals": "signal",
+    "metrics": "metric",
+    "reports": "report",
+}
+
+EXIT_OK = 0
+EXIT_FAILED = 1
+EXIT_INVALID = 2
+EXIT_INTERRUPTED = 130
+
+_MAIN_EPILOG = """\
+examples:
+  netsim run scenarios/dc_servo_can.yaml                 run one scenario, write reports/<name>/<run-id>/
+  netsim run scenarios/dc_servo_can.yaml --plot --seed 3 --set networks.can.bitrate="1 Mbit/s"
+  netsim validate scenarios/*.yaml                       check files; exit code = number of problems
+  netsim batch scenarios/ --workers 4                    run every scenario in a folder, write summary.csv
+  netsim sweep scenarios/hdd_gpi_sweep.yaml              threshold sweep (parallel), summary.csv + surface
+  netsim report reports/hdd_gpi                          tables and figures from a finished sweep
+  netsim list programs                                   registered task programs, one per line
+
+exit codes: 0 ok, 1 a run failed, 2 invalid scenario or usage; validate: number of problems.
+"""
+
+_RUN_EPILOG = """\
+examples:
+  netsim run scenarios/dc_servo_ideal.yaml
+  netsim run scenarios/dc_servo_can.yaml --out /tmp/can --seed 7 --plot
+  netsim run scenarios/dc_servo_can.yaml --set networks.can.bitrate="1 Mbit/s" --set 'plant.x0=[1, 0]'
+  netsim run scenarios/three_servos_dm.yaml --set nodes.cpu.tasks[2].period="5 ms"
+
+--set values are YAML: "1 Mbit/s" stays text, 0.5 is a number, [1, 0] a list, null removes a value.
+The scenario is validated first; nothing runs when it has problems (exit code 2).
+"""
+
+_VALIDATE_EPILOG = """\
+examples:
+  netsim validate scenarios/dc_servo_can.yaml
+  netsim validate scenarios/*.yaml --set duration="10 s"
+
+Prints every problem as file:line: path: message (warnings marked "warning:") and exits with the
+number of errors found (0 when every file is valid, at most 255).
+"""
+
+_BATCH_EPILOG = """\
+examples:
+  netsim batch scenarios/dc_servo_ideal.yaml scenarios/dc_servo_can.yaml
+  netsim batch scenarios/ --out reports/batch --workers 2
+
+A folder means every *.yaml/*.yml scenario in it (sweep files are skipped). A failing scenario does not
+stop the batch: its row in summary.csv carries the error and the exit code is 1.
+"""
+
+_SWEEP_EPILOG = """\
+examples:
+  netsim sweep scenarios/hdd_gpi_sweep.yaml
+  netsim sweep scenarios/hdd_gpi_sweep.yaml --workers 8 --out reports/gpi
+  netsim sweep scenarios/hdd_gpi_sweep.yaml --scheduler tcp://10.0.0.5:8786
+  netsim sweep scenarios/hdd_gpi_sweep.yaml --dask-local
+
+Finished points are kept and skipped when the sweep is run again (use --overwrite to redo them).
+"""
+
+_REPORT_EPILOG = """\
+examples:
+  netsim report reports/hdd_gpi              tables/figures of a sweep or run folder
+  netsim report hdd --out reports/hdd        a registered case-study report (see: netsim list reports)
+  netsim report reports/hdd_gpi --no-plots
+"""
+
+_LIST_EPILOG = """\
+examples:
+  netsim list                 everything, grouped by kind
+  netsim list plants          registered plant models
+  netsim list programs        task/handler programs a scenario can run
+
+kinds: """ + ", ".join(LIST_KINDS)
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    def __init__(self, prog: str) -> None:
+        super().__init__(prog, max_help_position=32, width=100)
+
+
+def _version() -> str:
+    from netsim import __version__
+
+    return f"netsim {__version__}"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``netsim`` command (no heavy imports)."""
+    parser = argparse.ArgumentParser(
+        prog="netsim",
+        description="Co-simulate networked control systems: real-time kernels, networks and plants.",
+        epilog=_MAIN_EPILOG,
+        formatter_class=_Formatter,
+    )
+    parser.add_argument("--version", action="version", version=_version())
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="only errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    p = sub.add_parser("run", help="run one scenario and write its run folder", epilog=_RUN_EPILOG,
+                       formatter_class=_Formatter, description="Validate and run one scenario.")
+    p.add_argument("file", metavar="FILE", help="scenario YAML file")
+    p.add_argument("--out", metavar="DIR", help="run folder (default: reports/<scenario>/<run-id>/)")
+    p.add_argument("--seed", type=int, metavar="N", help="override the scenario seed")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
+                   help="override a value, e.g. networks.can.bitrate='1 Mbit/s' (repeatable)")
+    p.add_argument("--plot", action="store_true", help="also write PNG figures")
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("batch", help="run many scenarios in parallel, write summary.csv", epilog=_BATCH_EPILOG,
+                       formatter_class=_Formatter, description="Run many scenarios (parallel processes).")
+    p.add_argument("paths", nargs="+", metavar="FILE|DIR", help="scenario files or folders of them")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: reports/batch-<time>/)")
+    p.add_argument("--workers", type=_positive_int, metavar="N", help="parallel processes (default: all cores)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_batch)
+
+    p = sub.add_parser("sweep", help="run a parameter sweep (locally or on a dask cluster)", epilog=_SWEEP_EPILOG,
+                       formatter_class=_Formatter, description="Run a sweep file: factors over scenario fields.")
+    p.add_argument("file", metavar="FILE", help="sweep YAML file")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: reports/<sweep>/)")
+    p.add_argument("--workers", type=_positive_int, metavar="N", help="parallel processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDR", help="dask scheduler address, e.g. tcp://host:8786")
+    p.add_argument("--dask-local", action="store_true", help="use a local dask cluster instead of processes")
+    p.add_argument("--overwrite", action="store_true", help="rerun points that already have results")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_sweep)
+
+    p = sub.add_parser("report", help="tables and figures from a run/sweep folder or a case study",
+                       epilog=_REPORT_EPILOG, formatter_class=_Formatter,
+                       description="Build report tables (CSV) and figures.")
+    p.add_argument("target", metavar="DIR|NAME", help="a run or sweep folder, or a registered report name")
+    p.add_argument("--out", metavar="DIR", help="where to write (default: next to the input)")
+    p.add_argument("--no-plots", action="store_true", help="tables only")
+    p.set_defaults(func=_cmd_report)
+
+    p = sub.add_parser("validate", help="check scenario files; exit code = number of problems",
+                       epilog=_VALIDATE_EPILOG, formatter_class=_Formatter,
+                       description="Check scenario files completely without running them.")
+    p.add_argument("files", nargs="+", metavar="FILE", help="scenario YAML files")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
+                   help="apply an override before checking (repeatable)")
+    p.set_defaults(func=_cmd_validate)
+
+    p = sub.add_parser("list", help="list registered plants, programs, networks, ...", epilog=_LIST_EPILOG,
+                       formatter_class=_Formatter, description="List registered building blocks.")
+    p.add_argument("kind", nargs="?", metavar="KIND", help="one kind (plural or singular), e.g. plants")
+    p.set_defaults(func=_cmd_list)
+    return parser
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def _err(message: str) -> None:
+    print(f"netsim: error: {message}", file=sys.stderr)
+
+
+def _print_problems(problems: Sequence[Any], stream: TextIO) -> None:
+    for p in problems:
+        print(str(p), file=stream)
+
+
+def _overrides(items: Sequence[str]) -> dict[str, Any]:
+    from netsim.scenario import parse_override
+
+    out: dict[str, Any] = {}
+    for item in items:
+        key, value = parse_override(item)
+        out[key] = value
+    return out
+
+
+# --------------------------------------------------------------------------------------------- commands
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from netsim.scenario import check_scenario
+
+    overrides = _overrides(args.overrides)
+    n_errors = 0
+    for file in args.files:
+        problems = check_scenario(file, overrides or None)
+        errors = [p for p in problems if p.is_error]
+        n_errors += len(errors)
+        _print_problems(problems, sys.stdout)
+        if not errors:
+            warn = len(problems)
+            note = f" ({warn} warning{'s' if warn != 1 else ''})" if warn else ""
+            print(f"{file}: valid{note}")
+    if len(args.files) > 1 and n_errors:
+        print(f"{n_errors} problem{'s' if n_errors != 1 else ''} in total", file=sys.stderr)
+    return min(n_errors, 255)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from netsim.scenario import ScenarioError, load_scenario
+
+    overrides = _overrides(args.overrides)
+    try:
+        scenario = load_scenario(args.file, overrides or None)
+    except ScenarioError as exc:
+        _print_problems(exc.problems, sys.stderr)
+        n = len(exc.errors)
+        _err(f"{args.file}: {n} problem{'s' if n != 1 else ''}; nothing was run")
+        return EXIT_INVALID
+    from netsim.runner import run
+
+    result = run(scenario, out=args.out, seed=args.seed, plot=args.plot)
+    meta = getattr(result, "meta", {}) or {}
+    status = str(meta.get("status", "ok"))
+    out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
+    where = f"; wrote {out_dir}" if out_dir else ""
+    print(f"{scenario.name}: {status}{where}")
+    _print_metrics(getattr(result, "metrics", None))
+    if status != "ok":
+        error = meta.get("error")
+        if error:
+            _err(str(error))
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _print_metrics(metrics: Any, limit: int = 30) -> None:
+    if metrics is None:
+        return
+    try:
+        items = list(metrics.items())
+    except AttributeError:
+        return
+    if not items:
+        return
+    width = max(len(str(k)) for k, _ in items[:limit])
+    for key, value in items[:limit]:
+        text = f"{value:.6g}" if isinstance(value, float) else str(value)
+        print(f"  {str(key):<{width}}  {text}")
+    if len(items) > limit:
+        print(f"  ... {len(items) - limit} more in metrics.csv")
+
+
+_SWEEP_LINE = re.compile(r"^sweep\s*:", re.MULTILINE)
+
+
+def _expand_batch(paths: Sequence[str]) -> list[Path]:
+    """Files as given; folders become their *.yaml/*.yml scenarios (sweep files skipped), sorted."""
+    from netsim.errors import ConfigError
+
+    out: list[Path] = []
+    for item in paths:
+        p = Path(item)
+        if p.is_dir():
+            found = sorted([*p.glob("*.yaml"), *p.glob("*.yml")])
+            found = [f for f in found if not _SWEEP_LINE.search(f.read_text(encoding="utf-8", errors="replace"))]
+            if not found:
+                raise ConfigError(f"no scenario files (*.yaml, *.yml) in folder {item}")
+            out += found
+        elif p.exists():
+            out.append(p)
+        else:
+            raise ConfigError(f"file not found: {item}")
+    return out
+
+
+def _cmd_batch(args: argparse.Namespace) -> int:
+    files = _expand_batch(args.paths)
+    from netsim.batch import run_batch
+
+    summary, n_failed = run_batch(files, out=args.out, workers=args.workers, progress=not args.no_progress)
+    n = len(files)
+    print(f"{n - n_failed} of {n} scenario{'s' if n != 1 else ''} ok" + (f", {n_failed} failed" if n_failed else ""))
+    out = getattr(summary, "attrs", {}).get("path") if summary is not None else None
+    if out:
+        print(f"summary: {out}")
+    return EXIT_FAILED if n_failed else EXIT_OK
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from netsim.errors import ConfigError
+
+    if args.scheduler and args.dask_local:
+        raise ConfigError("give either --scheduler ADDR or --dask-local, not both")
+    if not Path(args.file).exists():
+        raise ConfigError(f"file not found: {args.file}")
+    from netsim.sweep import run_sweep
+
+    result = run_sweep(
+        args.file,
+        out=args.out,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        local_dask=args.dask_local,
+        overwrite=args.overwrite,
+        progress=not args.no_progress,
+    )
+    for attr in ("out_dir", "out", "path"):
+        where = getattr(result, attr, None)
+        if where:
+            print(f"wrote {where}")
+            break
+    n_failed = getattr(result, "n_failed", 0) or 0
+    if n_failed:
+        _err(f"{n_failed} sweep point{'s' if n_failed != 1 else ''} failed (see summary.csv)")
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from netsim.report import report
+
+    tables = report(args.target, out=args.out, plots=not args.no_plots)
+    for name, frame in (tables or {}).items():
+        rows = getattr(frame, "shape", (0,))[0]
+        print(f"{name}: {rows} row{'s' if rows != 1 else ''}")
+    return EXIT_OK
+
+
+def _kind_of(text: str) -> str | None:
+    key = text.strip().lower()
+    if key in LIST_KINDS:
+        return LIST_KINDS[key]
+    if key in LIST_KINDS.values():
+        return key
+    return None
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    from netsim import registry
+    from netsim.errors import ConfigError
+    from netsim.scenario.paths import did_you_mean
+    from netsim.scenario.validate import plugin_load_problems
+
+    if args.kind is not None:
+        kind = _kind_of(args.kind)
+        if kind is None:
+            raise ConfigError(f"unknown kind '{args.kind}'{did_you_mean(args.kind.lower(), LIST_KINDS, what='kinds')}")
+        kinds = [kind]
+    else:
+        kinds = list(LIST_KINDS.values())
+    for problem in plugin_load_problems():
+        print(f"warning: {problem.message}", file=sys.stderr)
+    for kind in kinds:
+        items = registry.entries(kind)
+        if args.kind is None:
+            plural = next(k for k, v in LIST_KINDS.items() if v == kind)
+            print(f"{plural}:")
+            if not items:
+                print("  (none)")
+        indent = "  " if args.kind is None else ""
+        width = max((len(e.name) for e in items), default=0)
+        for e in items:
+            print(f"{indent}{e.name:<{width}}  {e.summary}".rstrip())
+    return EXIT_OK
+
+
+# --------------------------------------------------------------------------------------------- main
+def _setup_logging(verbose: int, quiet: bool) -> None:
+    level = logging.ERROR if quiet else (logging.WARNING, logging.INFO, logging.DEBUG)[min(verbose, 2)]
+    root = logging.getLogger()
+    if not any(getattr(h, "_netsim_cli", False) for h in root.handlers):
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
+        handler._netsim_cli = True  # type: ignore[attr-defined]
+        root.addHandler(handler)
+    root.setLevel(level)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``netsim`` command line; returns the exit code (see the module docstring).
+
+    Parameters
+    ----------
+    argv
+        Arguments without the program name (default: ``sys.argv[1:]``).
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(list(argv) if argv is not None else None)
+    except SystemExit as exc:  # --help, --version, usage errors
+        return int(exc.code) if isinstance(exc.code, int) else (EXIT_OK if exc.code is None else EXIT_INVALID)
+    if getattr(args, "func", None) is None:
+        parser.print_help()
+        return EXIT_INVALID
+    _setup_logging(args.verbose, args.quiet)
+    func: Callable[[argparse.Namespace], int] = args.func
+    from netsim.errors import ConfigError, NetsimError
+
+    try:
+        return func(args)
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return EXIT_INTERRUPTED
+    except ConfigError as exc:
+        problems = getattr(exc, "problems", None)
+        if problems:
+            _print_problems(problems, sys.stderr)
+        else:
+            _err(str(exc))
+        return EXIT_INVALID
+    except NetsimError as exc:
+        _err(str(exc))
+        return EXIT_FAILED
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
