@@ -34,7 +34,6 @@ class DcServoParams(StrictModel):
     gain: float = 1000.0
     a: float = 1.0
     count: int = 1
-    process_noise: float | None = None  # intensity of white noise on each servo's acceleration (optional)
 
 
 def dc_servo_matrices(gain: float = 1000.0, a: float = 1.0, count: int = 1) -> tuple[np.ndarray, ...]:
@@ -64,11 +63,6 @@ def dc_servo(params: DcServoParams | None = None, **kwargs: object):  # -> netsi
         inputs = [f"u{i + 1}" for i in range(p.count)]
         outputs = [f"y{i + 1}" for i in range(p.count)]
         states = [name for i in range(p.count) for name in (f"theta{i + 1}", f"omega{i + 1}")]
-    noise = None
-    if p.process_noise:
-        noise = np.zeros((2 * p.count, 2 * p.count))
-        for i in range(p.count):
-            noise[2 * i + 1, 2 * i + 1] = float(p.process_noise)
     return LTIPlant(
         A,
         B,
@@ -77,7 +71,6 @@ def dc_servo(params: DcServoParams | None = None, **kwargs: object):  # -> netsi
         input_names=inputs,
         output_names=outputs,
         state_names=states,
-        process_noise=noise,
         name="dc_servo",
     )
 

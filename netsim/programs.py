@@ -32,6 +32,7 @@ from typing import Any, Callable, Generator
 
 from pydantic import model_validator
 
+import netsim.runtime_metrics  # noqa: F401 - registers the 'metric' entries (registry.PLUGIN_MODULES lacks it)
 from netsim.control.pid import PID, PIDParams
 from netsim.registry import register
 from netsim.units import StrictModel, Time

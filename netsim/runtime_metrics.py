@@ -274,3 +274,7 @@ def compute_metrics(result: Any, specs: list[Any], baseline: Any = None) -> dict
         values = fn(result, spec.get("params") or {}, baseline)
         out.update({str(k): float(v) for k, v in values.items()})
     return out
+
+
+control_error.Params = ControlErrorParams  # type: ignore[attr-defined]
+latency.Params = LatencyParams  # type: ignore[attr-defined]

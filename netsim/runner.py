@@ -1,0 +1,242 @@
+"""Run a scenario: load and validate, build, simulate, collect the tables, compute metrics, write the run folder.
+
+``run(source)`` is what ``netsim run FILE`` and ``netsim.run(...)`` call. The run folder goes to ``out``, else
+the scenario's ``output.dir``, else ``reports/<scenario>/<run-id>/`` (run-id = UTC time stamp + the first 8
+hex digits of the scenario hash) under the current directory.
+
+Failures are recorded, never lost:
+
+* a :class:`~netsim.errors.DivergenceError` (unstable loop) ends the simulation at that instant; the tables
+  up to that time are written and ``meta.json`` says ``status: "diverged at t = ... s"``; ``run`` returns
+  the result normally (``result.ok`` is False);
+* any other exception during the simulation or the metrics writes what exists with ``status: "error"``
+  and the error text, then re-raises (a :class:`~netsim.errors.NetsimError` carries a user message, anything
+  else is a bug).
+
+A scenario with ``baseline: {overrides: {...}}`` first runs the baseline (the same scenario with those
+overrides, same seed, nothing written) and passes its result to every metric as ``baseline``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import platform
+import time
+from datetime import datetime, timezone
+from importlib import metadata
+from pathlib import Path
+from typing import Any, Mapping
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+import pandas as pd  # noqa: E402
+
+from netsim.errors import DivergenceError  # noqa: E402
+from netsim.results import RunResult, jobs_table, messages_table, schedule_table, signals_table  # noqa: E402
+from netsim.timebase import S  # noqa: E402
+
+__all__ = ["run", "run_point", "simulate", "default_out_dir", "package_versions"]
+
+log = logging.getLogger(__name__)
+
+_VERSION_PACKAGES = ("netsim", "simpy", "numpy", "scipy", "control", "pandas", "pydantic")
+
+
+def package_versions() -> dict[str, str]:
+    """Versions of Python and the packages a run depends on (without importing them)."""
+    out = {"python": platform.python_version()}
+    for pkg in _VERSION_PACKAGES:
+        try:
+            out[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            if pkg == "netsim":
+                import netsim
+
+                out[pkg] = netsim.__version__
+    return out
+
+
+def default_out_dir(name: str, scenario_hash: str, root: str | Path = "reports") -> Path:
+    """``reports/<name>/<UTC stamp>-<hash8>``; a numeric suffix keeps two runs in one second apart."""
+    stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    base = Path(root) / name / f"{stamp}-{scenario_hash[:8]}"
+    out, k = base, 1
+    while out.exists():
+        k += 1
+        out = base.with_name(f"{base.name}-{k}")
+    return out
+
+
+def _collect(sim: Any, t_end_ns: int) -> RunResult:
+    """The tables of a (finished or aborted) simulation."""
+    rec = sim.env.recorder
+    signals = signals_table(rec.times, rec.values, order=sim.scenario.record)
+    job_frames = [jobs_table(k.job_records, name) for name, k in sim.kernels.items()]
+    jobs = pd.concat(job_frames, ignore_index=True) if job_frames else jobs_table([])
+    if not jobs.empty:
+        jobs = jobs.sort_values(["release_s", "node", "task", "job_id"], kind="stable").reset_index(drop=True)
+    msg_frames = [messages_table(net.records) for net in sim.networks.values()]
+    messages = pd.concat(msg_frames, ignore_index=True) if msg_frames else messages_table([])
+    if not messages.empty:
+        messages = messages.sort_values(["msg_id", "network", "receiver"], kind="stable").reset_index(drop=True)
+    sched_frames = [schedule_table(name, getattr(k, "schedule", [])) for name, k in sim.kernels.items()]
+    schedule = pd.concat(sched_frames, ignore_index=True) if sched_frames else schedule_table("", [])
+    return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule)
+
+
+def _event_count(env: Any) -> int | None:
+    counter = getattr(env.sim, "_eid", None)
+    try:
+        return int(next(counter)) if counter is not None else None
+    except Exception:  # noqa: BLE001
+        return None
+
+
+def simulate(scenario: Any) -> tuple[RunResult, Any, BaseException | None]:
+    """Build and run ``scenario`` (validated); returns (result without metrics, simulation, exception or None).
+
+    The result's ``meta`` has ``status``, ``error``, ``t_end_s``, ``wall_time_s`` and ``events``.
+    """
+    from netsim.scenario.builder import build
+
+    t0 = time.perf_counter()
+    sim = build(scenario)
+    failure: BaseException | None = None
+    status, error = "ok", ""
+    try:
+        t_end = sim.run()
+    except DivergenceError as exc:
+        t_end = int(getattr(exc, "time_ns", sim.env.now))
+        status = f"diverged at t = {t_end / S:.9g} s"
+        error = str(exc)
+        failure = exc
+    except Exception as exc:  # noqa: BLE001 - recorded, then re-raised by run()
+        t_end = sim.env.now
+        status, error = "error", f"{type(exc).__name__}: {exc}"
+        failure = exc
+    wall = time.perf_counter() - t0
+    result = _collect(sim, t_end)
+    result.meta.update(
+        {
+            "status": status,
+            "error": error,
+            "t_end_s": t_end / S,
+            "duration_s": scenario.duration / S,
+            "wall_time_s": wall,
+            "events": _event_count(sim.env),
+        }
+    )
+    return result, sim, failure
+
+
+def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | None) -> dict[str, float]:
+    from netsim.runtime_metrics import compute_metrics, generic_metrics
+
+    t_end_ns = int(round(result.meta["t_end_s"] * S))
+    values = generic_metrics(result, sim, t_end_ns)
+    values.update(compute_metrics(result, list(scenario.metrics), baseline))
+    return values
+
+
+def run(
+    source: Any,
+    *,
+    out: str | Path | None = None,
+    seed: int | None = None,
+    overrides: Mapping[str, Any] | None = None,
+    plot: bool = False,
+    write: bool = True,
+) -> RunResult:
+    """Run one scenario and (by default) write its run folder.
+
+    Parameters
+    ----------
+    source
+        Scenario file path, raw mapping, or validated :class:`~netsim.scenario.schema.Scenario`.
+    out
+        Run folder (default: the scenario's ``output.dir`` or ``reports/<name>/<run-id>``).
+    seed
+        Overrides the scenario seed.
+    overrides
+        ``{"dotted.path": value}`` applied before validation.
+    plot
+        Also write PNG figures (as does ``output.plot: true`` in the scenario).
+    write
+        False: write nothing (the result is still complete in memory).
+
+    Returns
+    -------
+    RunResult
+        ``meta["status"]`` is ``"ok"`` or ``"diverged at t = ... s"``.
+
+    Raises
+    ------
+    ScenarioError
+        The scenario does not validate (every problem listed).
+    NetsimError
+        Another user-caused failure (after the partial run folder was written).
+    """
+    from netsim.scenario.loader import load_scenario, scenario_hash
+
+    wall0 = time.perf_counter()
+    ov = dict(overrides or {})
+    if seed is not None:
+        ov["seed"] = int(seed)
+    scenario = load_scenario(source, overrides=ov or None)
+    digest = scenario_hash(scenario)
+
+    baseline: RunResult | None = None
+    base_sc = scenario.baseline_scenario()
+    if base_sc is not None:
+        baseline, base_sim, base_fail = simulate(base_sc)
+        if base_fail is not None and not isinstance(base_fail, DivergenceError):
+            raise base_fail
+        baseline.metrics = pd.Series(_metrics(baseline, base_sim, base_sc, None), dtype=float, name="value")
+
+    result, sim, failure = simulate(scenario)
+    result.scenario = scenario.resolved_dict()
+    try:
+        result.metrics = pd.Series(_metrics(result, sim, scenario, baseline), dtype=float, name="value")
+    except Exception as exc:  # noqa: BLE001
+        if failure is None:
+            failure = exc
+            result.meta["status"] = "error"
+            result.meta["error"] = f"{type(exc).__name__}: {exc}"
+        result.metrics = pd.Series(dtype=float, name="value")
+    result.meta.update(
+        {
+            "scenario": scenario.name,
+            "source": scenario.source,
+            "seed": scenario.seed,
+            "scenario_hash": digest,
+            "versions": package_versions(),
+            "baseline": None if baseline is None else {"status": baseline.status},
+        }
+    )
+    result.meta["wall_time_s"] = time.perf_counter() - wall0
+    if write:
+        folder = Path(out) if out is not None else (
+            Path(scenario.output.dir) if scenario.output.dir else default_out_dir(scenario.name, digest)
+        )
+        result.to_csv(folder)
+        if plot or scenario.output.plot:
+            try:
+                result.plot(folder)
+            except Exception:  # noqa: BLE001 - figures are a convenience; the tables are written
+                log.exception("plotting failed for %s", folder)
+    if failure is not None and not isinstance(failure, DivergenceError):
+        raise failure
+    if not result.ok:
+        log.warning("%s: %s", scenario.name, result.status)
+    return result
+
+
+def run_point(raw: Mapping[str, Any], out: str | Path, seed: int) -> dict[str, float]:
+    """One sweep point in a worker process: run ``raw`` with ``seed``, write the run folder to ``out``.
+
+    Returns the metrics (an errored run raises; a diverged run returns its metrics, its ``meta.json`` says so).
+    """
+    result = run(dict(raw), out=out, seed=seed, write=True)
+    return {str(k): float(v) for k, v in result.metrics.items()}

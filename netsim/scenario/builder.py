@@ -1,0 +1,395 @@
+"""Turn a validated :class:`~netsim.scenario.schema.Scenario` into a runnable :class:`Simulation`.
+
+Lifecycle (desmod's build, connect, run, collect): :func:`build` creates every runtime object and connects
+them; :meth:`Simulation.run` runs the event loop; :mod:`netsim.results` collects the tables.
+
+What :func:`build` does, in order:
+
+1. a :class:`~netsim.env.SimEnv` with the scenario seed and the ``record:`` filter;
+2. the scenario signals (:func:`netsim.signals.make_signal` semantics);
+3. the plant from its registered factory (``factory(params)``); each ``disturbances`` entry (plant input ->
+   signal) is added with ``plant.add_disturbance`` (exact switching at the signal's jumps); the plant is bound
+   to the env (recording its outputs on ``record_grid``; its state/input at events when ``record`` is
+   omitted or names ``<plant>.x``/``<plant>.u``); then ``x0`` is set;
+4. the ``io`` channels (ADC, DAC, encoder) attached to **every** kernel as analog channels by name
+   (an encoder reads as its quantized position; the :class:`~netsim.io.Encoder` object itself is in
+   ``env.components["io.<name>"]`` for programs that want its edges);
+5. one kernel per node; its tasks and handlers run program instances built with a
+   :class:`~netsim.programs.ProgramContext`; timers and external triggers are created from ``trigger:``;
+6. the networks (``make_network``), attached to their nodes' kernels; tasks with
+   ``release: on_message:<net>`` and handlers with ``trigger: {on_message: net}`` are bound to receptions;
+7. recording of the scenario signals named in ``record:`` (at 0 and at every jump; continuous ones on the grid).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from netsim.env import SimEnv
+from netsim.errors import BuildError, ConfigError, NetsimError
+from netsim.timebase import MS
+
+__all__ = ["Simulation", "build", "DEFAULT_SIGNAL_GRID"]
+
+log = logging.getLogger(__name__)
+
+#: Grid on which continuous (not piecewise-constant) disturbances and recorded signals are refreshed.
+DEFAULT_SIGNAL_GRID = 1 * MS
+
+
+@dataclass
+class Simulation:
+    """Everything :func:`build` created, ready to run.
+
+    Attributes
+    ----------
+    scenario, env, plant
+        The scenario, the environment and the plant (None when the scenario has none).
+    signals : dict[str, Callable[[int], float]]
+    channels : dict[str, Any]
+        ``io`` channel objects by name (ADC, DAC, Encoder).
+    kernels : dict[str, Kernel]
+    networks : dict[str, Network]
+    duration : int
+        Simulated time in ns.
+    """
+
+    scenario: Any
+    env: SimEnv
+    plant: Any = None
+    signals: dict[str, Callable[[int], float]] = field(default_factory=dict)
+    channels: dict[str, Any] = field(default_factory=dict)
+    kernels: dict[str, Any] = field(default_factory=dict)
+    networks: dict[str, Any] = field(default_factory=dict)
+    programs: dict[str, Any] = field(default_factory=dict)
+    duration: int = 0
+    finished_at: int | None = None
+
+    def run(self, until: int | None = None) -> int:
+        """Run to ``until`` ns (default: the scenario duration); returns the time reached.
+
+        Exceptions from the model (e.g. :class:`~netsim.errors.DivergenceError`) propagate; the finalizers
+        (plant flush, open schedule intervals) are then run at the current time by :meth:`finish`, so the
+        tables hold everything up to the failure.
+        """
+        t_end = self.duration if until is None else int(until)
+        try:
+            self.env.run(t_end)
+        except BaseException:
+            self.finish(self.env.now)
+            raise
+        self.finished_at = t_end
+        return t_end
+
+    def finish(self, t_ns: int) -> None:
+        """Run the env's end-of-run finalizers at ``t_ns`` after an aborted run (each at most once)."""
+        if self.finished_at is not None:
+            return
+        self.finished_at = int(t_ns)
+        for fn in list(getattr(self.env, "_finalizers", [])):
+            try:
+                fn(int(t_ns))
+            except Exception:  # noqa: BLE001 - collecting after a failure must not raise again
+                log.debug("finalizer failed after an aborted run", exc_info=True)
+
+
+# --------------------------------------------------------------------------------------------- pieces
+def _record_filter(scenario: Any) -> set[str] | None:
+    return None if scenario.record is None else set(scenario.record)
+
+
+def _make_signals(scenario: Any) -> dict[str, Callable[[int], float]]:
+    out: dict[str, Callable[[int], float]] = {}
+    for name, spec in scenario.signals.items():
+        cls = spec.plugin()
+        try:
+            out[name] = cls(spec.validated_params())
+        except NetsimError:
+            raise
+        except Exception as exc:  # noqa: BLE001
+            raise BuildError(f"cannot build signal '{name}': {exc}", path=f"signals.{name}") from exc
+    return out
+
+
+def _build_plant(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> Any:
+    """The plant from its factory, with disturbances (exact at jumps), bound to ``env``, then ``x0``."""
+    spec = scenario.plant
+    if spec is None:
+        return None
+    factory = spec.plugin()
+    params = spec.validated_params()
+    try:
+        plant = factory(params)
+    except NetsimError:
+        raise
+    except Exception as exc:  # noqa: BLE001
+        raise BuildError(f"cannot build plant '{spec.model}': {exc}", path="plant") from exc
+    if spec.process_noise is not None:
+        _set_process_noise(plant, spec.process_noise)
+    for port, sig_name in spec.disturbances.items():
+        _call(plant.add_disturbance, f"plant.disturbances.{port}", port, signals[sig_name])
+    record_events = scenario.record is None or any(
+        r in (f"{plant.name}.x", f"{plant.name}.u") for r in scenario.record
+    )
+    plant.bind(env, record_events=record_events, record_grid_ns=spec.record_grid)
+    if spec.x0 is not None:
+        _call(plant.set_state, "plant.x0", np.asarray(spec.x0, dtype=float), 0)
+    return plant
+
+
+def _set_process_noise(plant: Any, noise: Any) -> None:
+    fn = getattr(plant, "set_process_noise", None)
+    if callable(fn):
+        fn(noise)
+        return
+    raise BuildError("this plant does not accept process_noise from the scenario; set it in the model's "
+                     "params instead", path="plant.process_noise")
+
+
+def _schedule_signal(env: SimEnv, sig: Callable[[int], float], t_end: int, grid: int,
+                     action: Callable[[int, float], None]) -> None:
+    """Call ``action(t, sig(t))`` at 0, at every jump of ``sig`` and, for continuous signals, on ``grid``."""
+    piecewise = getattr(sig, "piecewise_constant", False)
+    if piecewise and hasattr(sig, "breakpoints"):
+        instants = [t for t in sig.breakpoints(0, t_end)]
+    else:
+        instants = list(range(grid, t_end + 1, grid))
+
+    def proc():  # type: ignore[no-untyped-def]
+        action(0, sig(0))
+        for t in instants:
+            yield env.timeout(t - env.now)
+            action(t, sig(t))
+
+    env.process(proc())
+
+
+def _build_io(scenario: Any, env: SimEnv, plant: Any) -> dict[str, Any]:
+    if not scenario.io:
+        return {}
+    if plant is None:
+        raise BuildError("io channels need a plant; add a 'plant:' section", path="io")
+    from netsim.io import ADC, DAC, Encoder
+
+    out: dict[str, Any] = {}
+    for name, ch in scenario.io.items():
+        path = f"io.{name}"
+        try:
+            if ch.type == "adc":
+                out[name] = ADC(plant, ch.output, noise_std=ch.noise_std, quant_step=ch.quant_step,
+                                saturation=ch.saturation, rng=env.rng(f"io.{name}.noise"))
+            elif ch.type == "dac":
+                out[name] = DAC(plant, ch.input, saturation=ch.saturation, resolution=ch.resolution)
+            else:
+                out[name] = Encoder(plant, ch.output, step=ch.step, tick_ns=ch.tick, mode=ch.mode)
+        except NetsimError:
+            raise
+        except Exception as exc:  # noqa: BLE001
+            raise BuildError(f"cannot build {ch.type} channel '{name}': {exc}", path=path) from exc
+        env.components[f"io.{name}"] = out[name]
+    return out
+
+
+def _encoder_reader(enc: Any, plant: Any, output: Any, step: float) -> Callable[[int], float]:
+    read = getattr(enc, "read", None)
+    if callable(read):
+        return read
+    idx = plant.output_index(output)
+
+    def quantized(t_ns: int) -> float:
+        y = float(np.asarray(plant.output(t_ns)).ravel()[idx])
+        return float(np.floor(y / step) * step)
+
+    return quantized
+
+
+def _attach_io(kernel: Any, scenario: Any, channels: dict[str, Any], plant: Any) -> None:
+    for name, ch in scenario.io.items():
+        obj = channels[name]
+        if ch.type == "adc":
+            kernel.attach_analog_in(name, obj.read)
+        elif ch.type == "dac":
+            kernel.attach_analog_out(name, obj.write)
+        else:
+            kernel.attach_analog_in(name, _encoder_reader(obj, plant, ch.output, ch.step))
+
+
+def _policy(node_spec: Any) -> Any:
+    from netsim.scenario.schema import BUILTIN_POLICIES
+
+    name = node_spec.policy
+    if name in BUILTIN_POLICIES:
+        return name
+    from netsim.registry import lookup
+
+    obj = lookup("policy", name)
+    return obj() if isinstance(obj, type) else obj
+
+
+def _exec_time(spec: Any, path: str) -> Any:
+    raw = spec.execution_spec()
+    if raw is None:
+        return None
+    from netsim.kernel import ExecTime
+
+    try:
+        return ExecTime.from_spec(raw)
+    except ConfigError as exc:
+        raise BuildError(exc.message, path=f"{path}.execution") from None
+
+
+def _program(spec: Any, ctx: Any, path: str) -> Any:
+    cls = spec.plugin()
+    params = spec.validated_params()
+    try:
+        body = cls(ctx, params)
+    except NetsimError as exc:
+        if isinstance(exc, ConfigError) and exc.path is None:
+            raise BuildError(exc.message, path=path) from None
+        raise
+    except (ValueError, TypeError, KeyError) as exc:
+        raise BuildError(f"cannot build program '{spec.program}': {exc}", path=path) from exc
+    if not callable(body):
+        raise BuildError(f"program '{spec.program}' did not produce a callable body", path=path)
+    return body
+
+
+def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels: dict[str, Any],
+                   plant: Any) -> tuple[dict[str, Any], dict[str, Any], list[tuple[str, str, str]]]:
+    """Kernels with their tasks and handlers; returns also the (node, network, target) receive bindings."""
+    from netsim.kernel import Kernel
+    from netsim.programs import ProgramContext
+
+    kernels: dict[str, Any] = {}
+    programs: dict[str, Any] = {}
+    bindings: list[tuple[str, str, str]] = []
+    for node_name, node in scenario.nodes.items():
+        npath = f"nodes.{node_name}"
+        try:
+            kernel = Kernel(env, node_name, policy=_policy(node), context_switch=node.context_switch)
+        except NetsimError as exc:
+            raise BuildError(str(exc), path=npath) from None
+        kernels[node_name] = kernel
+        env.components[f"kernel.{node_name}"] = kernel
+        _attach_io(kernel, scenario, channels, plant)
+
+        for i, h in enumerate(node.handlers):
+            hpath = f"{npath}.handlers[{i}]"
+            ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=h.name,
+                                 execution=_exec_time(h, hpath), signals=signals, scenario=scenario,
+                                 period=None, spec=h)
+            body = _program(h, ctx, hpath)
+            programs[f"{node_name}.{h.name}"] = body
+            _call(kernel.create_handler, hpath, h.name, body, priority=h.priority, latency=h.latency)
+        for i, t in enumerate(node.tasks):
+            tpath = f"{npath}.tasks[{i}]"
+            periodic = t.release_kind == "periodic"
+            ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=t.name,
+                                 execution=_exec_time(t, tpath), signals=signals, scenario=scenario,
+                                 period=t.period, spec=t)
+            body = _program(t, ctx, tpath)
+            programs[f"{node_name}.{t.name}"] = body
+            _call(kernel.create_task, tpath, t.name, body,
+                  period=t.period if periodic else None, offset=t.offset, deadline=t.deadline,
+                  priority=t.priority, wcet=t.wcet, preemptible=t.preemptible,
+                  wcet_handler=t.wcet_handler, deadline_handler=t.deadline_handler)
+            if t.release_network is not None:
+                bindings.append((node_name, t.release_network, t.name))
+        # triggers after every handler exists
+        for i, h in enumerate(node.handlers):
+            hpath = f"{npath}.handlers[{i}]"
+            trig = h.trigger
+            if trig is None:
+                continue
+            if trig.kind == "timer":
+                _call(kernel.create_timer, f"{hpath}.trigger", f"{h.name}_timer", h.name,
+                      period=trig.timer.period, start=trig.timer.start)
+            elif trig.kind == "external":
+                _call(kernel.create_trigger, f"{hpath}.trigger", h.name, h.name,
+                      min_interarrival=trig.external.min_interarrival)
+            else:
+                bindings.append((node_name, trig.on_message, h.name))
+    return kernels, programs, bindings
+
+
+def _call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:
+    """Call a kernel/network constructor, turning its user errors into BuildErrors with ``path``."""
+    try:
+        return fn(*args, **kwargs)
+    except ConfigError as exc:
+        if exc.path is None:
+            raise BuildError(exc.message, path=path) from None
+        raise
+    except NetsimError as exc:
+        raise BuildError(str(exc), path=path) from None
+    except (ValueError, TypeError) as exc:
+        raise BuildError(str(exc), path=path) from exc
+
+
+def _build_networks(scenario: Any, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:
+    if not scenario.networks:
+        return {}
+    from netsim.network import make_network
+
+    nets: dict[str, Any] = {}
+    for name, spec in scenario.networks.items():
+        path = f"networks.{name}"
+        net = _call(make_network, path, env, name, spec.type, spec.validated_params())
+        nets[name] = net
+        env.components[f"network.{name}"] = net
+        for node in spec.nodes:
+            kernel = kernels.get(node)
+            if kernel is None:
+                raise BuildError(f"network '{name}' lists node '{node}', which is not defined under 'nodes'",
+                                 path=f"{path}.nodes")
+            _call(net.attach, f"{path}.nodes", node, kernel)
+            kernel.attach_network(net)
+    return nets
+
+
+def _record_signals(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> None:
+    wanted = scenario.record
+    grid = (scenario.plant.record_grid if scenario.plant is not None else None) or DEFAULT_SIGNAL_GRID
+    for name, sig in signals.items():
+        if wanted is not None and name not in wanted:
+            continue
+        _schedule_signal(env, sig, scenario.duration, grid, lambda t, v, n=name: env.record(n, v, t))
+
+
+# --------------------------------------------------------------------------------------------- build
+def build(scenario: Any) -> Simulation:
+    """Create and connect every runtime object of ``scenario`` (a validated Scenario, a path or a dict).
+
+    Raises
+    ------
+    BuildError
+        When a valid description cannot be turned into runtime objects (the message names the YAML path).
+    ScenarioError
+        When ``scenario`` is a path or dict that does not validate.
+    """
+    from netsim.scenario.schema import Scenario
+
+    if not isinstance(scenario, Scenario):
+        from netsim.scenario.loader import load_scenario
+
+        scenario = load_scenario(scenario)
+    env = SimEnv(seed=scenario.seed, record=_record_filter(scenario))
+    signals = _make_signals(scenario)
+    plant = _build_plant(scenario, env, signals)
+    if plant is not None:
+        env.components["plant"] = plant
+    channels = _build_io(scenario, env, plant)
+    kernels, programs, bindings = _build_kernels(scenario, env, signals, channels, plant)
+    networks = _build_networks(scenario, env, kernels)
+    for node, net, target in bindings:
+        if net not in networks:
+            raise BuildError(f"node '{node}' receives on network '{net}', which is not defined",
+                             path=f"nodes.{node}")
+        _call(kernels[node].bind_receive, f"nodes.{node}", net, target)
+    _record_signals(scenario, env, signals)
+    return Simulation(scenario=scenario, env=env, plant=plant, signals=signals, channels=channels,
+                      kernels=kernels, networks=networks, programs=programs, duration=scenario.duration)
