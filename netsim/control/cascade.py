@@ -1,0 +1,201 @@
+"""The control side of Fig. 1 of Cuenca et al. as one numeric object: NUMRE + MRCI (+ DOB) + eq (22).
+
+:class:`ControlSide` is called once per *received* measurement ``(k, y_k)`` and returns the packet it
+computed and whether eq (22) lets it go to the actuator. Two modes:
+
+``estimator=None`` (Cases 1 and 2, no NUMRE)
+    ``e_k = r_k - y_k``; the MRCI steps once (its slow mode of phase ``k mod m`` and the fast modes) and the
+    packet holds the current action only (``h = 0``): the actuator holds it (ZOH).
+
+with a :class:`~netsim.control.numre.Numre` (Cases 3-6)
+    1. ``N = k - k_ls`` (eq 9); the prior ``x(k|k-N)`` is the state predicted at the previous arrival
+       with the inputs the actuator *actually applies* (the packet sent then, or -- if eq (22) held the
+       packet back -- the older packet still playing, then its last value held);
+    2. correction with ``K(N)`` (eq 11);
+    3. cascade (eq 14, Section 2): for ``l = 0..h``: ``y_hat, d_hat`` (eq 15, or the DOB), the MRCI on
+       ``r_{k+l} - y_hat`` minus ``d_hat`` gives ``u_{k+l}``, the model predicts ``x(k+l+1|k)`` with it;
+    4. the controller states (MRCI, DOB) of every cascade step are kept, so that at the next arrival
+       ``k + N`` they continue from the state they had reached at ``k + N`` (the controller "ran" through
+       the cascade). If ``N > h`` (``h < N_max``, which the paper forbids) the prediction and the
+       controller are continued past the packet with the held last action, and the violation is counted
+       in :attr:`horizon_violations` and logged.
+
+The controller-side trigger compares ``u_k`` with the first value of the last *sent* packet (eq 21-22).
+The sign convention: ``u = C(e) - d_hat`` (``d`` enters the plant as ``u + d``).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Callable
+
+import numpy as np
+
+from netsim.control.controller_trigger import ControllerTrigger
+from netsim.control.mrci import MrciController
+from netsim.control.numre import Numre
+from netsim.control.packets import ControlPacket, PlayoutBuffer
+
+__all__ = ["ControlSide", "Decision"]
+
+log = logging.getLogger(__name__)
+
+
+class Decision:
+    """What :meth:`ControlSide.on_measurement` returns."""
+
+    __slots__ = ("k", "packet", "send", "N", "y_hat", "d_hat")
+
+    def __init__(self, k: int, packet: ControlPacket, send: bool, N: int, y_hat: float, d_hat: float) -> None:
+        self.k = k
+        self.packet = packet
+        self.send = send
+        self.N = N
+        self.y_hat = y_hat
+        self.d_hat = d_hat
+
+
+class ControlSide:
+    """Control-side algorithm: see the module docstring.
+
+    Parameters
+    ----------
+    controller
+        The MRCI (or any object with ``step(k, e)``, ``snapshot()``, ``restore(s)``).
+    reference
+        ``r(k) -> float``, the reference at fast instant ``k``.
+    estimator
+        A :class:`Numre`, or None for the no-estimator mode.
+    dob
+        Optional disturbance observer with ``step(u_prev, y_hat) -> d_hat``, ``snapshot``, ``restore``
+        (see :mod:`netsim.control.dob`); used instead of ``Cbar x`` for ``d_hat``.
+    trigger
+        Controller-side eq (22) (default: always send).
+    h
+        Number of future actions per packet (forced to 0 without estimator).
+    """
+
+    def __init__(self, controller: MrciController, reference: Callable[[int], float], *,
+                 estimator: Numre | None = None, dob=None, trigger: ControllerTrigger | None = None,
+                 h: int | None = None, x0: np.ndarray | None = None) -> None:
+        self.ctrl = controller
+        self.reference = reference
+        self.est = estimator
+        self.dob = dob
+        self.trigger = trigger or ControllerTrigger(enabled=False)
+        if estimator is None:
+            self.h = 0
+        else:
+            self.h = estimator.h if h is None else int(h)
+        self.mirror = PlayoutBuffer()  # what the actuator plays (no loss assumed)
+        self.k_ls: int | None = None
+        self.horizon_violations = 0
+        self.N_max = 0
+        n = 0 if estimator is None else estimator.n
+        self._x0 = np.zeros(n) if x0 is None else np.asarray(x0, float)
+        self._traj_x: list[np.ndarray] = []
+        self._traj_c: list[np.ndarray] = []
+        self._traj_d: list = []
+        self._u_prev = 0.0
+        self._traj_u_prev: list[float] = []
+        self.steps = 0  # controller steps computed (cost accounting)
+
+    # ------------------------------------------------------------------------------------------
+    def on_measurement(self, k: int, y: float) -> Decision:
+        """Process measurement ``y`` sensed at fast instant ``k``; return the packet and the send decision."""
+        if self.est is None:
+            return self._direct(k, y)
+        return self._estimated(k, y)
+
+    def _direct(self, k: int, y: float) -> Decision:
+        N = k - self.k_ls if self.k_ls is not None else k + 1
+        self.k_ls = k
+        u = self.ctrl.step(k, self.reference(k) - y)
+        self.steps += 1
+        pkt = ControlPacket(k, (u,))
+        send = self.trigger.should_send(u)
+        if send:
+            self.mirror.receive(pkt)
+        return Decision(k, pkt, send, N, y, 0.0)
+
+    def _state_at(self, k: int) -> tuple[np.ndarray, int]:
+        """Prior at ``k`` (and leave controller/DOB states as they were at ``k``)."""
+        est = self.est
+        if self.k_ls is None:  # first measurement: the initial guess propagated with the initial action
+            x = self._x0.copy()
+            for j in range(k):
+                x = est.predict_step(x, self.mirror.value(j))
+            return x, 1
+        N = k - self.k_ls
+        L = len(self._traj_x) - 1
+        if N <= L:
+            self.ctrl.restore(self._traj_c[N])
+            if self.dob is not None:
+                self.dob.restore(self._traj_d[N])
+            self._u_prev = self._traj_u_prev[N]
+            return self._traj_x[N], N
+        # past the packet: continue with the held action (h < N)
+        self.ctrl.restore(self._traj_c[L])
+        if self.dob is not None:
+            self.dob.restore(self._traj_d[L])
+        self._u_prev = self._traj_u_prev[L]
+        x = self._traj_x[L]
+        for l in range(L, N):
+            j = self.k_ls + l
+            yh, dh = est.outputs(x)
+            dh = self._dob_step(self._u_prev, yh) if self.dob is not None else dh
+            self._u_prev = self.ctrl.step(j, self.reference(j) - yh) - dh
+            x = est.predict_step(x, self.mirror.value(j))
+        return x, N
+
+    def _dob_step(self, u_prev: float, y_hat: float) -> float:
+        if self.dob is None:
+            return 0.0
+        return self.dob.step(u_prev, y_hat)
+
+    def _estimated(self, k: int, y: float) -> Decision:
+        est = self.est
+        prior, N = self._state_at(k)
+        if self.k_ls is not None and N > self.h:
+            self.horizon_violations += 1
+            if self.horizon_violations == 1:
+                log.warning("NUMRE: multiplicity N=%d at k=%d exceeds the horizon h=%d (need h >= N_max); "
+                            "predicting on with the held last action", N, k, self.h)
+        self.N_max = max(self.N_max, N)
+        x = est.correct(prior, y, min(N, 10**6))
+        self.k_ls = k
+        h = self.h
+        xs = [x]
+        cs = [self.ctrl.snapshot()]
+        ds = [self.dob.snapshot() if self.dob is not None else None]
+        ups = [self._u_prev]
+        us = []
+        y_hat0 = d_hat0 = 0.0
+        for l in range(h + 1):
+            j = k + l
+            yh, dh = est.outputs(x)
+            if self.dob is not None:
+                dh = self.dob.step(self._u_prev, yh)
+            if l == 0:
+                y_hat0, d_hat0 = yh, dh
+            u = self.ctrl.step(j, self.reference(j) - yh) - dh
+            self._u_prev = u
+            us.append(u)
+            x = est.predict_step(x, u)
+            xs.append(x)
+            cs.append(self.ctrl.snapshot())
+            ds.append(self.dob.snapshot() if self.dob is not None else None)
+            ups.append(u)
+        self.steps += h + 1
+        pkt = ControlPacket(k, tuple(us))
+        send = self.trigger.should_send(us[0])
+        if send:
+            self.mirror.receive(pkt)
+        else:  # the actuator keeps playing the older packet: predict with what it applies
+            x = xs[0]
+            xs = [x]
+            for l in range(h + 1):
+                x = est.predict_step(x, self.mirror.value(k + l))
+                xs.append(x)
+        self._traj_x, self._traj_c, self._traj_d, self._traj_u_prev = xs, cs, ds, ups
+        return Decision(k, pkt, send, N, y_hat0, d_hat0)
