@@ -218,7 +218,8 @@ class _Checker:
             port = int(port)
         if isinstance(port, int):
             if not 0 <= port < len(ports):
-                self.error(at, f"plant {what} index {port} out of range: the plant has {len(ports)} {what}s (0..{len(ports) - 1})")
+                n = len(ports)
+                self.error(at, f"plant {what} index {port} out of range: the plant has {n} {what}{'s' if n != 1 else ''}" + (f" (0..{n - 1})" if n else ""))
         elif isinstance(port, str):
             names = [p for p in ports if isinstance(p, str)]
             if names and port not in names:

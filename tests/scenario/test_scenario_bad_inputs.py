@@ -1,0 +1,243 @@
+"""Every bad input the issue lists gives a problem with its YAML path, its line and an exact message."""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+import yaml
+from scenario_fakes import base
+
+from netsim.scenario import ScenarioError, check_scenario, load_scenario
+
+
+def _errors(source, **kw):
+    return [p for p in check_scenario(source, **kw) if p.is_error]
+
+
+def _only(source) -> tuple[str, str]:
+    problems = _errors(source)
+    assert len(problems) == 1, [str(p) for p in problems]
+    return problems[0].path, problems[0].message
+
+
+def _write(tmp_path: Path, data, name: str = "s.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(data, sort_keys=False) if not isinstance(data, str) else data)
+    return path
+
+
+def _line_of(path: Path, needle: str) -> int:
+    """1-based line of the first line containing ``needle`` (computed independently of the loader)."""
+    for i, line in enumerate(path.read_text().splitlines(), start=1):
+        if needle in line:
+            return i
+    raise AssertionError(needle)
+
+
+def test_the_base_scenario_is_valid():
+    assert check_scenario(base()) == []
+
+
+def test_unknown_key_lists_the_known_keys():
+    raw = base()
+    raw["output"] = {"dir": None, "colour": "red"}
+    assert _only(raw) == ("output.colour", "unknown key 'colour' (known keys: dir, plot)")
+
+
+def test_misspelt_key_gets_a_did_you_mean():
+    raw = base()
+    task = raw["nodes"]["sensor"]["tasks"][0]
+    task["perod"] = task.pop("period")
+    problems = {p.path: p.message for p in _errors(raw)}
+    assert problems["nodes.sensor.tasks[0].perod"] == "unknown key 'perod'; did you mean 'period'?"
+
+
+def test_wrong_type_names_the_expected_type():
+    raw = base()
+    raw["seed"] = "abc"
+    raw["nodes"]["sensor"]["tasks"][0]["priority"] = "high"
+    problems = {p.path: p.message for p in _errors(raw)}
+    assert problems == {
+        "seed": "expected an integer, got 'abc'",
+        "nodes.sensor.tasks[0].priority": "expected an integer, got 'high'",
+    }
+
+
+def test_negative_period_is_an_error():
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"][0]["period"] = "-10 ms"
+    assert _only(raw) == ("nodes.sensor.tasks[0].period", "time must not be negative, got '-10 ms'")
+
+
+def test_zero_period_and_zero_duration_are_errors():
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"][0]["period"] = "0 ms"
+    raw["duration"] = 0
+    problems = {p.path: p.message for p in _errors(raw)}
+    assert problems == {
+        "nodes.sensor.tasks[0].period": "duration must be positive, got '0 ms'",
+        "duration": "duration must be positive, got 0",
+    }
+
+
+def test_unknown_unit_suggests_the_right_unit(tmp_path):
+    raw = base()
+    raw["nodes"]["controller"]["tasks"].append(
+        {"name": "log", "program": "zzt_idle", "period": "100 usec", "priority": 3}
+    )
+    path = _write(tmp_path, raw)
+    problems = _errors(path)
+    assert [str(p) for p in problems] == [
+        f"{path}:{_line_of(path, '100 usec')}: nodes.controller.tasks[1].period: unknown unit 'usec'; did you mean 'us'?"
+    ]
+
+
+def test_unknown_model_suggests_the_registered_one():
+    raw = base()
+    raw["plant"]["model"] = "zzt_plnt"
+    assert _only(raw) == ("plant.model", "unknown plant 'zzt_plnt'; did you mean 'zzt_plant'?")
+
+
+def test_unknown_program_is_reported_not_raised():
+    raw = base()
+    raw["nodes"]["controller"]["tasks"][0]["program"] = "zzt_idel"
+    assert _only(raw) == ("nodes.controller.tasks[0].program", "unknown program 'zzt_idel'; did you mean 'zzt_idle'?")
+
+
+def test_network_listing_a_node_that_does_not_exist():
+    raw = base()
+    raw["networks"]["bus"]["nodes"].append("ghost")
+    assert _only(raw) == ("networks.bus.nodes[3]", "unknown node 'ghost' (known nodes: actuator, controller, sensor)")
+
+
+def test_task_released_by_a_network_that_does_not_exist():
+    raw = base()
+    raw["nodes"]["controller"]["tasks"][0]["release"] = "on_message:ghost"
+    assert _only(raw) == ("nodes.controller.tasks[0].release", "unknown network 'ghost' (known networks: bus)")
+
+
+def test_task_released_by_a_network_its_node_is_not_on():
+    raw = base()
+    raw["networks"]["bus"]["nodes"] = ["sensor", "actuator"]
+    raw["nodes"]["sensor"]["tasks"][0]["params"]["to"] = "actuator"
+    assert _only(raw) == (
+        "nodes.controller.tasks[0].release",
+        "node 'controller' is not attached to network 'bus' (its nodes: sensor, actuator); "
+        "add 'controller' to networks.bus.nodes",
+    )
+
+
+def test_message_to_a_node_not_on_the_network():
+    raw = base()
+    raw["nodes"]["lonely"] = {"policy": "edf"}
+    raw["nodes"]["sensor"]["tasks"][0]["params"]["to"] = "lonely"
+    assert _only(raw) == (
+        "nodes.sensor.tasks[0].params.to",
+        "node 'lonely' is not on network 'bus' (its nodes: sensor, controller, actuator); "
+        "add it to networks.bus.nodes or send to one of those",
+    )
+
+
+def test_message_to_a_node_that_does_not_exist():
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"][0]["params"]["to"] = "controler"
+    assert _only(raw) == ("nodes.sensor.tasks[0].params.to", "unknown node 'controler'; did you mean 'controller'?")
+
+
+def test_empty_file(tmp_path):
+    path = _write(tmp_path, "# nothing here\n")
+    problems = check_scenario(path)
+    assert [(p.file, p.line, p.path, p.message) for p in problems] == [
+        (str(path), 1, "", "the file is empty; a scenario needs at least 'name' and 'duration'")
+    ]
+
+
+def test_yaml_syntax_error_has_its_line(tmp_path):
+    text = textwrap.dedent(
+        """\
+        name: broken
+        duration: 1 s
+        nodes:
+          a: {policy: fp
+          b: {}
+        """
+    )
+    path = _write(tmp_path, text)
+    problems = check_scenario(path)
+    assert len(problems) == 1
+    assert problems[0].message.startswith("YAML syntax error: ")
+    # the flow mapping opened on line 4 is never closed; the parser notices on line 5
+    assert problems[0].line == 5
+    assert str(problems[0]).startswith(f"{path}:5: YAML syntax error")
+
+
+def test_duplicate_key_is_a_yaml_error_with_its_line(tmp_path):
+    path = _write(tmp_path, "name: a\nduration: 1 s\nname: b\n")
+    problems = check_scenario(path)
+    assert len(problems) == 1 and problems[0].line == 3
+    assert "duplicate key" in problems[0].message
+
+
+def test_file_that_does_not_exist(tmp_path):
+    missing = tmp_path / "nope.yaml"
+    assert [str(p) for p in check_scenario(missing)] == [f"{missing}: file not found: {missing}"]
+    with pytest.raises(ScenarioError):
+        load_scenario(missing)
+
+
+def test_top_level_that_is_not_a_mapping(tmp_path):
+    path = _write(tmp_path, "- a\n- b\n")
+    assert [p.message for p in check_scenario(path)] == [
+        "the top level must be a mapping (name: ..., duration: ...), got a list"
+    ]
+
+
+def test_missing_required_keys():
+    assert {(p.path, p.message) for p in _errors({"nodes": {}})} == {
+        ("name", "missing required key 'name'"),
+        ("duration", "missing required key 'duration'"),
+    }
+
+
+def test_every_problem_is_reported_at_once_with_its_line(tmp_path):
+    raw = base()
+    raw["seed"] = "abc"  # schema
+    raw["nodes"]["sensor"]["tasks"][0]["period"] = "10 msec"  # unit
+    raw["nodes"]["sensor"]["tasks"][0]["params"]["bits"] = -1  # plugin params
+    raw["networks"]["bus"]["nodes"].append("ghost")  # cross reference
+    raw["plant"]["model"] = "zzt_plnt"  # registry
+    path = _write(tmp_path, raw)
+    problems = _errors(path)
+    got = {p.path: p.line for p in problems}
+    assert got == {
+        "seed": _line_of(path, "seed: abc"),
+        "plant.model": _line_of(path, "zzt_plnt"),
+        "nodes.sensor.tasks[0].params.bits": _line_of(path, "bits: -1"),
+        "nodes.sensor.tasks[0].period": _line_of(path, "10 msec"),
+        "networks.bus.nodes[3]": _line_of(path, "- ghost"),
+    }
+    assert [p.line for p in problems] == sorted(p.line for p in problems)
+
+
+def test_plugin_parameter_errors_carry_the_full_path():
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"][0]["params"]["bits"] = -1
+    raw["nodes"]["sensor"]["tasks"][0]["params"]["bitz"] = 8
+    raw["networks"]["bus"]["bitrate"] = "80 kbps/s"
+    problems = {p.path: p.message for p in _errors(raw)}
+    assert problems["nodes.sensor.tasks[0].params.bits"] == "input should be greater than 0, got -1"
+    assert problems["nodes.sensor.tasks[0].params.bitz"] == "unknown key 'bitz'; did you mean 'bits'?"
+    assert problems["networks.bus.bitrate"].startswith("cannot read '80 kbps/s' as a bit rate")
+    assert len(problems) == 3
+
+
+def test_load_scenario_raises_with_every_problem():
+    raw = base()
+    raw["seed"] = -1
+    raw["nodes"]["sensor"]["tasks"][0]["period"] = "10 usec"
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(raw)
+    assert [p.path for p in info.value.problems] == ["seed", "nodes.sensor.tasks[0].period"]
+    assert "scenario has 2 problems" in str(info.value)
