@@ -9,12 +9,19 @@ the media.
 """
 
 from netsim.network.can import CanBus, can_frame_bits
+from netsim.network.csma_cd import CsmaCdBus
+from netsim.network.delay import DelaySpec
+from netsim.network.ethernet import SwitchedEthernet
+from netsim.network.fdma import FdmaMedium
 from netsim.network.factory import make_network, network_class
 from netsim.network.link import Link
 from netsim.network.message import BROADCAST, Message, Receiver
 from netsim.network.params import NetworkParams, NodeDelays
 from netsim.network.pipeline import Frame, Network
+from netsim.network.loss import LossSpec
 from netsim.network.records import DROP_REASONS, MessageRecord
+from netsim.network.round_robin import RoundRobinBus
+from netsim.network.tdma import TdmaBus
 
 __all__ = [
     "make_network",
@@ -28,7 +35,14 @@ __all__ = [
     "BROADCAST",
     "MessageRecord",
     "DROP_REASONS",
+    "DelaySpec",
+    "LossSpec",
     "Link",
     "CanBus",
     "can_frame_bits",
+    "TdmaBus",
+    "CsmaCdBus",
+    "SwitchedEthernet",
+    "RoundRobinBus",
+    "FdmaMedium",
 ]

@@ -17,7 +17,7 @@ from simpy.events import NORMAL, Event
 
 from netsim.timebase import S
 
-__all__ = ["LATE", "Call", "call_later", "tx_time_ns"]
+__all__ = ["LATE", "Call", "call_later", "late_event", "tx_time_ns"]
 
 #: simpy priority of end-of-instant events (after URGENT=0 and NORMAL=1).
 LATE: Final[int] = 2
@@ -68,3 +68,12 @@ def tx_time_ns(bits: int, rate_bps: float) -> int:
     if irate == rate_bps:
         return -((-bits * S) // irate)
     return max(1, math.ceil(bits * S / rate_bps - 1e-6))
+
+
+def late_event(sim: simpy.Environment, delay_ns: int = 0) -> Event:
+    """An event (for a process to yield) processed at the end of the instant ``now + delay_ns``."""
+    ev = Event(sim)
+    ev._ok = True
+    ev._value = None
+    sim.schedule(ev, LATE, delay_ns)
+    return ev
