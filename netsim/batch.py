@@ -1,0 +1,168 @@
+"""Run many scenarios, in parallel processes, and summarise them in one table.
+
+``netsim batch FILE... | DIR`` calls :func:`run_batch`. Each scenario writes its own run folder
+``<out>/<file stem>/``; ``<out>/summary.csv`` has one row per scenario (in the order given): ``scenario,
+path, status, error, wall_time_s, run_dir`` and then every metric as a column. A scenario that fails (invalid
+file, build error, exception) does not stop the batch: its row carries the error text, and the returned
+failure count is non-zero. A run that diverges is a result, not a failure: its ``status`` says
+``diverged at t = ...`` and it is not counted as failed.
+
+Default output folder: ``reports/batch/<UTC time stamp>/``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any, Iterable
+
+import pandas as pd
+
+from netsim.results import write_csv
+
+__all__ = ["run_batch", "expand_paths", "SUMMARY_COLUMNS"]
+
+log = logging.getLogger(__name__)
+
+SUMMARY_COLUMNS = ["scenario", "path", "status", "error", "wall_time_s", "run_dir"]
+
+
+def _is_sweep(path: Path) -> bool:
+    """True for sweep files (a top-level ``sweep:`` key), which ``batch`` skips."""
+    try:
+        import yaml
+
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except Exception:  # noqa: BLE001 - a broken file is reported by its run
+        return False
+    return isinstance(data, dict) and "sweep" in data
+
+
+def expand_paths(paths: Iterable[str | Path]) -> list[Path]:
+    """Files as given; folders become their ``*.yaml``/``*.yml`` scenario files (sorted, sweeps skipped)."""
+    out: list[Path] = []
+    for p in paths:
+        path = Path(p)
+        if path.is_dir():
+            found = sorted([*path.glob("*.yaml"), *path.glob("*.yml")])
+            out += [f for f in found if not _is_sweep(f)]
+        else:
+            out.append(path)
+    return out
+
+
+def _init_worker() -> None:
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    os.environ["OMP_NUM_THREADS"] = "1"
+    os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+def _run_one(path: str, run_dir: str) -> dict[str, Any]:
+    """One batch row (never raises)."""
+    import time
+
+    t0 = time.perf_counter()
+    row: dict[str, Any] = {"scenario": Path(path).stem, "path": path, "status": "error", "error": "",
+                           "wall_time_s": 0.0, "run_dir": run_dir}
+    try:
+        from netsim.runner import run
+
+        result = run(path, out=run_dir)
+        row["scenario"] = str(result.meta.get("scenario", row["scenario"]))
+        row["status"] = result.status
+        row["error"] = str(result.meta.get("error", "") or "")
+        row.update({f"metric:{k}": float(v) for k, v in result.metrics.items()})
+    except Exception as exc:  # noqa: BLE001 - a failing scenario becomes a row with its error
+        row["status"] = "error"
+        row["error"] = f"{type(exc).__name__}: {exc}"
+    row["wall_time_s"] = time.perf_counter() - t0
+    return row
+
+
+def _run_dirs(files: list[Path], out: Path) -> list[Path]:
+    seen: dict[str, int] = {}
+    dirs = []
+    for f in files:
+        k = seen.get(f.stem, 0)
+        seen[f.stem] = k + 1
+        dirs.append(out / (f.stem if k == 0 else f"{f.stem}-{k + 1}"))
+    return dirs
+
+
+def run_batch(
+    paths: Iterable[str | Path],
+    *,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    progress: bool = True,
+) -> tuple[pd.DataFrame, int]:
+    """Run every scenario in ``paths`` (files or folders); write ``summary.csv``.
+
+    Parameters
+    ----------
+    paths
+        Scenario files and/or folders of scenario files.
+    out
+        Output folder (default ``reports/batch/<UTC stamp>``).
+    workers
+        Worker processes (default: CPU count; 1 runs in this process).
+    progress
+        Show a progress bar on stderr.
+
+    Returns
+    -------
+    (summary, n_failed)
+        The summary table (one row per scenario, metrics as columns) and the number of rows whose status
+        is ``error``.
+    """
+    files = expand_paths(paths)
+    folder = Path(out) if out is not None else (
+        Path("reports") / "batch" / datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    )
+    folder.mkdir(parents=True, exist_ok=True)
+    dirs = _run_dirs(files, folder)
+    n_workers = max(1, min(workers or os.cpu_count() or 1, max(1, len(files))))
+    rows: list[dict[str, Any] | None] = [None] * len(files)
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    bar = Progress(TextColumn("batch"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                   TextColumn("{task.description}"), console=Console(stderr=True), disable=not progress,
+                   transient=False)
+    with bar:
+        task = bar.add_task("", total=len(files))
+        if n_workers == 1:
+            for i, (f, d) in enumerate(zip(files, dirs)):
+                bar.update(task, description=f.name)
+                rows[i] = _run_one(str(f), str(d))
+                bar.advance(task)
+        else:
+            with ProcessPoolExecutor(max_workers=n_workers, initializer=_init_worker) as pool:
+                futures = {pool.submit(_run_one, str(f), str(d)): i for i, (f, d) in enumerate(zip(files, dirs))}
+                for fut in as_completed(futures):
+                    i = futures[fut]
+                    try:
+                        rows[i] = fut.result()
+                    except Exception as exc:  # noqa: BLE001 - a crashed worker process
+                        rows[i] = {"scenario": files[i].stem, "path": str(files[i]), "status": "error",
+                                   "error": f"{type(exc).__name__}: {exc}", "wall_time_s": 0.0,
+                                   "run_dir": str(dirs[i])}
+                    bar.update(task, description=files[i].name)
+                    bar.advance(task)
+
+    summary = _summary([r for r in rows if r is not None])
+    write_csv(summary, folder / "summary.csv")
+    n_failed = int((summary["status"] == "error").sum()) if not summary.empty else 0
+    if n_failed:
+        log.warning("%d of %d scenarios failed; see %s", n_failed, len(files), folder / "summary.csv")
+    return summary, n_failed
+
+
+def _summary(rows: list[dict[str, Any]]) -> pd.DataFrame:
+    metric_cols = sorted({k for r in rows for k in r if k.startswith("metric:")})
+    frame = pd.DataFrame(rows, columns=SUMMARY_COLUMNS + metric_cols)
+    return frame.rename(columns={c: c.removeprefix("metric:") for c in metric_cols})
