@@ -1,0 +1,613 @@
+"""Continuous and discrete plants co-simulated with the kernels and networks.
+
+A plant holds its state at an integer-nanosecond instant and is advanced **lazily**: whenever anything
+samples it (:meth:`Plant.output`, an ADC, an encoder) or actuates it (:meth:`Plant.set_input`, a DAC) it is
+first propagated to that instant under the inputs held since the last change (zero-order hold).
+
+Three plant types share the :class:`Plant` interface:
+
+:class:`~netsim.plant_lti.LTIPlant`
+    continuous LTI, propagated exactly (one matrix exponential per distinct step length, cached), process
+    noise with the exact (Van Loan) discrete covariance.
+:class:`~netsim.plant_nonlinear.NonlinearPlant`
+    ``f(t, x, u, params)``, ``h(t, x, u, params)`` integrated by :func:`scipy.integrate.solve_ivp`, with
+    event-detected mode switches for state-dependent discontinuities (stick-slip friction).
+:class:`~netsim.plant_lti.DiscretePlant`
+    ``x[k+1] = Ad x[k] + Bd u[k]`` updated at multiples of ``dt_ns``, outputs held in between.
+
+Disturbances
+------------
+:meth:`Plant.add_disturbance` adds a signal to one input (the plant sees ``held input + disturbances``).
+Piecewise-constant signals (:mod:`netsim.signals` constant/step/square/table, plain numbers) switch
+exactly at their jump instants: the plant splits its propagation there. A sinusoid is exact on an LTI plant
+(a harmonic oscillator is appended to the state). An :class:`LTIDisturbance` is a disturbance model of its
+own (eq. (2) of Cuenca et al.): continuous ones are appended to the state of an LTI plant, discrete ones
+(``dt_ns``) update their state at multiples of ``dt_ns`` and hold their output in between. Any other
+callable ``t_ns -> value`` is sampled at each propagation instant and held (an approximation).
+
+Listeners
+---------
+:meth:`Plant.on_input_change` registers ``callback(t_ns)`` called whenever the future trajectory stops being
+the one predicted from the current state and held inputs: an input change, a noisy propagation step (the
+noise enters as a jump at the step instant), a stochastic disturbance update. Exact encoders use it.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any, Callable, Iterable, Sequence
+
+import numpy as np
+
+from netsim.errors import BuildError, ConfigError, DivergenceError, SimulationError
+from netsim.timebase import format_time, to_seconds
+
+__all__ = [
+    "Plant",
+    "LTIPlant",
+    "NonlinearPlant",
+    "DiscretePlant",
+    "LTIDisturbance",
+    "Mode",
+    "Guard",
+    "as_matrix",
+]
+
+_log = logging.getLogger(__name__)
+
+#: "Never" as an integer time (about 146 years in ns): larger than any simulated instant.
+NEVER = 2**62
+
+_LAZY = {
+    "LTIPlant": "netsim.plant_lti",
+    "DiscretePlant": "netsim.plant_lti",
+    "NonlinearPlant": "netsim.plant_nonlinear",
+    "Mode": "netsim.plant_nonlinear",
+    "Guard": "netsim.plant_nonlinear",
+}
+
+
+def __getattr__(name: str) -> Any:
+    # The concrete plants live in their own modules, which import this one; re-export them lazily so
+    # that importing either module first works.
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'netsim.plant' has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(module), name)
+
+
+# ----------------------------------------------------------------------------------------------- validation
+def as_matrix(name: str, value: Any, shape: tuple[int | None, int | None] | None = None) -> np.ndarray:
+    """``value`` as a finite 2-D float array, or a :class:`ConfigError` naming the matrix ``name``.
+
+    A scalar becomes 1x1. ``shape`` entries that are not None must match.
+    """
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"matrix {name} is not numeric: {exc}") from None
+    if arr.ndim == 0:
+        arr = arr.reshape(1, 1)
+    if arr.ndim != 2:
+        raise ConfigError(f"matrix {name} must be 2-D, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ConfigError(f"matrix {name} contains NaN or Inf; give finite numbers")
+    if shape is not None:
+        for axis, want in enumerate(shape):
+            if want is not None and arr.shape[axis] != want:
+                raise ConfigError(
+                    f"matrix {name} has shape {arr.shape}, expected "
+                    f"({'any' if shape[0] is None else shape[0]}, {'any' if shape[1] is None else shape[1]})"
+                )
+    return arr
+
+
+def _names(kind: str, given: Sequence[str] | None, n: int, prefix: str) -> list[str]:
+    if given is None:
+        return [f"{prefix}[{i}]" for i in range(n)]
+    names = [str(g) for g in given]
+    if len(names) != n:
+        raise ConfigError(f"{kind} names: {len(names)} given for {n} {kind}s")
+    if len(set(names)) != len(names):
+        raise ConfigError(f"{kind} names must be unique, got {names}")
+    return names
+
+
+def _vector(name: str, value: Any, n: int) -> np.ndarray:
+    arr = np.array(value, dtype=float).ravel()
+    if arr.size == 1 and n != 1:
+        arr = np.full(n, float(arr[0]))
+    if arr.size != n:
+        raise ConfigError(f"{name} must have {n} entries, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise ConfigError(f"{name} contains NaN or Inf")
+    return arr
+
+
+# ----------------------------------------------------------------------------------------------- disturbances
+class LTIDisturbance:
+    """A disturbance generated by its own LTI model (eq. (2) of Cuenca et al.), driven by white noise.
+
+    Continuous (``dt_ns=None``): ``xd' = A xd + B w``, ``d = C xd`` with ``w`` white noise of intensity
+    ``noise_cov``; on an :class:`~netsim.plant_lti.LTIPlant` the model is appended to the plant state and
+    propagated exactly with it. Discrete (``dt_ns`` given): ``xd[k+1] = A xd[k] + B w[k]``, ``d[k] = C
+    xd[k]`` held over ``[k dt, (k+1) dt)``, ``w[k] ~ N(0, noise_cov)``; works on every plant type.
+
+    Parameters
+    ----------
+    A, B, C
+        The model matrices; ``C`` must have one row (the disturbance drives one plant input).
+    dt_ns
+        Sampling period of a discrete model, or None for a continuous one.
+    noise_cov
+        Covariance (discrete) or intensity (continuous) of ``w``; None or 0 for a deterministic model.
+    x0
+        Initial disturbance state (default zeros).
+    """
+
+    def __init__(
+        self,
+        A: Any,
+        B: Any,
+        C: Any,
+        *,
+        dt_ns: int | None = None,
+        noise_cov: Any = None,
+        x0: Any = None,
+    ) -> None:
+        self.A = as_matrix("disturbance A", A)
+        n = self.A.shape[0]
+        if self.A.shape != (n, n):
+            raise ConfigError(f"disturbance A must be square, got shape {self.A.shape}")
+        b = np.array(B, dtype=float)
+        self.B = as_matrix("disturbance B", b.reshape(n, -1) if b.ndim == 1 else b, (n, None))
+        c = np.array(C, dtype=float)
+        self.C = as_matrix("disturbance C", c.reshape(1, -1) if c.ndim == 1 else c, (1, n))
+        if dt_ns is not None and int(dt_ns) <= 0:
+            raise ConfigError(f"disturbance dt_ns must be positive, got {dt_ns}")
+        self.dt_ns = None if dt_ns is None else int(dt_ns)
+        nw = self.B.shape[1]
+        if noise_cov is None:
+            self.W = np.zeros((nw, nw))
+        else:
+            w = np.array(noise_cov, dtype=float)
+            self.W = as_matrix("disturbance noise_cov", np.diag(np.atleast_1d(w)) if w.ndim <= 1 else w, (nw, nw))
+        self.x0 = np.zeros(n) if x0 is None else _vector("disturbance x0", x0, n)
+        self.n = n
+
+    @property
+    def continuous(self) -> bool:
+        """True for a continuous-time model."""
+        return self.dt_ns is None
+
+    @property
+    def noisy(self) -> bool:
+        """True when the model is driven by noise."""
+        return bool(np.any(self.W != 0.0))
+
+
+def _psd_factor(name: str, Q: np.ndarray) -> np.ndarray:
+    """A square factor ``L`` with ``L @ L.T == Q`` for a symmetric positive semi-definite ``Q``."""
+    Q = 0.5 * (Q + Q.T)
+    w, V = np.linalg.eigh(Q)
+    scale = max(float(np.max(np.abs(w))) if w.size else 0.0, 1e-300)
+    if np.min(w) < -1e-9 * scale:
+        raise ConfigError(f"{name} must be positive semi-definite (eigenvalue {np.min(w):.3g})")
+    return V * np.sqrt(np.clip(w, 0.0, None))
+
+
+class _Source:
+    """One disturbance attached to an input, classified by how it can be propagated."""
+
+    __slots__ = ("index", "kind", "signal", "lti", "xd", "L", "rng", "_queue", "_window", "value", "next_ns")
+
+    def __init__(self, index: int, kind: str, signal: Any = None, lti: LTIDisturbance | None = None) -> None:
+        self.index = index
+        self.kind = kind  # "piecewise" | "sine" | "lti_c" | "lti_d" | "held"
+        self.signal = signal
+        self.lti = lti
+        self.xd = None if lti is None else lti.x0.copy()
+        self.L = None if lti is None or not lti.noisy else _psd_factor("disturbance noise_cov", lti.W)
+        self.rng: np.random.Generator | None = None
+        self._queue: list[int] = []
+        self._window = 1_000_000_000
+        self.value = 0.0
+        self.next_ns = NEVER
+
+    # piecewise sources: upcoming jumps from signal.breakpoints(t0, t1), fetched by growing windows
+    def next_break_after(self, t: int) -> int:
+        if self.kind == "lti_d":
+            dt = self.lti.dt_ns  # type: ignore[union-attr]
+            return (t // dt + 1) * dt
+        if self.kind != "piecewise":
+            return NEVER
+        while self._queue and self._queue[0] <= t:
+            self._queue.pop(0)
+        if self._queue:
+            return self._queue[0]
+        bp = getattr(self.signal, "breakpoints", None)
+        if bp is None:
+            return NEVER
+        window = self._window
+        while window < NEVER // 4:
+            found = [int(b) for b in bp(t, t + window) if int(b) > t]
+            if found:
+                self._queue = sorted(set(found))
+                return self._queue[0]
+            window *= 8
+        return NEVER
+
+    def refresh(self, t: int) -> None:
+        """Update ``value`` for the interval starting at ``t`` (right-continuous)."""
+        if self.kind in ("piecewise", "held"):
+            self.value = float(self.signal(t))
+        elif self.kind == "lti_d":
+            self.value = float(self.lti.C @ self.xd)  # type: ignore[union-attr,operator]
+        elif self.kind == "sine":
+            self.value = float(self.signal(t))
+
+    def step_discrete(self) -> None:
+        """Advance a discrete disturbance model by one period (at its break instant)."""
+        lti = self.lti
+        xd = lti.A @ self.xd  # type: ignore[union-attr]
+        if self.L is not None:
+            assert self.rng is not None
+            xd = xd + lti.B @ (self.L @ self.rng.standard_normal(self.L.shape[1]))  # type: ignore[union-attr]
+        self.xd = xd
+
+
+def _classify(index: int, signal: Any) -> _Source:
+    if isinstance(signal, LTIDisturbance):
+        return _Source(index, "lti_c" if signal.continuous else "lti_d", lti=signal)
+    if isinstance(signal, (int, float, np.floating, np.integer)) and not isinstance(signal, bool):
+        value = float(signal)
+        if not math.isfinite(value):
+            raise ConfigError(f"disturbance value must be finite, got {signal!r}")
+        return _Source(index, "piecewise", signal=lambda t, v=value: v)
+    if isinstance(signal, dict):
+        from netsim.signals import make_signal
+
+        signal = make_signal(signal)
+    if not callable(signal):
+        raise ConfigError(
+            f"a disturbance is a number, a signal spec {{type: ...}}, an LTIDisturbance or a callable t_ns -> "
+            f"value; got {type(signal).__name__}"
+        )
+    if all(hasattr(signal, a) for a in ("omega", "amplitude", "phase", "bias")):
+        return _Source(index, "sine", signal=signal)
+    if getattr(signal, "piecewise_constant", False):
+        return _Source(index, "piecewise", signal=signal)
+    _log.info("disturbance %r is sampled at propagation instants and held (not exact)", signal)
+    return _Source(index, "held", signal=signal)
+
+
+# ----------------------------------------------------------------------------------------------- base class
+class Plant:
+    """Common interface and lazy-advance machinery of all plants.
+
+    Subclasses implement :meth:`_step` (propagate over ``[self._t, t]`` with the effective input constant
+    apart from sinusoidal/continuous-model disturbances they handle themselves), :meth:`_output_now` and
+    :meth:`_state_now`, and may override :meth:`advance_to` with a faster path.
+
+    Parameters
+    ----------
+    n_states, n_inputs, n_outputs
+        Dimensions.
+    input_names, output_names, state_names
+        Signal names (default ``u[i]``, ``y[i]``, ``x[i]`` as in python-control).
+    name
+        Plant name: noise streams are ``plant.<name>.process`` and recorded signals ``<name>.x``.
+    divergence_bound
+        The run stops with :class:`DivergenceError` when the state norm exceeds this (or is not finite).
+    """
+
+    def __init__(
+        self,
+        n_states: int,
+        n_inputs: int,
+        n_outputs: int,
+        *,
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        state_names: Sequence[str] | None = None,
+        name: str = "plant",
+        divergence_bound: float = 1e12,
+    ) -> None:
+        if n_states < 0 or n_inputs < 0 or n_outputs < 1:
+            raise ConfigError(f"plant {name}: needs n_states >= 0, n_inputs >= 0, n_outputs >= 1")
+        self.name = str(name)
+        self.n_states, self.n_inputs, self.n_outputs = int(n_states), int(n_inputs), int(n_outputs)
+        self.input_names = _names("input", input_names, self.n_inputs, "u")
+        self.output_names = _names("output", output_names, self.n_outputs, "y")
+        self.state_names = _names("state", state_names, self.n_states, "x")
+        if not (divergence_bound > 0 and math.isfinite(divergence_bound)):
+            raise ConfigError(f"plant {name}: divergence_bound must be a positive finite number")
+        self.divergence_bound = float(divergence_bound)
+        self._bound2 = self.divergence_bound**2
+        self.env: Any = None
+        self._t = 0
+        self._u = np.zeros(self.n_inputs)  # inputs as last set (before disturbances)
+        self._listeners: list[Callable[[int], None]] = []
+        self._sources: list[_Source] = []
+        self._next_break = NEVER
+        self._has_held = False
+        self._started = False
+        self._record_events = False
+
+    # ---------------------------------------------------------------- names
+    def input_index(self, key: int | str) -> int:
+        """Index of input ``key`` (an index or a name)."""
+        return self._index("input", key, self.input_names)
+
+    def output_index(self, key: int | str) -> int:
+        """Index of output ``key`` (an index or a name)."""
+        return self._index("output", key, self.output_names)
+
+    def state_index(self, key: int | str) -> int:
+        """Index of state ``key`` (an index or a name)."""
+        return self._index("state", key, self.state_names)
+
+    def _index(self, kind: str, key: int | str, names: list[str]) -> int:
+        if isinstance(key, (int, np.integer)) and not isinstance(key, bool):
+            if 0 <= int(key) < len(names):
+                return int(key)
+            raise ConfigError(f"plant {self.name}: {kind} index {key} out of range 0..{len(names) - 1}")
+        if key in names:
+            return names.index(str(key))
+        raise ConfigError(f"plant {self.name} has no {kind} {key!r}; its {kind}s are {names}")
+
+    # ---------------------------------------------------------------- life cycle
+    @property
+    def time_ns(self) -> int:
+        """Instant the plant state refers to."""
+        return self._t
+
+    def bind(
+        self,
+        env: Any,
+        *,
+        record_events: bool = False,
+        record_grid_ns: int | None = None,
+        grid_prefix: str = "",
+    ) -> "Plant":
+        """Attach the plant to a :class:`~netsim.env.SimEnv` (noise streams, recording). Call once.
+
+        Parameters
+        ----------
+        record_events
+            Record the state ``<name>.x`` at every propagation instant and the held input ``<name>.u`` at
+            every input change.
+        record_grid_ns
+            Also record every output, under its output name (prefixed by ``grid_prefix``), on this fixed grid
+            starting at the current time (a simpy process).
+        """
+        if self.env is not None:
+            raise BuildError(f"plant {self.name} is already bound to an environment")
+        self.env = env
+        self._t = int(env.now)
+        self._record_events = bool(record_events)
+        for src in self._sources:
+            if src.lti is not None and src.lti.noisy:
+                src.rng = env.rng(f"plant.{self.name}.disturbance.{self.input_names[src.index]}")
+        self._bind_streams(env)
+        if record_grid_ns is not None:
+            grid = int(record_grid_ns)
+            if grid <= 0:
+                raise ConfigError(f"plant {self.name}: record_grid must be positive, got {record_grid_ns}")
+            env.process(self._grid_process(grid, grid_prefix))
+        env.at_end(self._finish)
+        return self
+
+    def _bind_streams(self, env: Any) -> None:
+        """Subclasses fetch their noise streams here."""
+
+    def _grid_process(self, grid: int, prefix: str) -> Any:
+        env = self.env
+        names = [prefix + n for n in self.output_names]
+        while True:
+            y = self.output(env.now)
+            for name, v in zip(names, y):
+                env.record(name, float(v))
+            yield env.timeout(grid)
+
+    def _finish(self, t_end: int) -> None:
+        if t_end > self._t:
+            self.advance_to(t_end)
+
+    def on_input_change(self, callback: Callable[[int], None]) -> Callable[[], None]:
+        """Call ``callback(t_ns)`` whenever the predicted future trajectory changes; returns an unsubscriber."""
+        self._listeners.append(callback)
+        return lambda: self._listeners.remove(callback) if callback in self._listeners else None
+
+    def _notify(self, t: int) -> None:
+        for cb in list(self._listeners):
+            cb(t)
+
+    def _now(self, t_ns: int | None) -> int:
+        if t_ns is not None:
+            return int(t_ns)
+        return int(self.env.now) if self.env is not None else self._t
+
+    # ---------------------------------------------------------------- disturbances
+    def add_disturbance(self, input: int | str, signal: Any) -> None:
+        """Add ``signal`` to input ``input`` (the plant sees held input + disturbances).
+
+        ``signal``: a number, a signal spec ``{type: step, at: ..., value: ...}``, a
+        :class:`netsim.signals.Signal`, an :class:`LTIDisturbance`, or any callable ``t_ns -> value``
+        (sampled and held at propagation instants). Must be called before the plant first advances.
+        """
+        if self._started:
+            raise BuildError(f"plant {self.name}: add disturbances before the simulation starts")
+        src = _classify(self.input_index(input), signal)
+        self._check_source(src)
+        if src.lti is not None and src.lti.noisy and self.env is not None:
+            src.rng = self.env.rng(f"plant.{self.name}.disturbance.{self.input_names[src.index]}")
+        self._sources.append(src)
+        self._has_held = any(s.kind == "held" for s in self._sources)
+        self._on_sources_changed()
+
+    def _check_source(self, src: _Source) -> None:
+        """Subclasses reject disturbance kinds they cannot propagate."""
+
+    def _on_sources_changed(self) -> None:
+        """Subclasses rebuild augmented models here."""
+
+    def _start(self) -> None:
+        """First use: evaluate the disturbances at the start instant."""
+        self._started = True
+        for src in self._sources:
+            if src.kind == "lti_d" and src.lti.noisy and src.rng is None:  # type: ignore[union-attr]
+                raise BuildError(f"plant {self.name}: bind(env) before running a noisy disturbance model")
+        self._refresh_sources(self._t)
+
+    def _refresh_sources(self, t: int) -> None:
+        nxt = NEVER
+        for src in self._sources:
+            src.refresh(t)
+            src.next_ns = src.next_break_after(t)
+            nxt = min(nxt, src.next_ns)
+        self._next_break = nxt
+        self._update_effective_input(t)
+
+    def _break_at(self, t: int) -> bool:
+        """Process the disturbance jumps due at ``t``; True when a stochastic update happened."""
+        stochastic = False
+        for src in self._sources:
+            if src.next_ns == t and src.kind == "lti_d":
+                src.step_discrete()
+                stochastic = stochastic or src.L is not None
+        self._refresh_sources(t)
+        return stochastic
+
+    def _piecewise_input(self) -> np.ndarray:
+        """Held inputs plus the current values of piecewise/held/discrete-model disturbances."""
+        u = self._u.copy()
+        for src in self._sources:
+            if src.kind in ("piecewise", "held", "lti_d"):
+                u[src.index] += src.value
+        return u
+
+    def _update_effective_input(self, t: int) -> None:
+        """Subclasses store the effective input used by :meth:`_step`."""
+
+    def prediction_barrier(self) -> int:
+        """Next instant beyond which the future cannot be predicted from the current state (stochastic
+        disturbance updates), or a huge number."""
+        return min((s.next_ns for s in self._sources if s.kind == "lti_d"), default=NEVER)
+
+    # ---------------------------------------------------------------- propagation
+    def advance_to(self, t_ns: int) -> None:
+        """Propagate the state to ``t_ns`` under the held inputs (no-op when already there)."""
+        t = int(t_ns)
+        if not self._started:
+            self._start()
+        if t <= self._t:
+            if t < self._t:
+                self._backwards(t)
+            return
+        stochastic = False
+        while True:
+            if self._has_held:
+                self._refresh_sources(self._t)
+            b = self._next_break
+            if b > t:
+                stochastic |= self._step(t)
+                break
+            if b > self._t:
+                stochastic |= self._step(b)
+            stochastic |= self._break_at(b)
+            if b == t:
+                break
+        if self._record_events:
+            self.env.record(f"{self.name}.x", self._state_now(), self._t)
+        if stochastic:
+            self._notify(self._t)
+
+    def _backwards(self, t: int) -> None:
+        raise SimulationError(
+            f"plant {self.name}: asked for t = {format_time(t)} but the plant is already at "
+            f"{format_time(self._t)} (time cannot go backwards)"
+        )
+
+    def _step(self, t: int) -> bool:  # pragma: no cover - abstract
+        """Propagate from ``self._t`` to ``t`` (no jumps in between); True when noise was added."""
+        raise NotImplementedError
+
+    def _output_now(self) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _state_now(self) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _diverged(self, t: int, x: np.ndarray) -> None:
+        norm = float(np.sqrt(np.dot(x, x))) if np.all(np.isfinite(x)) else float("nan")
+        raise DivergenceError(
+            f"plant diverged at t = {to_seconds(t):.9g} s: plant {self.name} state norm {norm:.3g} "
+            f"exceeds the divergence bound {self.divergence_bound:.3g} (unstable loop?)",
+            t,
+        )
+
+    # ---------------------------------------------------------------- sampling and actuation
+    def output(self, t_ns: int | None = None) -> np.ndarray:
+        """Outputs at ``t_ns`` (default now), after advancing the plant there."""
+        self.advance_to(self._now(t_ns))
+        return self._output_now()
+
+    def state(self, t_ns: int | None = None) -> np.ndarray:
+        """State (a copy) at ``t_ns`` (default now), after advancing the plant there."""
+        self.advance_to(self._now(t_ns))
+        return self._state_now()
+
+    @property
+    def inputs(self) -> np.ndarray:
+        """Held inputs as last set (without disturbances)."""
+        return self._u.copy()
+
+    def set_input(self, key: int | str, value: float, t_ns: int | None = None) -> None:
+        """Advance to ``t_ns`` (default now), then hold input ``key`` at ``value`` (zero-order hold)."""
+        i = self.input_index(key)
+        v = float(value)
+        if not math.isfinite(v):
+            raise SimulationError(
+                f"plant {self.name}: input {self.input_names[i]} set to {value!r} at "
+                f"t = {to_seconds(self._now(t_ns)):.9g} s (the controller produced a non-finite value)"
+            )
+        t = self._now(t_ns)
+        self.advance_to(t)
+        if self._u[i] == v:
+            return
+        self._u[i] = v
+        self._input_changed(t)
+
+    def set_inputs(self, values: Iterable[float], t_ns: int | None = None) -> None:
+        """Advance to ``t_ns`` (default now), then hold all inputs at ``values``."""
+        u = np.array(list(values), dtype=float)
+        if u.shape != (self.n_inputs,):
+            raise ConfigError(f"plant {self.name}: set_inputs needs {self.n_inputs} values, got {u.size}")
+        if not np.all(np.isfinite(u)):
+            raise SimulationError(f"plant {self.name}: non-finite input {u.tolist()}")
+        t = self._now(t_ns)
+        self.advance_to(t)
+        if np.array_equal(u, self._u):
+            return
+        self._u[:] = u
+        self._input_changed(t)
+
+    def _input_changed(self, t: int) -> None:
+        self._update_effective_input(t)
+        if self._record_events:
+            self.env.record(f"{self.name}.u", self._u, t)
+        self._notify(t)
+
+    def set_state(self, x: Any, t_ns: int | None = None) -> None:
+        """Advance to ``t_ns`` then overwrite the state (e.g. a disturbance impulse)."""
+        t = self._now(t_ns)
+        self.advance_to(t)
+        self._set_state_now(_vector(f"plant {self.name} state", x, self.n_states))
+        self._notify(t)
+
+    def _set_state_now(self, x: np.ndarray) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError

@@ -1,0 +1,404 @@
+"""Nonlinear plants integrated by :func:`scipy.integrate.solve_ivp` between events, with mode switching.
+
+``f(t, x, u, params) -> dx/dt`` and ``h(t, x, u, params) -> y`` use python-control's vocabulary (``t`` in
+seconds). Between two events the plant is integrated from its current state; inputs are held.
+
+Discontinuous dynamics
+----------------------
+A right-hand side that jumps with the state (Coulomb friction at ``v = 0``) makes an adaptive integrator
+crawl with tiny steps, or chatter forever around the switching surface. Two mechanisms avoid that:
+
+* ``events``: guard functions ``g(t, x, u, params)``; integration stops at their zero crossings and
+  restarts, so no step straddles the discontinuity.
+* ``modes``: a small hybrid automaton. Each :class:`Mode` has its own right-hand side and guards; when a
+  guard crosses zero (or the input changes), ``select_mode(t, x, u, params)`` picks the next mode and may
+  return a projected state (``("stick", x_with_v_0)``). :func:`stick_slip_modes` builds the usual
+  three-mode friction model (slip forward, slip backward, stick while the applied force stays below
+  static friction) so the velocity is held exactly 0 while stuck.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from netsim.errors import ConfigError, SimulationError
+from netsim.plant import NEVER, Plant, _Source, _vector
+from netsim.timebase import S
+
+__all__ = ["NonlinearPlant", "Mode", "Guard", "stick_slip_modes"]
+
+Fn = Callable[[float, np.ndarray, np.ndarray, Any], Any]
+
+#: Mode switches allowed at one instant before the plant reports Zeno behaviour.
+MAX_SWITCHES_PER_INSTANT = 20
+
+
+@dataclass(frozen=True)
+class Guard:
+    """A zero-crossing function ``fn(t, x, u, params)``; ``direction`` as in solve_ivp events
+    (+1: only upward crossings, -1: only downward, 0: both)."""
+
+    fn: Fn
+    direction: float = 0.0
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One mode of a hybrid plant: its right-hand side (None: the plant's ``f``) and its guards."""
+
+    f: Fn | None = None
+    guards: tuple[Guard, ...] = field(default_factory=tuple)
+
+
+def stick_slip_modes(
+    f: Fn,
+    *,
+    velocity: int,
+    applied_force: Fn,
+    coulomb: float,
+    static: float | None = None,
+    mass: float = 1.0,
+    v_eps: float = 1e-9,
+) -> tuple[dict[str, Mode], Callable[..., tuple[str, np.ndarray]]]:
+    """Modes and selector of Coulomb friction with stiction on state ``velocity``.
+
+    Parameters
+    ----------
+    f
+        Dynamics without friction.
+    velocity
+        Index of the velocity state.
+    applied_force
+        Net non-friction force ``F(t, x, u, params)`` on the mass (its effect is already in ``f``).
+    coulomb, static
+        Sliding and static friction forces (``static`` defaults to ``coulomb``).
+    mass
+        Mass that converts the friction force into acceleration.
+    v_eps
+        Speeds below this count as zero when a mode is chosen.
+
+    Returns
+    -------
+    (modes, select_mode)
+        Pass both to :class:`NonlinearPlant`. Modes: ``slip+`` (``v > 0``, friction ``-coulomb``),
+        ``slip-`` and ``stick`` (``v`` held at exactly 0 while ``|F| <= static``).
+    """
+    fc = float(coulomb) / mass
+    fs = float(coulomb if static is None else static)
+    if fc < 0 or fs < 0:
+        raise ConfigError("friction forces must be non-negative")
+
+    def f_pos(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> np.ndarray:
+        dx = np.array(f(t, x, u, p), dtype=float)
+        dx[velocity] -= fc
+        return dx
+
+    def f_neg(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> np.ndarray:
+        dx = np.array(f(t, x, u, p), dtype=float)
+        dx[velocity] += fc
+        return dx
+
+    def f_stick(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> np.ndarray:
+        dx = np.array(f(t, x, u, p), dtype=float)
+        dx[velocity] = 0.0
+        return dx
+
+    def speed(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> float:
+        return float(x[velocity])
+
+    def breakaway(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> float:
+        return abs(float(applied_force(t, x, u, p))) - fs
+
+    modes = {
+        "slip+": Mode(f_pos, (Guard(speed, -1.0),)),
+        "slip-": Mode(f_neg, (Guard(speed, +1.0),)),
+        "stick": Mode(f_stick, (Guard(breakaway, +1.0),)),
+    }
+
+    def select(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> tuple[str, np.ndarray]:
+        v = float(x[velocity])
+        if v > v_eps:
+            return "slip+", x
+        if v < -v_eps:
+            return "slip-", x
+        x = np.array(x, dtype=float)
+        x[velocity] = 0.0
+        force = float(applied_force(t, x, u, p))
+        if abs(force) <= fs:
+            return "stick", x
+        return ("slip+" if force > 0 else "slip-"), x
+
+    return modes, select
+
+
+class NonlinearPlant(Plant):
+    """A nonlinear plant ``x' = f(t, x, u, params)``, ``y = h(t, x, u, params)``.
+
+    Parameters
+    ----------
+    f, h
+        Dynamics and output functions (``t`` in seconds); ``h`` returns ``n_outputs`` values.
+    n_states, n_inputs, n_outputs
+        Dimensions.
+    params
+        Passed unchanged to ``f``, ``h`` and guards.
+    x0
+        Initial state (default zeros).
+    events
+        Guards (functions or :class:`Guard`) at whose zero crossings the integration restarts.
+    modes, select_mode, initial_mode
+        Hybrid dynamics: see the module docstring and :func:`stick_slip_modes`. ``select_mode`` is called at
+        every restart (input change, disturbance jump, guard crossing) and may return ``name`` or
+        ``(name, x)``.
+    method, rtol, atol, max_step
+        solve_ivp settings (defaults RK45, 1e-8, 1e-10, unbounded).
+    """
+
+    def __init__(
+        self,
+        f: Fn,
+        h: Fn,
+        n_states: int,
+        n_inputs: int,
+        n_outputs: int,
+        *,
+        params: Any = None,
+        x0: Any = None,
+        events: Sequence[Fn | Guard] | None = None,
+        modes: dict[str, Mode] | None = None,
+        select_mode: Callable[..., Any] | None = None,
+        initial_mode: str | None = None,
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        state_names: Sequence[str] | None = None,
+        name: str = "plant",
+        method: str = "RK45",
+        rtol: float = 1e-8,
+        atol: float = 1e-10,
+        max_step: float | None = None,
+        divergence_bound: float = 1e12,
+    ) -> None:
+        super().__init__(
+            n_states, n_inputs, n_outputs, input_names=input_names, output_names=output_names,
+            state_names=state_names, name=name, divergence_bound=divergence_bound,
+        )
+        if not callable(f) or not callable(h):
+            raise ConfigError(f"plant {name}: f and h must be callables f(t, x, u, params)")
+        self.f, self.h, self.params = f, h, params
+        self._x = np.zeros(self.n_states) if x0 is None else _vector(f"plant {name} x0", x0, self.n_states)
+        common = tuple(g if isinstance(g, Guard) else Guard(g) for g in (events or ()))
+        if modes:
+            if select_mode is None:
+                raise ConfigError(f"plant {name}: modes need a select_mode(t, x, u, params) function")
+            self.modes = {k: Mode(m.f, tuple(m.guards) + common) for k, m in modes.items()}
+        else:
+            self.modes = {"default": Mode(None, common)}
+        self.select_mode = select_mode
+        self.mode = initial_mode if initial_mode is not None else next(iter(self.modes))
+        if self.mode not in self.modes:
+            raise ConfigError(f"plant {name}: initial_mode {self.mode!r} is not one of {list(self.modes)}")
+        self.method, self.rtol, self.atol = method, float(rtol), float(atol)
+        self.max_step = math.inf if max_step is None else float(max_step)
+        self.rhs_evaluations = 0
+        self.mode_switches = 0
+        self._ueff = np.zeros(self.n_inputs)
+        self._check_output(self._x)
+
+    def _check_output(self, x: np.ndarray) -> None:
+        y = np.atleast_1d(np.asarray(self.h(0.0, x, np.zeros(self.n_inputs), self.params), dtype=float))
+        if y.shape != (self.n_outputs,):
+            raise ConfigError(f"plant {self.name}: h returns {y.size} values, n_outputs is {self.n_outputs}")
+
+    def _check_source(self, src: _Source) -> None:
+        if src.kind == "lti_c":
+            raise ConfigError(
+                f"plant {self.name}: continuous disturbance models need an LTI plant; give the LTIDisturbance "
+                "a dt_ns (discrete model) instead"
+            )
+
+    def _update_effective_input(self, t: int) -> None:
+        self._ueff = self._piecewise_input()
+        if self._started and self.select_mode is not None:
+            self._reselect(t / S)
+
+    def _input_fn(self, base: np.ndarray) -> Callable[[float], np.ndarray]:
+        sines = [s for s in self._sources if s.kind == "sine"]
+        if not sines:
+            return lambda t: base
+
+        def u_of(t: float) -> np.ndarray:
+            u = base.copy()
+            for s in sines:
+                sig = s.signal
+                u[s.index] += sig.bias + sig.amplitude * math.sin(sig.omega * t + sig.phase)
+            return u
+
+        return u_of
+
+    def _reselect(self, t: float) -> None:
+        choice = self.select_mode(t, self._x, self._input_fn(self._ueff)(t), self.params)  # type: ignore[misc]
+        name, x = (choice, self._x) if isinstance(choice, str) else choice
+        if name not in self.modes:
+            raise SimulationError(f"plant {self.name}: select_mode returned unknown mode {name!r}")
+        if name != self.mode:
+            self.mode_switches += 1
+        self.mode = name
+        self._x = np.asarray(x, dtype=float).copy()
+
+    def _start(self) -> None:
+        super()._start()
+        if self.select_mode is not None:
+            self._reselect(self._t / S)
+
+    # ---------------------------------------------------------------- integration
+    def _integrate(
+        self,
+        t0: float,
+        t1: float,
+        x: np.ndarray,
+        mode: str,
+        u_of: Callable[[float], np.ndarray],
+        extra: Sequence[Guard] = (),
+    ) -> tuple[float, np.ndarray, str, bool]:
+        """Integrate over ``[t0, t1]`` seconds with mode switching; stop early at an ``extra`` guard.
+
+        Returns ``(t_reached, x, mode, stopped_by_extra)``.
+        """
+        t = t0
+        switches_here, last_switch_t = 0, None
+        params = self.params
+        while t < t1:
+            m = self.modes[mode]
+            f = m.f or self.f
+
+            def rhs(tt: float, xx: np.ndarray, f: Fn = f) -> np.ndarray:
+                self.rhs_evaluations += 1
+                return f(tt, xx, u_of(tt), params)
+
+            guards = list(m.guards) + list(extra)
+            evs = []
+            for g in guards:
+                def ev(tt: float, xx: np.ndarray, g: Guard = g) -> float:
+                    return float(g.fn(tt, xx, u_of(tt), params))
+
+                ev.terminal = True  # type: ignore[attr-defined]
+                ev.direction = g.direction  # type: ignore[attr-defined]
+                evs.append(ev)
+            try:
+                sol = solve_ivp(
+                    rhs, (t, t1), x, method=self.method, rtol=self.rtol, atol=self.atol,
+                    max_step=self.max_step, events=evs or None,
+                )
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                raise SimulationError(f"plant {self.name}: integrator failed at t = {t:.9g} s: {exc}") from exc
+            if sol.status == -1:
+                raise SimulationError(f"plant {self.name}: integrator failed at t = {sol.t[-1]:.9g} s: {sol.message}")
+            t_new = float(sol.t[-1])
+            x = sol.y[:, -1]
+            if not (x @ x <= self._bound2):
+                self._diverged(int(round(t_new * S)), x)
+            if sol.status != 1:
+                return t1, x, mode, False
+            fired = [i for i, te in enumerate(sol.t_events) if len(te)]
+            i = fired[0]
+            t_new = float(sol.t_events[i][0])
+            x = np.asarray(sol.y_events[i][0], dtype=float)
+            if i >= len(m.guards):
+                return t_new, x, mode, True
+            if last_switch_t is not None and t_new - last_switch_t <= 1e-12 * max(1.0, abs(t_new)):
+                switches_here += 1
+                if switches_here > MAX_SWITCHES_PER_INSTANT:
+                    raise SimulationError(
+                        f"plant {self.name}: modes switch endlessly at t = {t_new:.9g} s (Zeno behaviour); "
+                        "check the guards and select_mode"
+                    )
+            else:
+                switches_here = 0
+            last_switch_t = t_new
+            if self.select_mode is not None:
+                choice = self.select_mode(t_new, x, u_of(t_new), params)
+                new, x = (choice, x) if isinstance(choice, str) else choice
+                x = np.asarray(x, dtype=float)
+                if new not in self.modes:
+                    raise SimulationError(f"plant {self.name}: select_mode returned unknown mode {new!r}")
+                if new != mode:
+                    self.mode_switches += 1
+                mode = new
+            t = t_new
+        return t1, x, mode, False
+
+    def _step(self, t: int) -> bool:
+        _, x, mode, _ = self._integrate(self._t / S, t / S, self._x, self.mode, self._input_fn(self._ueff))
+        self._x, self.mode, self._t = np.asarray(x, dtype=float), mode, t
+        return False
+
+    def _output_now(self) -> np.ndarray:
+        ts = self._t / S
+        return np.atleast_1d(np.asarray(self.h(ts, self._x, self._input_fn(self._ueff)(ts), self.params), float))
+
+    def _state_now(self) -> np.ndarray:
+        return self._x.copy()
+
+    def _set_state_now(self, x: np.ndarray) -> None:
+        self._x = x.copy()
+        if self.select_mode is not None:
+            self._reselect(self._t / S)
+
+    # ---------------------------------------------------------------- prediction for exact encoders
+    def predict_exit(
+        self, output: int, step: float, count: int, t_first: int, tick: int, max_ticks: int
+    ) -> tuple[int | None, int, int]:
+        """Candidate tick where ``floor(y/step)`` may leave ``count``: the first band crossing found by
+        solve_ivp events, snapped up to the tick grid (the encoder verifies it on the plant itself)."""
+        if not self._started:
+            self._start()
+        barrier = self.prediction_barrier()
+        t_end = t_first + (max_ticks - 1) * tick
+        if barrier <= t_end:
+            max_ticks = max(0, -(-(barrier - t_first) // tick))
+            t_end = t_first + (max_ticks - 1) * tick
+        if max_ticks == 0:
+            return None, t_first - tick, barrier
+        lo, hi = count * step, (count + 1) * step
+        p = self.params
+
+        def y_of(tt: float, xx: np.ndarray, uu: np.ndarray) -> float:
+            return float(np.atleast_1d(self.h(tt, xx, uu, p))[output])
+
+        band = (
+            Guard(lambda tt, xx, uu, _p: y_of(tt, xx, uu) - lo, -1.0),
+            Guard(lambda tt, xx, uu, _p: y_of(tt, xx, uu) - hi, +1.0),
+        )
+        breaks = sorted(
+            {int(b) for s in self._sources if s.kind == "piecewise" and hasattr(s.signal, "breakpoints")
+             for b in s.signal.breakpoints(self._t, t_end)}
+        ) + [t_end]
+        t, x, mode = self._t, self._x.copy(), self.mode
+        u = self._ueff.copy()
+        y_now = y_of(t / S, x, self._input_fn(u)(t / S))
+        if math.floor(y_now / step) != count:  # left the band before the first unexamined tick
+            return t_first, t_first, t_first
+        for b in breaks:
+            if b > t:
+                te, x, mode, hit = self._integrate(t / S, b / S, x, mode, self._input_fn(u), band)
+                if hit:
+                    tns = int(round(te * S))
+                    j = max(0, -(-(tns - t_first) // tick))
+                    cand = t_first + j * tick
+                    if j < max_ticks:
+                        return cand, cand, cand
+                    break
+                t = b
+            u = self._u.copy()
+            for s in self._sources:
+                if s.kind == "piecewise":
+                    u[s.index] += float(s.signal(b))
+                elif s.kind in ("held", "lti_d"):
+                    u[s.index] += s.value
+        last = t_first + (max_ticks - 1) * tick
+        return None, last, barrier if barrier < NEVER and barrier <= last + tick else last
