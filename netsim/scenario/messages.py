@@ -62,6 +62,17 @@ def _tag_of(tp: Any) -> str | None:
     return None
 
 
+def _members(tp: Any) -> list[Any]:
+    """The members of a (nested, possibly Annotated) union, each with its own annotations kept."""
+    inner = _unwrap(tp)
+    if typing.get_origin(inner) in _UNIONS:
+        out: list[Any] = []
+        for member in typing.get_args(inner):
+            out += _members(member) if typing.get_origin(_unwrap(member)) in _UNIONS else [member]
+        return out
+    return [tp]
+
+
 def _child(tp: Any, part: PathPart, next_tag: str | None) -> Any:
     """The type found at ``part`` inside values of type ``tp`` (None when unknown)."""
     tp = _unwrap(tp)
@@ -97,10 +108,8 @@ def _model_at(root: type[BaseModel] | None, loc: Sequence[Any]) -> type[BaseMode
     while i < len(parts):
         part = parts[i]
         if isinstance(part, str) and part.startswith(TAG_MARK):
-            inner = _unwrap(tp)
-            if typing.get_origin(inner) in _UNIONS:
-                tagged = [m for m in typing.get_args(inner) if _tag_of(m) == part]
-                tp = tagged[0] if tagged else tp
+            tagged = [m for m in _members(tp) if _tag_of(m) == part]
+            tp = tagged[0] if tagged else tp
             i += 1
             continue
         nxt = parts[i + 1] if i + 1 < len(parts) else None
