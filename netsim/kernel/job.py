@@ -1,0 +1,228 @@
+"""A job: one execution of a task body (or one invocation of an interrupt handler).
+
+The kernel calls the task's body once per job with the :class:`Job` as its only argument. The body is a
+generator; every interaction with the simulated computer is a request built by a method of the job and
+**yielded**::
+
+    def controller(job):
+        y = yield job.analog_in("y")
+        yield job.execute(ExecTime.uniform(400_000, 600_000))   # preemptible CPU time
+        yield job.send("can", "actuator", -2.0 * y, bits=64)
+        yield job.sleep(1 * MS)
+
+Code between two yields takes no simulated time and is never interrupted: it runs when the job holds
+the CPU, at the start of the job's next segment (TrueTime's segment functions).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from netsim.errors import SimulationError
+from netsim.kernel import requests as rq
+from netsim.kernel.requests import Request
+from netsim.kernel.states import NEW, STATE_NAMES
+from netsim.kernel.sync import Event, Mailbox, Semaphore
+
+if TYPE_CHECKING:  # pragma: no cover
+    from netsim.kernel.exectime import ExecTime
+    from netsim.kernel.kernel import Kernel
+
+__all__ = ["Job"]
+
+
+class Job:
+    """One job of a task, or one invocation of an interrupt handler.
+
+    Attributes
+    ----------
+    task_name : str
+        Name of the task (or handler) the job belongs to.
+    job_id : int
+        Index of the job within its task (0, 1, 2, ...).
+    data : Any
+        Data given at release (``create_job(task, data)``, the message of a receive, the trigger's data,
+        the overrunning job for an overrun handler), else the task's ``data``.
+    release : int
+        Release (or invocation) time in ns.
+    deadline : int | None
+        Absolute deadline in ns (``None``: no deadline).
+    start, finish : int | None
+        First time the job got the CPU; time it finished or was killed.
+    cpu_time : int
+        CPU time consumed so far (execution plus context switches charged to it), ns.
+    preemptions : int
+        How many times it lost the CPU to a more urgent job or handler while not finished.
+    killed : bool
+        True when it was ended by ``kill``.
+    invoker : str | None
+        For handler invocations: who raised it (timer, trigger, network, task name).
+    """
+
+    __slots__ = (
+        "_kernel", "_task", "_gen", "_state", "_rank", "_base_rank", "_seq", "_remaining", "_pre_left", "_budget",
+        "_value", "_seg_start", "_blocked_on", "_wake", "_np", "is_handler",
+        "task_name", "job_id", "data", "release", "deadline", "start", "finish", "cpu_time",
+        "preemptions", "killed", "invoker", "wcet_overrun", "deadline_overrun",
+    )
+
+    def __init__(self, kernel: "Kernel", task: Any, job_id: int, data: Any, release: int,
+                 deadline: int | None, is_handler: bool = False, invoker: str | None = None) -> None:
+        self._kernel = kernel
+        self._task = task
+        self._gen: Any = None
+        self._state = NEW
+        self._rank: tuple[Any, Any] = (1, 0)
+        self._base_rank: tuple[Any, Any] = self._rank
+        self._seq = 0
+        self._remaining = 0
+        self._pre_left = 0
+        self._budget: int | None = None
+        self._value: Any = None
+        self._seg_start = 0
+        self._blocked_on: Any = None
+        self._wake: Any = None
+        self._np = False
+        self.is_handler = is_handler
+        self.task_name: str = task.name
+        self.job_id = job_id
+        self.data = data
+        self.release = release
+        self.deadline = deadline
+        self.start: int | None = None
+        self.finish: int | None = None
+        self.cpu_time = 0
+        self.preemptions = 0
+        self.killed = False
+        self.invoker = invoker
+        self.wcet_overrun = False
+        self.deadline_overrun = False
+
+    # ----------------------------------------------------------------- context
+    @property
+    def now(self) -> int:
+        """Current simulation time in ns."""
+        return self._kernel._sim.now  # type: ignore[no-any-return]
+
+    @property
+    def spec(self) -> Any:
+        """The static description of the task (:class:`TaskSpec`) or handler (:class:`HandlerSpec`)."""
+        return self._task.spec
+
+    @property
+    def kernel(self) -> "Kernel":
+        """The kernel (node) the job runs on."""
+        return self._kernel
+
+    @property
+    def shared(self) -> dict[str, Any]:
+        """The node's shared state (``kernel.shared``)."""
+        return self._kernel.shared
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The node's random stream for body code, ``env.rng(f"kernel.{node}.rng")``."""
+        return self._kernel.rng
+
+    @property
+    def state(self) -> str:
+        """``"queued"``, ``"ready"``, ``"running"``, ``"blocked"`` or ``"done"``."""
+        return STATE_NAMES[self._state]
+
+    @property
+    def done(self) -> bool:
+        """True once the job finished or was killed."""
+        return self.finish is not None
+
+    # ----------------------------------------------------------------- time
+    def execute(self, duration: "int | ExecTime") -> Request:
+        """Consume ``duration`` ns (or one draw of an :class:`ExecTime`) of preemptible CPU time."""
+        return Request(rq.EXECUTE, duration)
+
+    def sleep(self, duration: int) -> Request:
+        """Give up the CPU for ``duration`` ns."""
+        return Request(rq.SLEEP, duration)
+
+    def sleep_until(self, t_ns: int) -> Request:
+        """Give up the CPU until absolute time ``t_ns`` (returns at once if it has passed)."""
+        return Request(rq.SLEEP_UNTIL, t_ns)
+
+    # ----------------------------------------------------------------- I/O and network
+    def analog_in(self, channel: str) -> Request:
+        """Read the analog input ``channel`` now; the yield returns the value."""
+        return Request(rq.ANALOG_IN, channel)
+
+    def analog_out(self, channel: str, value: Any) -> Request:
+        """Write ``value`` to the analog output ``channel`` now."""
+        return Request(rq.ANALOG_OUT, channel, value)
+
+    def send(self, network: str, to: str | None, payload: Any, bits: int, priority: int = 0,
+             tag: str = "") -> Request:
+        """Send ``payload`` (``bits`` long) to node ``to`` (``None``: broadcast) on ``network``.
+
+        The kernel fills ``sender``, ``receiver``, ``bits``, ``priority`` and ``tag`` (default: the task
+        name) of a :class:`~netsim.network.message.Message` and calls ``network.send(msg)``.
+        """
+        return Request(rq.SEND, network, (to, payload, bits), (priority, tag))
+
+    def receive(self, network: str) -> Request:
+        """The next message of the node's inbox for ``network``; the yield returns it, or ``None``."""
+        return Request(rq.RECEIVE, network)
+
+    # ----------------------------------------------------------------- synchronisation
+    def fetch(self, mailbox: Mailbox) -> Request:
+        """Take the oldest item of ``mailbox``, blocking while it is empty; the yield returns the item."""
+        self._check(mailbox, Mailbox, "fetch")
+        return Request(rq.FETCH, mailbox)
+
+    def post(self, mailbox: Mailbox, item: Any) -> Request:
+        """Put ``item`` into ``mailbox``, blocking while it is full."""
+        self._check(mailbox, Mailbox, "post")
+        return Request(rq.POST, mailbox, item)
+
+    def try_fetch(self, mailbox: Mailbox) -> Request:
+        """Take the oldest item of ``mailbox`` without blocking; the yield returns ``None`` if empty."""
+        self._check(mailbox, Mailbox, "try_fetch")
+        return Request(rq.TRY_FETCH, mailbox)
+
+    def try_post(self, mailbox: Mailbox, item: Any) -> Request:
+        """Put ``item`` into ``mailbox`` without blocking; the yield returns ``False`` if full."""
+        self._check(mailbox, Mailbox, "try_post")
+        return Request(rq.TRY_POST, mailbox, item)
+
+    def take(self, semaphore: Semaphore) -> Request:
+        """Decrement ``semaphore``, blocking at zero."""
+        self._check(semaphore, Semaphore, "take")
+        return Request(rq.TAKE, semaphore)
+
+    def give(self, semaphore: Semaphore) -> Request:
+        """Increment ``semaphore`` (or wake its first waiter)."""
+        self._check(semaphore, Semaphore, "give")
+        return Request(rq.GIVE, semaphore)
+
+    def wait(self, event: Event) -> Request:
+        """Block until ``event`` is notified."""
+        self._check(event, Event, "wait")
+        return Request(rq.WAIT, event)
+
+    def notify(self, event: Event, all: bool = False) -> Request:  # noqa: A002 - TrueTime vocabulary
+        """Wake the first waiter of ``event`` (every waiter with ``all=True``)."""
+        self._check(event, Event, "notify")
+        return Request(rq.NOTIFY, event, bool(all))
+
+    def kill(self, target: "Job | None" = None) -> Request:
+        """End ``target`` now (default: this job). Killing this job ends its body at the yield."""
+        if target is not None and not isinstance(target, Job):
+            raise SimulationError(f"task '{self.task_name}': kill() needs a Job, got {target!r}")
+        return Request(rq.KILL, target)
+
+    def _check(self, obj: Any, cls: type, op: str) -> None:
+        if not isinstance(obj, cls):
+            raise SimulationError(
+                f"task '{self.task_name}': {op}() needs a {cls.__name__}, got {type(obj).__name__} {obj!r}"
+            )
+
+    def __repr__(self) -> str:
+        return f"<Job {self.task_name}#{self.job_id} {self.state} release={self.release}>"

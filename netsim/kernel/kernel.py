@@ -1,0 +1,990 @@
+"""The simulated real-time kernel of one node (TrueTime's kernel block, with generator bodies).
+
+Semantics
+---------
+- **Bodies and segments.** A task body is a generator; the code between two yields runs atomically, in
+  zero time, while the job holds the CPU. ``execute`` requests consume preemptible CPU time;
+  ``sleep``/``sleep_until`` and blocking mailbox/semaphore/event requests give up the CPU. Zero-time
+  requests (``analog_in``, ``send``, ``try_fetch`` ...) are answered without a simpy round trip.
+- **End of a segment.** When an ``execute`` ends at ``t`` the job's following code runs at ``t``, before
+  anything released at ``t`` can take the CPU (so a job whose last ``execute`` ends at ``t`` finishes at
+  ``t``, as response-time analysis assumes). The job may then be preempted before its next ``execute``.
+- **Releases before dispatch.** Every release at an instant (periodic releases, timers, triggers,
+  message arrivals, wake-ups) is processed before the CPU is given away at that instant: the dispatch
+  runs as a simpy event of lower priority than every ordinary event of the instant. Ties among ready
+  jobs of equal urgency go to the one that became ready first (FIFO); equal urgency never preempts.
+  A preempted job keeps its place (it resumes before equals that arrived while it ran).
+- **Interrupt handlers** rank above every task; among themselves by ``priority``. An invocation that
+  arrives while the handler is queued or running is queued with its data and time stamp, never lost.
+  A handler's ``latency`` is CPU time spent at each invocation before its code runs (ISR entry).
+- **Context switches** (TrueTime's "context switch overhead"): each time a task job is put on the CPU
+  after a different task job, or after the CPU was idle, it first runs ``context_switch`` ns of kernel
+  code, charged to that job (its ``cpu_time``, its task's ``cpu_time``, the schedule trace as
+  "running", and ``Kernel.switch_time``). This happens after a release (the new job starts, possibly
+  preempting), after a preemption (the preempting job starts, and later the preempted one resumes) and
+  after a finish or a block (the next job starts or resumes). Handlers borrow the CPU without a context
+  switch: a task resumed after a handler pays nothing (it continues an interrupted switch if one was
+  under way). A switch cut short by a more urgent task is started again in full on resumption.
+- **Budgets and deadlines.** ``wcet`` is a budget of execution time (context switches excluded) per job;
+  the instant it is exhausted with work left, ``wcet_handler`` fires. ``deadline_handler`` fires at the
+  absolute deadline if the job has not finished. Neither kills the job; a handler can (``kill_job``).
+- **Livelock.** More than ``livelock_limit`` zero-time activities (requests and job resumptions) at one
+  instant raise :class:`~netsim.errors.LivelockError` naming the tasks and handlers involved.
+"""
+
+from __future__ import annotations
+
+import difflib
+import logging
+from collections import deque
+from heapq import heappop, heappush
+from typing import Any, Callable, Iterable
+
+from netsim.env import SimEnv
+from netsim.errors import BuildError, ConfigError, LivelockError, SimulationError
+from netsim.kernel import requests as rq
+from netsim.kernel.events import DEADLINE, DISPATCH, NORMAL, URGENT, Wake
+from netsim.kernel.exectime import ExecTime
+from netsim.kernel.job import Job
+from netsim.kernel.policies import Policy
+from netsim.kernel.records import JobRecord, busy_time
+from netsim.kernel.requests import Request
+from netsim.kernel.states import BLOCKED, DONE, NEW, READY, RUNNING
+from netsim.kernel.task import (Handler, HandlerSpec, Task, TaskSpec, check_body, check_time,
+                                task_error)
+from netsim.network.message import Message
+from netsim.registry import lookup
+
+__all__ = ["Kernel", "Timer", "Trigger"]
+
+log = logging.getLogger(__name__)
+
+_EXECUTE, _SLEEP_UNTIL, _SLEEP = rq.EXECUTE, rq.SLEEP_UNTIL, rq.SLEEP
+#: Rank of a started non-preemptible task job: below every handler (level 0), above every task (level 1).
+_NP_RANK = (0.5, 0)
+
+
+def _did_you_mean(name: str, known: Iterable[str]) -> str:
+    known = list(known)
+    close = difflib.get_close_matches(name, known, n=1)
+    if close:
+        return f"; did you mean '{close[0]}'?"
+    return f" (known: {', '.join(sorted(known)) or 'none'})"
+
+
+def resolve_policy(policy: "str | Policy", node: str) -> Policy:
+    """A :class:`Policy` instance from a registered name, a ``"module:Class"`` path or an instance."""
+    if isinstance(policy, Policy):
+        return policy
+    if isinstance(policy, type) and issubclass(policy, Policy):
+        return policy()
+    if not isinstance(policy, str):
+        raise BuildError(f"node '{node}': policy must be a name such as 'fp', 'rm', 'dm', 'edf' or a Policy, "
+                         f"got {policy!r}")
+    try:
+        obj = lookup("policy", policy)
+    except ConfigError as exc:
+        raise BuildError(f"node '{node}': scheduling {exc}") from None
+    if isinstance(obj, type):
+        obj = obj()
+    if not isinstance(obj, Policy):
+        raise BuildError(f"node '{node}': '{policy}' is not a scheduling Policy (got {obj!r})")
+    return obj
+
+
+class Timer:
+    """A periodic or one-shot timer that invokes a handler."""
+
+    __slots__ = ("name", "handler", "period", "start", "data", "active", "fired")
+
+    def __init__(self, name: str, handler: str, period: int | None, start: int, data: Any) -> None:
+        self.name = name
+        self.handler = handler
+        self.period = period
+        self.start = start
+        self.data = data
+        self.active = True
+        self.fired = 0
+
+
+class Trigger:
+    """An external interrupt input with a minimum inter-arrival time (earlier edges are ignored)."""
+
+    __slots__ = ("name", "handler", "min_interarrival", "last", "accepted", "ignored")
+
+    def __init__(self, name: str, handler: str, min_interarrival: int) -> None:
+        self.name = name
+        self.handler = handler
+        self.min_interarrival = min_interarrival
+        self.last: int | None = None
+        self.accepted = 0
+        self.ignored = 0
+
+
+class Kernel:
+    """A simulated real-time computer: tasks, interrupt handlers, a scheduler and I/O.
+
+    Parameters
+    ----------
+    env
+        The simulation environment.
+    name
+        Node name (sender name of its messages; part of its random stream names).
+    policy
+        ``"fp"``, ``"rm"``, ``"dm"``, ``"edf"``, ``"np_fp"``, ``"np_edf"``, ``"module:Class"`` or a
+        :class:`~netsim.kernel.policies.Policy`.
+    context_switch
+        Context-switch overhead in ns (see the module notes for where it is charged).
+    trace
+        Keep the schedule trace (``Kernel.schedule``); turning it off saves time in long runs.
+    livelock_limit
+        Zero-time activities allowed at one instant before a :class:`LivelockError`.
+
+    Attributes
+    ----------
+    shared : dict
+        Per-node state shared by the node's bodies.
+    job_records : list[JobRecord]
+        One record per finished or killed task job (plus, after the run, one per unfinished job).
+    schedule : list[tuple[str, str, int, int]]
+        ``(task, state, t0, t1)`` intervals, state in ``"running"``, ``"ready"``, ``"blocked"``.
+    switches, switch_time : int
+        Number of context switches and CPU time spent in them.
+    segments : int
+        Number of CPU segments dispatched (execution pieces, context switches, ISR latencies).
+    """
+
+    def __init__(self, env: SimEnv, name: str, policy: "str | Policy" = "fp", context_switch: int = 0, *,
+                 trace: bool = True, livelock_limit: int = 200_000) -> None:
+        if not isinstance(name, str) or not name:
+            raise BuildError(f"kernel name must be a non-empty string, got {name!r}")
+        self.env = env
+        self._sim = env.sim
+        self.name = name
+        self.policy = resolve_policy(policy, name)
+        self.context_switch = check_time(name, "<kernel>", "context_switch", context_switch) or 0
+        self.trace = bool(trace)
+        self.livelock_limit = int(livelock_limit)
+        self.shared: dict[str, Any] = {}
+        self.job_records: list[JobRecord] = []
+        self.schedule: list[tuple[str, str, int, int]] = []
+        self.tasks: dict[str, Task] = {}
+        self.handlers: dict[str, Handler] = {}
+        self.timers: dict[str, Timer] = {}
+        self.triggers: dict[str, Trigger] = {}
+        self.networks: dict[str, Any] = {}
+        self._inboxes: dict[str, deque[Message]] = {}
+        self._bindings: dict[str, str] = {}
+        self._ain: dict[str, Callable[[int], Any]] = {}
+        self._aout: dict[str, Callable[[int, Any], None]] = {}
+        self._ready: list[tuple[Any, int, Job]] = []
+        self._seq = 0
+        self._running: Job | None = None
+        self._seg_ev: Wake | None = None
+        self._last_task_job: Job | None = None
+        self._busy = False
+        self._dispatch_pending = False
+        self._exec_rng = env.rng(f"kernel.{name}.exec")
+        self.rng = env.rng(f"kernel.{name}.rng")
+        self._zt_time = -1
+        self._zt_count = 0
+        self._zt_names: dict[str, int] = {}
+        self._unfinished: list[JobRecord] = []
+        self._t_end: int | None = None
+        self.switches = 0
+        self.switch_time = 0
+        self.segments = 0
+        Wake(self._sim, 0, URGENT, self._on_start)
+        env.at_end(self._finalize)
+
+    # ================================================================= building
+    def create_task(self, name: str, body: Callable[[Job], Any], *, period: int | None = None, offset: int = 0,
+                    deadline: int | None = None, priority: int | float | None = None, wcet: int | None = None,
+                    preemptible: bool = True, data: Any = None, wcet_handler: "str | Callable[[Job], Any] | None" = None,
+                    deadline_handler: "str | Callable[[Job], Any] | None" = None) -> Task:
+        """Create a periodic (``period`` set) or aperiodic task.
+
+        Parameters
+        ----------
+        name
+            Unique name on this node (tasks and handlers share one name space).
+        body
+            Generator function ``body(job)``, called once per job.
+        period, offset, deadline
+            Period and first release (ns, periodic tasks); relative deadline (default: the period).
+        priority
+            Fixed priority (lower = more urgent), required by ``fp``.
+        wcet
+            Execution budget per job (ns); exceeding it fires ``wcet_handler``.
+        preemptible
+            ``False``: a started job is preempted only by interrupt handlers.
+        data
+            Default ``job.data`` for jobs released without data.
+        wcet_handler, deadline_handler
+            A handler name (invoked with the overrunning job as data) or a callable ``fn(job)`` run at
+            the overrun instant.
+
+        Raises
+        ------
+        BuildError
+            Naming the task and field for an invalid value.
+        """
+        node = self.name
+        if not isinstance(name, str) or not name:
+            raise BuildError(f"node '{node}': task name must be a non-empty string, got {name!r}")
+        if name in self.tasks or name in self.handlers:
+            raise task_error(node, name, "name", "is already used by another task or handler on this node")
+        check_body(node, name, body)
+        period_ns = check_time(node, name, "period", period, positive=True, allow_none=True)
+        offset_ns = check_time(node, name, "offset", offset)
+        assert offset_ns is not None
+        if period_ns is None and offset_ns:
+            raise task_error(node, name, "offset", "applies to periodic tasks only; give a period or drop it")
+        deadline_ns = check_time(node, name, "deadline", deadline, positive=True, allow_none=True)
+        if deadline_ns is None:
+            deadline_ns = period_ns
+        if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
+            raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
+        wcet_ns = check_time(node, name, "wcet", wcet, positive=True, allow_none=True)
+        for field, ref in (("wcet_handler", wcet_handler), ("deadline_handler", deadline_handler)):
+            if ref is not None and not isinstance(ref, str) and not callable(ref):
+                raise task_error(node, name, field, f"must be a handler name or a callable fn(job), got {ref!r}")
+        if wcet_handler is not None and wcet_ns is None:
+            raise task_error(node, name, "wcet_handler", "needs a 'wcet' budget to detect overruns")
+        if deadline_handler is not None and deadline_ns is None:
+            raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
+        spec = TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(preemptible))
+        self.policy.check(node, spec)
+        task = Task(spec, body, data, wcet_handler, deadline_handler)
+        self.tasks[name] = task
+        for ref in (wcet_handler, deadline_handler):
+            if isinstance(ref, str) and ref in self.handlers:
+                pass  # resolved now; unknown names are reported by validate() before the run
+        if period_ns is not None:
+            Wake(self._sim, offset_ns, NORMAL, self._on_periodic_release, task)
+        return task
+
+    def create_handler(self, name: str, body: Callable[[Job], Any], *, priority: int | float = 0, latency: int = 0,
+                       data: Any = None) -> Handler:
+        """Create an interrupt handler.
+
+        Parameters
+        ----------
+        name
+            Unique name on this node.
+        body
+            Generator function ``body(job)``, called once per invocation; ``job.data`` is the invocation
+            data (the message, the trigger data, the overrunning job) or ``data``.
+        priority
+            Among handlers (lower = more urgent); every handler beats every task.
+        latency
+            ISR entry latency: CPU time (ns) spent at each invocation before the code runs.
+        """
+        node = self.name
+        if not isinstance(name, str) or not name:
+            raise BuildError(f"node '{node}': handler name must be a non-empty string, got {name!r}")
+        if name in self.tasks or name in self.handlers:
+            raise task_error(node, name, "name", "is already used by another task or handler on this node")
+        check_body(node, name, body)
+        if isinstance(priority, bool) or not isinstance(priority, (int, float)):
+            raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
+        latency_ns = check_time(node, name, "latency", latency)
+        assert latency_ns is not None
+        handler = Handler(HandlerSpec(name, priority, latency_ns), body, data)
+        self.handlers[name] = handler
+        return handler
+
+    def create_timer(self, name: str, handler: str, *, period: int | None = None, start: int = 0,
+                     data: Any = None) -> Timer:
+        """A timer invoking ``handler`` at absolute time ``start``, then every ``period`` ns if given."""
+        node = self.name
+        if name in self.timers:
+            raise task_error(node, name, "name", "is already used by another timer on this node")
+        period_ns = check_time(node, name, "period", period, positive=True, allow_none=True)
+        start_ns = check_time(node, name, "start", start)
+        assert start_ns is not None
+        now = self._sim.now
+        if start_ns < now:
+            raise task_error(node, name, "start", f"{start_ns} ns is in the past (now {now} ns)")
+        if not isinstance(handler, str):
+            raise task_error(node, name, "handler", f"must be a handler name, got {handler!r}")
+        timer = Timer(name, handler, period_ns, start_ns, data)
+        self.timers[name] = timer
+        Wake(self._sim, start_ns - now, NORMAL, self._on_timer, timer)
+        return timer
+
+    def cancel_timer(self, name: str) -> None:
+        """Stop timer ``name`` (pending expiries are discarded)."""
+        self._get(self.timers, name, "timer").active = False
+
+    def create_trigger(self, name: str, handler: str, *, min_interarrival: int = 0) -> Trigger:
+        """An external interrupt input ``name`` invoking ``handler``; edges closer than ``min_interarrival``
+        ns to the last accepted one are ignored (counted in ``Trigger.ignored``)."""
+        node = self.name
+        if name in self.triggers:
+            raise task_error(node, name, "name", "is already used by another trigger on this node")
+        mia = check_time(node, name, "min_interarrival", min_interarrival)
+        assert mia is not None
+        if not isinstance(handler, str):
+            raise task_error(node, name, "handler", f"must be a handler name, got {handler!r}")
+        trig = Trigger(name, handler, mia)
+        self.triggers[name] = trig
+        return trig
+
+    def bind_receive(self, network: str, target: str) -> None:
+        """On each message arriving on ``network``: queue it in ``inbox(network)``, then invoke the handler
+        ``target`` or release a job of the task ``target`` (the message is also the job's ``data``)."""
+        if network in self._bindings:
+            raise BuildError(f"node '{self.name}': network '{network}' is already bound to "
+                             f"'{self._bindings[network]}'")
+        if not isinstance(target, str):
+            raise BuildError(f"node '{self.name}': bind_receive target must be a task or handler name, got {target!r}")
+        self._bindings[network] = target
+        self._inboxes.setdefault(network, deque())
+
+    def attach_network(self, net: Any) -> None:
+        """Make ``net`` (with ``.name`` and ``.send(msg)``) available to ``job.send``."""
+        self.networks[net.name] = net
+        self._inboxes.setdefault(net.name, deque())
+
+    def attach_analog_in(self, channel: str, read: Callable[[int], Any]) -> None:
+        """Analog input ``channel``: ``read(t_ns)`` returns the value seen by ``job.analog_in``."""
+        self._ain[channel] = read
+
+    def attach_analog_out(self, channel: str, write: Callable[[int, Any], None]) -> None:
+        """Analog output ``channel``: ``job.analog_out`` calls ``write(t_ns, value)``."""
+        self._aout[channel] = write
+
+    def validate(self) -> None:
+        """Check every reference to a handler or task by name (called automatically at time 0).
+
+        Raises
+        ------
+        BuildError
+            Naming the referring timer, trigger, task or binding, with a suggestion.
+        """
+        handlers = self.handlers
+        for timer in self.timers.values():
+            if timer.handler not in handlers:
+                raise task_error(self.name, timer.name, "handler",
+                                 f"unknown handler '{timer.handler}'{_did_you_mean(timer.handler, handlers)}")
+        for trig in self.triggers.values():
+            if trig.handler not in handlers:
+                raise task_error(self.name, trig.name, "handler",
+                                 f"unknown handler '{trig.handler}'{_did_you_mean(trig.handler, handlers)}")
+        for task in self.tasks.values():
+            for field, ref in (("wcet_handler", task.wcet_handler), ("deadline_handler", task.deadline_handler)):
+                if isinstance(ref, str) and ref not in handlers:
+                    raise task_error(self.name, task.name, field,
+                                     f"unknown handler '{ref}'{_did_you_mean(ref, handlers)}")
+        for network, target in self._bindings.items():
+            if target not in handlers and target not in self.tasks:
+                known = list(handlers) + list(self.tasks)
+                raise BuildError(f"node '{self.name}': bind_receive('{network}', '{target}'): no task or "
+                                 f"handler '{target}'{_did_you_mean(target, known)}")
+
+    # ================================================================= run-time API
+    @property
+    def now(self) -> int:
+        """Current simulation time in ns."""
+        return self._sim.now  # type: ignore[no-any-return]
+
+    @property
+    def running(self) -> str | None:
+        """Name of the task or handler holding the CPU (``None``: idle)."""
+        return None if self._running is None else self._running.task_name
+
+    def inbox(self, network: str) -> deque[Message]:
+        """The node's queue of received, not yet read messages of ``network``."""
+        return self._inboxes.setdefault(network, deque())
+
+    def create_job(self, task: str, data: Any = None) -> Job:
+        """Release a job of ``task`` now (queued FIFO behind an unfinished job of the same task)."""
+        job = self._release(self._get(self.tasks, task, "task"), data)
+        self._request_dispatch_deferred()
+        return job
+
+    def invoke_handler(self, handler: str, data: Any = None, invoker: str | None = None) -> Job:
+        """Raise the interrupt of ``handler`` now (queued if it is already queued or running)."""
+        job = self._invoke(self._get(self.handlers, handler, "handler"), data, invoker)
+        self._request_dispatch_deferred()
+        return job
+
+    def trigger(self, name: str, data: Any = None) -> bool:
+        """An edge on external trigger ``name``; returns ``False`` if ignored by its minimum inter-arrival."""
+        trig = self._get(self.triggers, name, "trigger")
+        now = self._sim.now
+        if trig.last is not None and now - trig.last < trig.min_interarrival:
+            trig.ignored += 1
+            return False
+        trig.last = now
+        trig.accepted += 1
+        self._invoke(self._get(self.handlers, trig.handler, "handler"), data, f"trigger:{name}")
+        self._request_dispatch_deferred()
+        return True
+
+    def deliver(self, network: str, msg: Message) -> None:
+        """Receiver protocol: ``msg`` arrived on ``network`` now (queued, then the bound target is run)."""
+        inbox = self._inboxes.get(network)
+        if inbox is None:
+            inbox = self._inboxes[network] = deque()
+        inbox.append(msg)
+        target = self._bindings.get(network)
+        if target is None:
+            return
+        handler = self.handlers.get(target)
+        if handler is not None:
+            self._invoke(handler, msg, f"network:{network}")
+        else:
+            self._release(self._get(self.tasks, target, "task"), msg)
+        self._request_dispatch_deferred()
+
+    def kill_job(self, job: Job) -> None:
+        """End ``job`` now: it frees the CPU, its record is marked killed, its task's next job may start."""
+        if job._state == DONE:
+            return
+        if job._kernel is not self:
+            job._kernel.kill_job(job)
+            return
+        self._kill(job)
+        self._request_dispatch_deferred()
+
+    @property
+    def cpu_time(self) -> dict[str, int]:
+        """CPU time per task and handler (ns, context switches included), up to now."""
+        out = {t.name: t.cpu for t in self.tasks.values()}
+        out.update({h.name: h.cpu for h in self.handlers.values()})
+        job = self._running
+        if job is not None and self._seg_ev is not None:
+            out[job.task_name] += self._sim.now - job._seg_start
+        return out
+
+    def utilization(self, t0: int = 0, t1: int | None = None) -> float:
+        """Fraction of ``[t0, t1]`` (default: up to now) the CPU was busy (tasks, handlers, switches)."""
+        now = self._sim.now
+        if t1 is None:
+            # after env.run(T) the simpy clock stands at T + 1 ns; the run covered [0, T]
+            t1 = self._t_end if self._t_end is not None and now <= self._t_end + 1 else now
+        t1 = int(t1)
+        if t1 <= t0:
+            raise SimulationError(f"node '{self.name}': utilization window [{t0}, {t1}] ns is empty")
+        if not self.trace:
+            if t0 != 0 or t1 < now - 1:
+                raise SimulationError(f"node '{self.name}': utilization over a window needs trace=True")
+            return min(1.0, sum(self.cpu_time.values()) / t1)
+        busy = busy_time(self.schedule, t0, t1)
+        for ent in list(self.tasks.values()) + list(self.handlers.values()):
+            if ent.trace_state == "running":
+                lo, hi = max(ent.trace_since, t0), min(now, t1)  # open interval of the running entity
+                if hi > lo:
+                    busy += hi - lo
+        return busy / (t1 - t0)
+
+    # ================================================================= releases and invocations
+    def _get(self, table: dict[str, Any], name: str, what: str) -> Any:
+        obj = table.get(name)
+        if obj is None:
+            raise SimulationError(f"node '{self.name}': no {what} '{name}'{_did_you_mean(str(name), table)}")
+        return obj
+
+    def _release(self, task: Task, data: Any) -> Job:
+        now = self._sim.now
+        spec = task.spec
+        jid = task.released
+        task.released = jid + 1
+        deadline = None if spec.deadline is None else now + spec.deadline
+        job = Job(self, task, jid, task.data if data is None else data, now, deadline)
+        key = task.key
+        if key is None:
+            key = self.policy.key(job)
+            if self.policy.static:
+                task.key = key
+        job._rank = job._base_rank = (1, key)
+        job._np = not (spec.preemptible and self.policy.preemptive)
+        job._budget = spec.wcet
+        if task.deadline_handler is not None and deadline is not None:
+            Wake(self._sim, deadline - now, DEADLINE, self._on_deadline, job)
+        if task.active is None:
+            task.active = job
+            self._make_ready(job, now)
+        else:
+            task.queue.append(job)
+        return job
+
+    def _invoke(self, handler: Handler, data: Any, invoker: str | None) -> Job:
+        now = self._sim.now
+        job = Job(self, handler, handler.invocations, handler.data if data is None else data, now, None, True,
+                  invoker)
+        handler.invocations += 1
+        job._rank = (0, handler.spec.priority)
+        job._pre_left = handler.spec.latency
+        if handler.active is None:
+            handler.active = job
+            self._make_ready(job, now)
+        else:
+            handler.queue.append(job)
+        return job
+
+    def _make_ready(self, job: Job, now: int) -> None:
+        job._state = READY
+        self._seq += 1
+        job._seq = self._seq
+        heappush(self._ready, (job._rank, job._seq, job))
+        if self.trace:
+            self._trace(job._task, "ready", now)
+
+    def _unblock(self, job: Job, value: Any) -> None:
+        """Wake a blocked job with ``value`` as the result of its request (used by sync objects)."""
+        job._value = value
+        job._blocked_on = None
+        job._wake = None
+        self._make_ready(job, self._sim.now)
+        self._request_dispatch_deferred()
+
+    def _trace(self, ent: Any, state: str | None, now: int) -> None:
+        old = ent.trace_state
+        if old == state:
+            return
+        if old is not None and now > ent.trace_since:
+            self.schedule.append((ent.name, old, ent.trace_since, now))
+        ent.trace_state = state
+        ent.trace_since = now
+
+    # ================================================================= simpy callbacks
+    def _on_start(self, _ev: Any) -> None:
+        self.validate()
+
+    def _on_periodic_release(self, ev: Wake) -> None:
+        task: Task = ev._value
+        self._release(task, None)
+        Wake(self._sim, task.spec.period, NORMAL, self._on_periodic_release, task)  # type: ignore[arg-type]
+        self._request_dispatch()
+
+    def _on_timer(self, ev: Wake) -> None:
+        timer: Timer = ev._value
+        if not timer.active:
+            return
+        timer.fired += 1
+        self._invoke(self._get(self.handlers, timer.handler, "handler"), timer.data, f"timer:{timer.name}")
+        if timer.period is not None:
+            Wake(self._sim, timer.period, NORMAL, self._on_timer, timer)
+        else:
+            timer.active = False
+        self._request_dispatch()
+
+    def _on_sleep_done(self, ev: Wake) -> None:
+        job: Job = ev._value
+        if job._state != BLOCKED or job._wake is not ev:
+            return
+        job._wake = None
+        job._blocked_on = None
+        self._make_ready(job, self._sim.now)
+        self._request_dispatch()
+
+    def _on_deadline(self, ev: Wake) -> None:
+        job: Job = ev._value
+        if job.finish is not None:
+            return
+        job.deadline_overrun = True
+        self._fire_overrun(job._task.deadline_handler, job, "deadline")
+        self._request_dispatch()
+
+    def _on_segment_done(self, ev: Wake) -> None:
+        if ev is not self._seg_ev:
+            return  # invalidated by a preemption or kill
+        self._seg_ev = None
+        job = self._running
+        assert job is not None
+        now = self._sim.now
+        self._charge(job, now - job._seg_start)
+        if job._pre_left == 0 and job._remaining == 0:
+            self._busy = True
+            try:
+                self._advance(job, now)  # the code after the segment runs at its end, on the CPU
+            finally:
+                self._busy = False
+        self._request_dispatch()
+
+    def _on_deferred_dispatch(self, _ev: Any) -> None:
+        self._dispatch_pending = False
+        self._dispatch()
+
+    # ================================================================= dispatcher
+    def _request_dispatch(self) -> None:
+        """Dispatch now if nothing else is pending at this instant, else after the instant's events."""
+        if self._busy or self._dispatch_pending:
+            return
+        sim = self._sim
+        if sim.peek() > sim.now:
+            self._dispatch()
+        else:
+            self._dispatch_pending = True
+            Wake(sim, 0, DISPATCH, self._on_deferred_dispatch)
+
+    def _request_dispatch_deferred(self) -> None:
+        """Dispatch after every event of this instant (entry points called from outside the kernel)."""
+        if self._busy or self._dispatch_pending:
+            return
+        self._dispatch_pending = True
+        Wake(self._sim, 0, DISPATCH, self._on_deferred_dispatch)
+
+    def _dispatch(self) -> None:
+        self._busy = True
+        try:
+            self._dispatch_loop()
+        finally:
+            self._busy = False
+
+    def _dispatch_loop(self) -> None:
+        now = self._sim.now
+        ready = self._ready
+        while True:
+            while ready and ready[0][2]._state != READY:
+                heappop(ready)  # killed while ready
+            cur = self._running
+            if cur is not None:
+                if ready:
+                    top = ready[0][0]
+                    if top < cur._rank:
+                        self._preempt(cur, now)
+                        cur = None
+                if cur is not None and self._seg_ev is not None:
+                    return  # keeps running its segment
+            if cur is None:
+                if not ready:
+                    self._last_task_job = None  # idle: the next task pays a context switch
+                    return
+                cur = heappop(ready)[2]
+                self._switch_in(cur, now)
+            if cur._pre_left:
+                self._start_segment(cur, cur._pre_left, now)
+                return
+            remaining = cur._remaining
+            if remaining:
+                budget = cur._budget
+                if budget is not None and budget < remaining:
+                    if budget <= 0:
+                        cur._budget = None
+                        cur.wcet_overrun = True
+                        self._fire_overrun(cur._task.wcet_handler, cur, "wcet")
+                        continue
+                    remaining = budget
+                self._start_segment(cur, remaining, now)
+                return
+            self._advance(cur, now)
+
+    def _switch_in(self, job: Job, now: int) -> None:
+        job._state = RUNNING
+        self._running = job
+        if job.start is None:
+            job.start = now
+        if job._np:
+            job._rank = _NP_RANK  # a started non-preemptible job yields to handlers only
+        if not job.is_handler and self._last_task_job is not job:
+            self._last_task_job = job
+            self.switches += 1
+            if self.context_switch:
+                job._pre_left = self.context_switch
+        if self.trace:
+            self._trace(job._task, "running", now)
+
+    def _start_segment(self, job: Job, length: int, now: int) -> None:
+        job._seg_start = now
+        self.segments += 1
+        self._seg_ev = Wake(self._sim, length, NORMAL, self._on_segment_done)
+
+    def _charge(self, job: Job, elapsed: int) -> None:
+        if job._pre_left:
+            job._pre_left -= elapsed
+            if not job.is_handler:
+                self.switch_time += elapsed
+        else:
+            job._remaining -= elapsed
+            if job._budget is not None:
+                job._budget -= elapsed
+        job.cpu_time += elapsed
+        job._task.cpu += elapsed
+
+    def _preempt(self, job: Job, now: int) -> None:
+        if self._seg_ev is not None:
+            self._seg_ev = None
+            self._charge(job, now - job._seg_start)
+        job.preemptions += 1
+        job._state = READY
+        heappush(self._ready, (job._rank, job._seq, job))  # keeps its place among equals
+        self._running = None
+        if self.trace:
+            self._trace(job._task, "ready", now)
+
+    def _fire_overrun(self, ref: Any, job: Job, kind: str) -> None:
+        if ref is None:
+            log.debug("node %s: %s overrun of %s#%d at %d ns", self.name, kind, job.task_name, job.job_id,
+                      self._sim.now)
+            return
+        if isinstance(ref, str):
+            self._invoke(self._get(self.handlers, ref, "handler"), job, f"{kind}:{job.task_name}")
+        else:
+            busy, self._busy = self._busy, True
+            try:
+                ref(job)
+            finally:
+                self._busy = busy
+
+    # ================================================================= running body code
+    def _advance(self, job: Job, now: int) -> None:
+        """Run ``job``'s code until it asks for CPU time, blocks or ends (it holds the CPU)."""
+        if now != self._zt_time:
+            self._zt_time = now
+            self._zt_count = 0
+            if self._zt_names:
+                self._zt_names.clear()
+        self._zt_count += 1
+        limit = self.livelock_limit - self._zt_count
+        if limit < self.livelock_limit // 2:
+            names = self._zt_names
+            names[job.task_name] = names.get(job.task_name, 0) + 1
+        gen = job._gen
+        if gen is None:
+            gen = job._gen = self._make_generator(job)
+        value = job._value
+        job._value = None
+        send = gen.send
+        n = 0
+        while True:
+            try:
+                req = send(value)
+            except StopIteration:
+                self._zt_count += n
+                if job._state != DONE:
+                    self._finish(job, now, False)
+                return
+            except Exception as exc:
+                exc.add_note(f"raised by '{job.task_name}' on node '{self.name}' at t={now} ns")
+                raise
+            n += 1
+            if n > limit:
+                self._livelock(job)
+            if job._state == DONE:  # killed by its own code (kernel.kill_job)
+                gen.close()
+                self._zt_count += n
+                return
+            value = None
+            if type(req) is not Request:
+                raise SimulationError(
+                    f"node '{self.name}', task '{job.task_name}' yielded {req!r}; yield a request built by the "
+                    "job, e.g. `yield job.execute(1000)`")
+            op = req.op
+            if op == _EXECUTE:
+                d = req.a
+                if type(d) is not int:
+                    d = self._duration(job, d)
+                elif d < 0:
+                    raise SimulationError(f"node '{self.name}', task '{job.task_name}': execute({d}) is negative")
+                if d:
+                    job._remaining = d
+                    self._zt_count += n
+                    return
+            elif op == _SLEEP or op == _SLEEP_UNTIL:
+                t = req.a
+                if type(t) is not int:
+                    t = self._time_arg(job, t, rq.OP_NAMES[op])
+                if op == _SLEEP:
+                    if t < 0:
+                        raise SimulationError(f"node '{self.name}', task '{job.task_name}': sleep({t}) is negative")
+                    t += now
+                if t > now:
+                    job._wake = Wake(self._sim, t - now, NORMAL, self._on_sleep_done, job)
+                    self._block(job, job._wake, now)
+                    self._zt_count += n
+                    return
+            elif op == rq.ANALOG_IN:
+                value = self._io(self._ain, req.a, job, "analog input")(now)
+            elif op == rq.ANALOG_OUT:
+                self._io(self._aout, req.a, job, "analog output")(now, req.b)
+            elif op == rq.SEND:
+                self._send(job, req)
+            elif op == rq.RECEIVE:
+                inbox = self._inboxes.get(req.a)
+                value = inbox.popleft() if inbox else None
+            elif op == rq.FETCH:
+                ok, value = req.a.try_get()
+                if not ok:
+                    req.a._getters.append(job)
+                    self._block(job, req.a, now)
+                    self._zt_count += n
+                    return
+            elif op == rq.POST:
+                if not req.a.try_put(req.b):
+                    req.a._putters.append((job, req.b))
+                    self._block(job, req.a, now)
+                    self._zt_count += n
+                    return
+            elif op == rq.TRY_FETCH:
+                value = req.a.try_get()[1]
+            elif op == rq.TRY_POST:
+                value = req.a.try_put(req.b)
+            elif op == rq.TAKE:
+                if not req.a.try_take():
+                    req.a._waiters.append(job)
+                    self._block(job, req.a, now)
+                    self._zt_count += n
+                    return
+            elif op == rq.GIVE:
+                req.a.give()
+            elif op == rq.WAIT:
+                req.a._waiters.append(job)
+                self._block(job, req.a, now)
+                self._zt_count += n
+                return
+            elif op == rq.NOTIFY:
+                req.a.notify(req.b)
+            elif op == rq.KILL:
+                target = job if req.a is None else req.a
+                if target is job:
+                    self._zt_count += n
+                    self._kill(job)
+                    return
+                self.kill_job(target)
+            else:  # pragma: no cover - Request objects come from Job methods only
+                raise SimulationError(f"unknown request {req!r}")
+
+    def _make_generator(self, job: Job) -> Any:
+        gen = job._task.body(job)
+        if not hasattr(gen, "send") or not hasattr(gen, "close"):
+            raise SimulationError(f"node '{self.name}': body of '{job.task_name}' returned {gen!r}, not a "
+                                  "generator; the body must contain `yield job.<request>(...)`")
+        return gen
+
+    def _duration(self, job: Job, d: Any) -> int:
+        if isinstance(d, ExecTime):
+            return d.draw(self._exec_rng, job)
+        return self._time_arg(job, d, "execute")
+
+    def _time_arg(self, job: Job, t: Any, op: str) -> int:
+        if isinstance(t, ExecTime):
+            return t.draw(self._exec_rng, job)
+        try:
+            value = int(round(t))
+        except (TypeError, ValueError):
+            raise SimulationError(f"node '{self.name}', task '{job.task_name}': {op}() needs integer ns or an "
+                                  f"ExecTime, got {t!r}") from None
+        if value < 0 and op == "execute":
+            raise SimulationError(f"node '{self.name}', task '{job.task_name}': execute({t}) is negative")
+        return value
+
+    def _io(self, table: dict[str, Any], channel: str, job: Job, what: str) -> Any:
+        fn = table.get(channel)
+        if fn is None:
+            raise SimulationError(f"node '{self.name}', task '{job.task_name}': no {what} '{channel}'"
+                                  f"{_did_you_mean(str(channel), table)}")
+        return fn
+
+    def _send(self, job: Job, req: Request) -> None:
+        net = self.networks.get(req.a)
+        if net is None:
+            raise SimulationError(f"node '{self.name}', task '{job.task_name}': send on network '{req.a}', which "
+                                  f"is not attached to this node{_did_you_mean(str(req.a), self.networks)}")
+        to, payload, bits = req.b
+        priority, tag = req.c
+        if isinstance(bits, bool) or not isinstance(bits, int) or bits < 0:
+            raise SimulationError(f"node '{self.name}', task '{job.task_name}': send bits must be a "
+                                  f"non-negative int, got {bits!r}")
+        msg = Message(sender=self.name, receiver=to, payload=payload, bits=bits, priority=priority,
+                      tag=tag or job.task_name)
+        net.send(msg)
+
+    def _block(self, job: Job, on: Any, now: int) -> None:
+        job._state = BLOCKED
+        job._blocked_on = on
+        job._rank = job._base_rank
+        self._running = None
+        if self.trace:
+            self._trace(job._task, "blocked", now)
+
+    def _livelock(self, job: Job) -> None:
+        names = dict(self._zt_names)
+        names[job.task_name] = names.get(job.task_name, 0) + 1
+        involved = sorted(names)
+        raise LivelockError(
+            f"node '{self.name}': livelock at t={self._sim.now} ns: more than {self.livelock_limit} zero-time "
+            f"activities at one instant by {', '.join(repr(n) for n in involved)}; give the loop an execute() "
+            "or a sleep() so that time advances", involved)
+
+    # ================================================================= ending jobs
+    def _finish(self, job: Job, now: int, killed: bool) -> None:
+        job._state = DONE
+        job.finish = now
+        job.killed = killed
+        if self._running is job:
+            self._running = None
+        task = job._task
+        if not job.is_handler:
+            deadline = job.deadline
+            self.job_records.append(JobRecord(
+                task.name, self.name, job.job_id, job.release, job.start, now, now - job.release, deadline,
+                True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, killed))
+        nxt = task.queue.popleft() if task.queue else None
+        task.active = nxt
+        if nxt is not None:
+            self._make_ready(nxt, now)
+        elif self.trace:
+            self._trace(task, None, now)
+
+    def _kill(self, job: Job) -> None:
+        now = self._sim.now
+        if job is self._running:
+            if self._seg_ev is not None:
+                self._seg_ev = None
+                self._charge(job, now - job._seg_start)
+            self._running = None
+        elif job._state == NEW:
+            job._task.queue.remove(job)
+            job._state = DONE
+            job.finish = now
+            job.killed = True
+            if not job.is_handler:
+                self.job_records.append(JobRecord(
+                    job.task_name, self.name, job.job_id, job.release, None, now, now - job.release,
+                    job.deadline, True if job.deadline is None else now <= job.deadline, 0, 0, True))
+            return
+        job._wake = None
+        gen = job._gen
+        job._gen = None
+        self._finish(job, now, True)
+        if gen is not None:
+            try:
+                gen.close()
+            except ValueError:
+                pass  # the job is killing itself from its own running code: _advance closes it
+            except Exception:  # noqa: BLE001 - a body's cleanup must not hide the kill
+                log.exception("node %s: body of %s raised while being killed", self.name, job.task_name)
+            if job._gen is None:
+                job._gen = gen
+
+    def _finalize(self, t_end: int) -> None:
+        """Close open trace intervals and add records of the jobs unfinished at ``t_end``."""
+        self._t_end = t_end
+        if self._unfinished:
+            stale = {id(r) for r in self._unfinished}
+            self.job_records[:] = [r for r in self.job_records if id(r) not in stale]
+        self._unfinished = []
+        running, partial = self._running, 0
+        if running is not None and self._seg_ev is not None:
+            partial = self._sim.now - running._seg_start
+        for task in self.tasks.values():
+            jobs = ([task.active] if task.active is not None else []) + list(task.queue)
+            for job in jobs:
+                cpu = job.cpu_time + (partial if job is running else 0)
+                missed = job.deadline is not None and job.deadline <= t_end
+                rec = JobRecord(task.name, self.name, job.job_id, job.release, job.start, None, None, job.deadline,
+                                False if missed else None, job.preemptions, cpu, False)
+                self._unfinished.append(rec)
+        self.job_records.extend(self._unfinished)
+        if self.trace:
+            for ent in list(self.tasks.values()) + list(self.handlers.values()):
+                if ent.trace_state is not None and t_end > ent.trace_since:
+                    self.schedule.append((ent.name, ent.trace_state, ent.trace_since, t_end))
+                    ent.trace_since = t_end
+
+    def __repr__(self) -> str:
+        return f"<Kernel {self.name} policy={self.policy.name} tasks={len(self.tasks)} handlers={len(self.handlers)}>"

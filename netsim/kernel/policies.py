@@ -1,0 +1,151 @@
+"""Scheduling policies: which ready task job gets the CPU.
+
+A policy maps each task job to a *key*; the smaller key is more urgent. The kernel compares keys when a
+job becomes ready; equal keys are served first come, first served and never preempt each other.
+Interrupt handlers are outside the policy: every handler beats every task.
+
+Built-in policies (registered under kind ``"policy"``):
+
+========== ==============================================================================
+``fp``     fixed priority: key = the task's ``priority`` (required)
+``rm``     rate monotonic: key = period (aperiodic tasks last); deadlines must not exceed periods
+``dm``     deadline monotonic: key = relative deadline (tasks without one last); D <= T
+``edf``    earliest deadline first: key = absolute deadline of the job (none: last)
+``np_fp``  ``fp`` without preemption between tasks (handlers still preempt)
+``np_edf`` ``edf`` without preemption between tasks
+========== ==============================================================================
+
+Custom policies subclass :class:`Policy` and override :meth:`Policy.key` (and optionally
+:meth:`Policy.check` and :attr:`Policy.preemptive`); pass an instance to ``Kernel(policy=...)`` or name
+it as ``"module:Class"``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from netsim.kernel.task import TaskSpec, task_error
+from netsim.registry import register
+
+if TYPE_CHECKING:  # pragma: no cover
+    from netsim.kernel.job import Job
+
+__all__ = [
+    "Policy",
+    "FixedPriority",
+    "RateMonotonic",
+    "DeadlineMonotonic",
+    "EarliestDeadlineFirst",
+    "NonPreemptiveFixedPriority",
+    "NonPreemptiveEDF",
+]
+
+
+class Policy:
+    """Interface of a scheduling policy.
+
+    Attributes
+    ----------
+    name : str
+        Short name used in messages.
+    preemptive : bool
+        ``False``: a started task job keeps the CPU until it finishes or blocks (handlers still preempt).
+    static : bool
+        ``True`` when the key depends only on the task (computed once per task, faster).
+    """
+
+    name: ClassVar[str] = "custom"
+    preemptive: ClassVar[bool] = True
+    static: ClassVar[bool] = False
+
+    def check(self, node: str, spec: TaskSpec) -> None:
+        """Reject a task this policy cannot schedule (raise via :func:`~netsim.kernel.task.task_error`)."""
+
+    def key(self, job: "Job") -> Any:
+        """Urgency of ``job`` (smaller = more urgent); called when the job is released.
+
+        ``job.spec`` is the task's :class:`TaskSpec`; ``job.release`` and ``job.deadline`` (absolute) are set.
+        """
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+@register("policy", "fp", "fixed priority: the task's `priority` (lower = more urgent)")
+class FixedPriority(Policy):
+    """Fixed priority given explicitly per task (TrueTime's ``prioFP``)."""
+
+    name = "fp"
+    static = True
+
+    def check(self, node: str, spec: TaskSpec) -> None:
+        if spec.priority is None:
+            raise task_error(node, spec.name, "priority",
+                             "is required under policy 'fp' (lower = more urgent), or use policy 'rm'/'dm'/'edf'")
+
+    def key(self, job: "Job") -> Any:
+        return job.spec.priority
+
+
+class _Constrained(Policy):
+    """Shared check: relative deadline must not exceed the period (the policy's optimality assumption)."""
+
+    def check(self, node: str, spec: TaskSpec) -> None:
+        if spec.period is not None and spec.deadline is not None and spec.deadline > spec.period:
+            raise task_error(
+                node, spec.name, "deadline",
+                f"{spec.deadline} ns exceeds the period {spec.period} ns, which policy '{self.name}' "
+                "does not allow; shorten the deadline or use policy 'fp' or 'edf'",
+            )
+
+
+@register("policy", "rm", "rate monotonic: shorter period = more urgent")
+class RateMonotonic(_Constrained):
+    """Rate monotonic: priority by period; aperiodic tasks rank below every periodic one."""
+
+    name = "rm"
+    static = True
+
+    def key(self, job: "Job") -> Any:
+        period = job.spec.period
+        return math.inf if period is None else period
+
+
+@register("policy", "dm", "deadline monotonic: shorter relative deadline = more urgent")
+class DeadlineMonotonic(_Constrained):
+    """Deadline monotonic: priority by relative deadline; tasks without a deadline rank last."""
+
+    name = "dm"
+    static = True
+
+    def key(self, job: "Job") -> Any:
+        deadline = job.spec.deadline
+        return math.inf if deadline is None else deadline
+
+
+@register("policy", "edf", "earliest deadline first: earlier absolute deadline = more urgent")
+class EarliestDeadlineFirst(Policy):
+    """Earliest deadline first on the absolute deadline of each job."""
+
+    name = "edf"
+
+    def key(self, job: "Job") -> Any:
+        return math.inf if job.deadline is None else job.deadline
+
+
+@register("policy", "np_fp", "non-preemptive fixed priority (handlers still preempt)")
+class NonPreemptiveFixedPriority(FixedPriority):
+    """Fixed priority where a started task job runs until it finishes or blocks."""
+
+    name = "np_fp"
+    preemptive = False
+
+
+@register("policy", "np_edf", "non-preemptive EDF (handlers still preempt)")
+class NonPreemptiveEDF(EarliestDeadlineFirst):
+    """EDF where a started task job runs until it finishes or blocks."""
+
+    name = "np_edf"
+    preemptive = False

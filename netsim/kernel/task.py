@@ -1,0 +1,172 @@
+"""Static descriptions of tasks and interrupt handlers, and their run-time counterparts.
+
+Following SimSo, the frozen :class:`TaskSpec`/:class:`HandlerSpec` (what the user asked for, validated at
+build time) is kept apart from the mutable :class:`Task`/:class:`Handler` (job queue, counters).
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import numbers
+from collections import deque
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from netsim.errors import BuildError
+
+__all__ = ["TaskSpec", "HandlerSpec", "Task", "Handler", "task_error", "check_body", "check_time"]
+
+
+def task_error(node: str, task: str, field: str, message: str) -> BuildError:
+    """A :class:`BuildError` naming the node, the task (or handler) and the field to change.
+
+    The error carries ``node``, ``task`` and ``field`` attributes so a scenario builder can map it to a
+    YAML path.
+    """
+    err = BuildError(f"node '{node}', task '{task}', field '{field}': {message}")
+    err.node = node  # type: ignore[attr-defined]
+    err.task = task  # type: ignore[attr-defined]
+    err.field = field  # type: ignore[attr-defined]
+    return err
+
+
+def _is_generator_callable(body: Any) -> bool:
+    target = body
+    for _ in range(8):
+        if isinstance(target, functools.partial):
+            target = target.func
+            continue
+        unwrapped = inspect.unwrap(target) if callable(target) else target
+        if inspect.isgeneratorfunction(unwrapped):
+            return True
+        if inspect.isfunction(unwrapped) or inspect.ismethod(unwrapped) or inspect.isbuiltin(unwrapped):
+            return False
+        call = getattr(type(target), "__call__", None)
+        if call is None or call is target:
+            return False
+        target = call
+    return False
+
+
+def check_body(node: str, task: str, body: Any) -> None:
+    """Raise a :class:`BuildError` unless ``body`` is a generator function (or an object whose
+    ``__call__`` is one, or a ``functools.partial`` of one)."""
+    if not callable(body):
+        raise task_error(node, task, "body", f"must be a generator function body(job), got {body!r}")
+    if not _is_generator_callable(body):
+        name = getattr(body, "__qualname__", None) or type(body).__name__
+        raise task_error(
+            node, task, "body",
+            f"'{name}' is not a generator function; a body must yield requests, "
+            "e.g. def body(job): yield job.execute(500_000)",
+        )
+
+
+def check_time(node: str, task: str, field: str, value: Any, *, positive: bool = False,
+               allow_none: bool = False) -> int | None:
+    """Validate an integer-ns time field of a task; returns it as ``int`` (or ``None``)."""
+    if value is None:
+        if allow_none:
+            return None
+        raise task_error(node, task, field, "is required")
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise task_error(node, task, field, f"must be an integer number of ns, got {value!r}")
+    value = int(value)
+    if positive and value <= 0:
+        raise task_error(node, task, field, f"must be positive, got {value} ns")
+    if value < 0:
+        raise task_error(node, task, field, f"must not be negative, got {value} ns")
+    return value
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """The validated description of a task (times in ns).
+
+    Attributes
+    ----------
+    name
+        Task name, unique on its node.
+    period
+        Release period (``None``: aperiodic, released by ``create_job``, messages or handlers).
+    offset
+        First release of a periodic task.
+    deadline
+        Relative deadline (default: the period; ``None`` for an aperiodic task without one).
+    priority
+        Explicit priority (lower = more urgent); needed by ``fp``.
+    wcet
+        Execution budget per job; exceeding it fires the task's ``wcet_handler``.
+    preemptible
+        ``False``: once started, only interrupt handlers can take the CPU from the job.
+    """
+
+    name: str
+    period: int | None
+    offset: int
+    deadline: int | None
+    priority: int | float | None
+    wcet: int | None
+    preemptible: bool
+
+
+@dataclass(frozen=True)
+class HandlerSpec:
+    """The validated description of an interrupt handler.
+
+    Attributes
+    ----------
+    name
+        Handler name, unique on its node (shared name space with tasks).
+    priority
+        Among handlers (lower = more urgent); every handler beats every task.
+    latency
+        ISR entry latency in ns: CPU time consumed at each invocation before the body's code runs.
+    """
+
+    name: str
+    priority: int | float
+    latency: int
+
+
+class Task:
+    """Run-time state of a task: its body, its FIFO of released jobs and its counters."""
+
+    __slots__ = ("spec", "name", "body", "data", "wcet_handler", "deadline_handler", "queue", "active",
+                 "released", "key", "cpu", "trace_state", "trace_since")
+
+    def __init__(self, spec: TaskSpec, body: Callable[[Any], Any], data: Any,
+                 wcet_handler: Any, deadline_handler: Any) -> None:
+        self.spec = spec
+        self.name = spec.name
+        self.body = body
+        self.data = data
+        self.wcet_handler = wcet_handler
+        self.deadline_handler = deadline_handler
+        self.queue: deque[Any] = deque()  # released jobs waiting for the active one to finish
+        self.active: Any = None  # the job currently ready/running/blocked
+        self.released = 0
+        self.key: Any = None  # static policy key (None: computed per job)
+        self.cpu = 0  # CPU time consumed by all its jobs, ns
+        self.trace_state: str | None = None
+        self.trace_since = 0
+
+
+class Handler:
+    """Run-time state of an interrupt handler: its body and its queue of pending invocations."""
+
+    __slots__ = ("spec", "name", "body", "data", "queue", "active", "invocations", "cpu",
+                 "trace_state", "trace_since")
+
+    def __init__(self, spec: HandlerSpec, body: Callable[[Any], Any], data: Any) -> None:
+        self.spec = spec
+        self.name = spec.name
+        self.body = body
+        self.data = data
+        self.queue: deque[Any] = deque()  # invocations waiting for the active one
+        self.active: Any = None
+        self.invocations = 0
+        self.cpu = 0
+        self.trace_state: str | None = None
+        self.trace_since = 0
