@@ -55,7 +55,7 @@ class EstimatorState:
     active_since: float | None = None  # start of the current run of steps with active constraints
     n_events: int = 0
     n_between_updates: int = 0
-    history: list[tuple[str, float, float]] = field(default_factory=list)  # (kind, t, dp), if traced
+    history: list[tuple[str, float, float, float]] = field(default_factory=list)  # (kind, t, dp, dt) if traced
 
 
 class EventEstimator:
@@ -129,7 +129,7 @@ class EventEstimator:
         if self.bias_rule == "eq11":
             s.u_bias_hat += self._ki * dp
         if self.trace:
-            s.history.append((kind, t, dp))
+            s.history.append((kind, t, dp, dt))
 
     # ----------------------------------------------------------------- step
     def update(self, t_ns: int, count: int, direction: int, stamp_ns: int, u: float, vref: float) -> None:
