@@ -245,7 +245,7 @@ class _Source:
         if self.kind in ("piecewise", "held"):
             self.value = float(self.signal(t))
         elif self.kind == "lti_d":
-            self.value = float(self.lti.C @ self.xd)  # type: ignore[union-attr,operator]
+            self.value = float((self.lti.C @ self.xd)[0])  # type: ignore[union-attr,operator]
         elif self.kind == "sine":
             self.value = float(self.signal(t))
 
