@@ -78,11 +78,11 @@ class Simulation:
         """
         t_end = self.duration if until is None else int(until)
         try:
-            self.env.run(t_end)
+            _run_events(self.env, t_end)
         except BaseException:
             self.finish(self.env.now)
             raise
-        self.finished_at = t_end
+        self.finish(t_end)
         return t_end
 
     def finish(self, t_ns: int) -> None:
@@ -95,6 +95,26 @@ class Simulation:
                 fn(int(t_ns))
             except Exception:  # noqa: BLE001 - collecting after a failure must not raise again
                 log.debug("finalizer failed after an aborted run", exc_info=True)
+
+
+def _run_events(env: SimEnv, t_end: int) -> None:
+    """Process every event up to and including ``t_end`` (what ``SimEnv.run`` does, without finalizers).
+
+    simpy re-raises a process's unhandled exception as a *copy* built from ``exc.args``; our errors with
+    extra constructor arguments (``DivergenceError(message, time_ns)``) cannot be copied that way, and the copy
+    would lose ``time_ns`` anyway. So the loop looks at the next event first and raises the original
+    exception of a failed, undefused event itself.
+    """
+    sim = env.sim
+    queue = sim._queue  # simpy 4: heap of (time, priority, id, event)
+    step = sim.step
+    until = int(t_end) + 1
+    while queue and queue[0][0] < until:
+        event = queue[0][3]
+        if event._ok is False and not hasattr(event, "_defused") and isinstance(event._value, BaseException):
+            event._defused = True
+            raise event._value
+        step()
 
 
 # --------------------------------------------------------------------------------------------- pieces
@@ -261,6 +281,8 @@ def _program(spec: Any, ctx: Any, path: str) -> Any:
 def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels: dict[str, Any],
                    plant: Any) -> tuple[dict[str, Any], dict[str, Any], list[tuple[str, str, str]]]:
     """Kernels with their tasks and handlers; returns also the (node, network, target) receive bindings."""
+    if not scenario.nodes:
+        return {}, {}, []
     from netsim.kernel import Kernel
     from netsim.programs import ProgramContext
 

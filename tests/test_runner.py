@@ -1,0 +1,71 @@
+"""Runner: run folders, divergence recorded with the tables written, overrides, seeds, baseline."""
+
+import json
+import math
+
+import pandas as pd
+import pytest
+
+from netsim.runner import run
+
+
+def _unstable(duration="3 s"):
+    # dc_servo with a = -20: the velocity grows as e^{20 t} without control (pole at s = +20).
+    return {
+        "name": "unstable",
+        "duration": duration,
+        "plant": {"model": "dc_servo", "params": {"gain": 1000, "a": -20}, "x0": [0.0, 1.0], "record_grid": "1 ms"},
+        "record": ["y"],
+    }
+
+
+def test_divergence_is_recorded_as_status_with_csvs_up_to_that_time(tmp_path):
+    result = run(_unstable(), out=tmp_path / "run")
+    # the plant's divergence bound is 1e12 on the state norm; |x| ~ omega0 e^{20 t} -> t = ln(1e12)/20 = 1.3816 s,
+    # detected at the next 1 ms grid sample
+    t_div = math.log(1e12) / 20
+    assert result.status.startswith("diverged at t = ")
+    assert not result.ok
+    meta = json.loads((tmp_path / "run" / "meta.json").read_text())
+    assert meta["status"] == result.status and meta["error"]
+    assert t_div <= meta["t_end_s"] <= t_div + 0.0011
+    sig = pd.read_csv(tmp_path / "run" / "signals.csv")
+    assert sig["time_s"].iloc[-1] <= meta["t_end_s"] + 1e-12
+    assert sig["time_s"].iloc[-1] >= t_div - 0.0011
+    assert (tmp_path / "run" / "metrics.csv").exists()
+
+
+def test_overrides_and_seed_reach_the_scenario_and_meta(tmp_path):
+    result = run(_unstable(), out=tmp_path / "r", seed=42, overrides={"duration": "0.25 s"})
+    assert result.ok
+    assert result.meta["seed"] == 42
+    assert result.meta["t_end_s"] == 0.25
+    assert result.scenario["seed"] == 42 and result.scenario["duration"] == "250 ms"
+    assert len(result.meta["scenario_hash"]) == 64
+    assert "numpy" in result.meta["versions"]
+    # the 1 ms grid gives samples at 0, 1 ms, ..., 250 ms
+    assert len(result.signals) == 251
+
+
+def test_default_run_folder_is_reports_name_runid(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = run(_unstable("10 ms"))
+    folders = list((tmp_path / "reports" / "unstable").iterdir())
+    assert len(folders) == 1
+    assert folders[0].name.endswith(result.meta["scenario_hash"][:8])
+    assert (folders[0] / "scenario.yaml").exists()
+
+
+def test_write_false_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    run(_unstable("10 ms"), write=False)
+    assert not (tmp_path / "reports").exists()
+
+
+def test_invalid_scenario_raises_with_every_problem(tmp_path):
+    from netsim.scenario.problems import ScenarioError
+
+    bad = _unstable()
+    bad["duraton"] = "1 s"
+    with pytest.raises(ScenarioError, match="duraton"):
+        run(bad, out=tmp_path / "x")
