@@ -429,7 +429,7 @@ class Plant:
     def _now(self, t_ns: int | None) -> int:
         if t_ns is not None:
             return int(t_ns)
-        return int(self.env.now) if self.env is not None else self._t
+        return max(int(self.env.now), self._t) if self.env is not None else self._t
 
     # ---------------------------------------------------------------- disturbances
     def add_disturbance(self, input: int | str, signal: Any) -> None:
