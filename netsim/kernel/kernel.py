@@ -456,20 +456,24 @@ class Kernel:
         out.update({h.name: h.cpu for h in self.handlers.values()})
         job = self._running
         if job is not None and self._seg_ev is not None:
-            out[job.task_name] += self._sim.now - job._seg_start
+            out[job.task_name] += max(0, self._clock() - job._seg_start)
         return out
+
+    def _clock(self) -> int:
+        """Now, except right after ``env.run(T)``: the simpy clock then stands at T + 1 ns, the run covered T."""
+        now: int = self._sim.now
+        if self._t_end is not None and now == self._t_end + 1:
+            return self._t_end
+        return now
 
     def utilization(self, t0: int = 0, t1: int | None = None) -> float:
         """Fraction of ``[t0, t1]`` (default: up to now) the CPU was busy (tasks, handlers, switches)."""
-        now = self._sim.now
-        if t1 is None:
-            # after env.run(T) the simpy clock stands at T + 1 ns; the run covered [0, T]
-            t1 = self._t_end if self._t_end is not None and now <= self._t_end + 1 else now
-        t1 = int(t1)
+        now = self._clock()
+        t1 = now if t1 is None else int(t1)
         if t1 <= t0:
             raise SimulationError(f"node '{self.name}': utilization window [{t0}, {t1}] ns is empty")
         if not self.trace:
-            if t0 != 0 or t1 < now - 1:
+            if t0 != 0 or t1 != now:
                 raise SimulationError(f"node '{self.name}': utilization over a window needs trace=True")
             return min(1.0, sum(self.cpu_time.values()) / t1)
         busy = busy_time(self.schedule, t0, t1)
