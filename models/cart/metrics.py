@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import logging
 import math
+from typing import Any
 
 import numpy as np
 
@@ -134,3 +135,63 @@ def cart_metrics(
             rec = reconstruct(np.asarray(counts_full), h, delta_full, slack=slack, v0=0.0)
             out[key] = _rms_rel(rec.v[mask], vref)
     return out
+
+
+# ------------------------------------------------------------------------------------------ scenario metric
+from pydantic import Field  # noqa: E402
+
+from netsim.errors import ConfigError  # noqa: E402
+from netsim.registry import register  # noqa: E402
+from netsim.units import StrictModel  # noqa: E402
+
+
+class CartMetricParams(StrictModel):
+    """Parameters of the ``cart`` metric (signal names as recorded by the cart programs and plant grid)."""
+
+    position: str = "p"
+    velocity: str = "v"
+    command: str = "cart.u"
+    estimate: str = "cart.v_hat"
+    count: str = "cart.count"
+    vref: float | None = Field(None, description="reference (m/s); default: the largest recorded cart.vref")
+    grid: float = Field(1e-3, gt=0, description="sample period of the evaluation (s): the plant record_grid")
+    startup: float = STARTUP
+    distance: float = DISTANCE
+    delta_full: float = Field(5e-5, gt=0, description="full encoder resolution for the JMAP reconstruction (m)")
+    jmap: bool = True
+
+
+def _col(result: Any, name: str) -> np.ndarray:
+    if name not in result.signals.columns:
+        raise ConfigError(f"metric 'cart' needs signal '{name}', which was not recorded; add it to 'record:' "
+                          f"(recorded: {', '.join(result.signals.columns[1:])})")
+    return result.signals[name].to_numpy(dtype=float)
+
+
+@register("metric", "cart", "sigma_u, Ev (true, estimate, JMAP), events per Tfilter over the last 0.7 m of the run")
+def cart_metric(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
+    """The cart metrics of a netsim run (names prefixed ``cart.``); see :func:`cart_metrics`."""
+    p = params if isinstance(params, CartMetricParams) else CartMetricParams.model_validate(dict(params or {}))
+    t_all = result.signals["time_s"].to_numpy(dtype=float)
+    on_grid = np.abs(t_all / p.grid - np.round(t_all / p.grid)) < 1e-6
+    pos, vel = _col(result, p.position), _col(result, p.velocity)
+    u, vh = _col(result, p.command), _col(result, p.estimate)
+    cnt = _col(result, p.count)
+    sel = on_grid & np.isfinite(pos) & np.isfinite(u)
+    vref = p.vref
+    if vref is None:
+        vr = _col(result, "cart.vref")
+        vr = vr[np.isfinite(vr)]
+        vref = float(vr[np.argmax(np.abs(vr))]) if vr.size else 0.0
+    tf = _col(result, "cart.tfilter")
+    tf = tf[np.isfinite(tf)]
+    changed = np.concatenate(([False], np.diff(np.nan_to_num(cnt, nan=cnt[np.isfinite(cnt)][0] if np.isfinite(cnt).any() else 0.0)) != 0))
+    edges = t_all[changed]
+    counts_full = np.floor(pos[sel] / p.delta_full + 0.5)
+    out = cart_metrics(t_all[sel], pos[sel], vel[sel], u[sel], vref, v_hat=vh[sel], edge_times=edges,
+                       tfilter=float(tf[0]) if tf.size else None, counts_full=counts_full,
+                       delta_full=p.delta_full, jmap=p.jmap, startup=p.startup, distance=p.distance)
+    return {f"cart.{k}": v for k, v in out.items()}
+
+
+cart_metric.Params = CartMetricParams  # type: ignore[attr-defined]
