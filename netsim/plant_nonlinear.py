@@ -295,13 +295,13 @@ class NonlinearPlant(Plant):
                     max_step=self.max_step, events=evs or None,
                 )
             except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-                raise SimulationError(f"plant {self.name}: integrator failed at t = {t:.9g} s: {exc}") from exc
-            if sol.status == -1:
-                raise SimulationError(f"plant {self.name}: integrator failed at t = {sol.t[-1]:.9g} s: {sol.message}")
+                raise SimulationError(f"plant {self.name}: integrator failed at t = {t:.12g} s: {exc}") from exc
             t_new = float(sol.t[-1])
             x = sol.y[:, -1]
             if not (x @ x <= self._bound2):
                 self._diverged(int(round(t_new * S)), x)
+            if sol.status == -1:
+                raise SimulationError(f"plant {self.name}: integrator failed at t = {t_new:.12g} s: {sol.message}")
             if sol.status != 1:
                 return t1, x, mode, False
             fired = [i for i, te in enumerate(sol.t_events) if len(te)]
