@@ -39,6 +39,7 @@ __all__ = [
     "load_scenario",
     "check_scenario",
     "resolved_dict",
+    "raw_copy",
     "dump_resolved",
     "scenario_hash",
 ]
@@ -161,7 +162,7 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None) -> tuple[list[P
     if isinstance(source, Scenario):
         if not overrides:
             return [], source
-        raw: Any = resolved_dict(source)
+        raw: Any = raw_copy(source)
         file = source.source
     elif isinstance(source, Mapping):
         raw = _plain_copy(dict(source))
@@ -208,6 +209,17 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None) -> tuple[list[P
     elif any(p.severity == ERROR for p in problems):
         scenario = None
     return done(problems), scenario
+
+
+def raw_copy(scenario: Scenario) -> dict[str, Any]:
+    """A copy of the raw data ``scenario`` was validated from (its resolved dict if it was built directly).
+
+    Overrides are applied to this, so that derived defaults follow them (a task's deadline defaults to its
+    period: overriding the period of a loaded scenario moves the default deadline too).
+    """
+    if isinstance(scenario._raw, dict):
+        return copy.deepcopy(scenario._raw)
+    return resolved_dict(scenario)
 
 
 def _attach(scenario: Scenario, validated: Mapping[str, Any]) -> None:

@@ -66,6 +66,7 @@ from pydantic import (
     PrivateAttr,
     StringConstraints,
     Tag,
+    model_serializer,
     model_validator,
 )
 
@@ -493,6 +494,11 @@ class HandlerTrigger(SpecModel):
             )
         return self
 
+    @model_serializer(mode="wrap")
+    def _only_given(self, handler: Any) -> Any:
+        data = handler(self)
+        return {k: v for k, v in data.items() if v is not None} if isinstance(data, dict) else data
+
     @property
     def kind(self) -> str:
         """``"timer"``, ``"on_message"`` or ``"external"``."""
@@ -649,6 +655,8 @@ class Scenario(SpecModel):
             return None
         from netsim.scenario.loader import load_scenario
 
-        raw = self.resolved_dict()
+        from netsim.scenario.loader import raw_copy
+
+        raw = raw_copy(self)
         raw["baseline"] = None
         return load_scenario(raw, overrides=dict(self.baseline.overrides))

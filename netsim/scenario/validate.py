@@ -284,6 +284,7 @@ class _Checker:
                 self.error([*base, "policy"], f"cannot load policy '{policy}': {type(exc).__name__}: {exc}")
         handlers = [h.get("name") for h in _l(node.get("handlers")) if isinstance(h, dict)]
         seen: dict[str, str] = {}
+        self.receivers: dict[str, str] = {}
         for kind in ("tasks", "handlers"):
             for i, item in enumerate(_l(node.get(kind))):
                 if not isinstance(item, dict):
@@ -317,7 +318,9 @@ class _Checker:
         if rel is not None and rel != "periodic" and period is not None:
             self.error([*at, "period"], f"only periodic tasks have a period (this one is released '{rel}'); remove 'period' or set 'release: periodic'")
         if rel is not None and rel.startswith("on_message:"):
-            self.network_ref(node_name, rel.split(":", 1)[1], [*at, "release"])
+            net = rel.split(":", 1)[1]
+            if self.network_ref(node_name, net, [*at, "release"]):
+                self.one_receiver(node_name, net, at, [*at, "release"])
         policy = node.get("policy", "fp")
         if policy == "fp" and task.get("priority") is None:
             self.error([*at, "priority"], "policy 'fp' needs a priority for every task; add e.g. 'priority: 1' (lower is more urgent) or use policy rm, dm or edf")
@@ -333,7 +336,17 @@ class _Checker:
     def handler(self, node_name: str, handler: dict[str, Any], at: list[PathPart]) -> None:
         trigger = handler.get("trigger")
         if isinstance(trigger, dict) and isinstance(trigger.get("on_message"), str):
-            self.network_ref(node_name, trigger["on_message"], [*at, "trigger", "on_message"])
+            where = [*at, "trigger", "on_message"]
+            if self.network_ref(node_name, trigger["on_message"], where):
+                self.one_receiver(node_name, trigger["on_message"], at, where)
+
+    def one_receiver(self, node: str, net: str, owner: list[PathPart], at: list[PathPart]) -> None:
+        """A node has one receiver (task or handler) per network: the kernel binds each network once."""
+        if net in self.receivers:
+            self.error(at, f"messages from network '{net}' already go to {self.receivers[net]} on node '{node}'; "
+                           "a node has one receiver per network (let that program hand messages on)")
+        else:
+            self.receivers[net] = format_path(owner)
 
     def conventions(self, node: str, values: dict[str, Any], at: list[PathPart]) -> None:
         """Check program parameters that name networks, nodes, channels and signals (see module doc)."""

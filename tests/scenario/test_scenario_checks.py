@@ -359,3 +359,26 @@ def test_module_path_plugins_resolve(tmp_path, monkeypatch):
         "nodes.controller.tasks[0].program": "module 'zzt_user_plugins' has no attribute 'Missing'"
     }
     sys.modules.pop("zzt_user_plugins", None)
+
+
+def test_a_node_has_one_receiver_per_network():
+    raw = base()
+    raw["nodes"]["actuator"]["tasks"] = [{"name": "also", "program": "zzt_idle", "release": "on_message:bus",
+                                         "priority": 1}]
+    assert _problems(raw) == {
+        "nodes.actuator.handlers[0].trigger.on_message": "messages from network 'bus' already go to "
+        "nodes.actuator.tasks[0] on node 'actuator'; a node has one receiver per network (let that program hand "
+        "messages on)"
+    }
+
+
+def test_overriding_a_loaded_scenario_keeps_derived_defaults_derived():
+    sc = load_scenario(base())
+    again = load_scenario(sc, overrides={"nodes.sensor.tasks[0].period": "4 ms"})
+    assert again.nodes["sensor"].tasks[0].deadline == 4 * MS  # the default deadline follows the period
+    assert load_scenario(sc) is sc
+
+
+def test_trigger_is_written_with_only_its_kind():
+    data = load_scenario(base()).resolved_dict()
+    assert data["nodes"]["actuator"]["handlers"][0]["trigger"] == {"on_message": "bus"}
