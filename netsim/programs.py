@@ -214,13 +214,13 @@ class Controller:
         self.y_last = y
         r = self.ref(job.now)
         u = self.pid.step(r, y)
-        if p.record_as:
-            self.ctx.record(p.record_as, u, job.now)
         yield from _run(self.ctx, job)
         if p.output_channel is not None:
             yield job.analog_out(p.output_channel, u)
         else:
             yield job.send(p.network, p.to, u, p.bits, priority=p.priority, tag=p.tag)
+        if p.record_as:
+            self.ctx.record(p.record_as, u, job.now)
 
 
 @register("program", "actuator", "take the newest control value from `network`, execute, analog_out(channel)")
@@ -315,7 +315,7 @@ class PeriodicController:
         r = self.ref(job.now)
         y = yield job.analog_in(p.channel)
         u = self.pid.step(r, float(y))
-        if p.record_as:
-            self.ctx.record(p.record_as, u, job.now)
         yield from _run(self.ctx, job)
         yield job.analog_out(p.output_channel, u)
+        if p.record_as:
+            self.ctx.record(p.record_as, u, job.now)
