@@ -46,7 +46,7 @@ from netsim.kernel import requests as rq
 from netsim.kernel.events import DEADLINE, DISPATCH, NORMAL, URGENT, Wake
 from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
-from netsim.kernel.policies import Policy
+from netsim.kernel.policies import BUILTIN_POLICIES, Policy
 from netsim.kernel.records import JobRecord, busy_time
 from netsim.kernel.requests import Request
 from netsim.kernel.states import BLOCKED, DONE, NEW, READY, RUNNING
@@ -81,6 +81,8 @@ def resolve_policy(policy: "str | Policy", node: str) -> Policy:
     if not isinstance(policy, str):
         raise BuildError(f"node '{node}': policy must be a name such as 'fp', 'rm', 'dm', 'edf' or a Policy, "
                          f"got {policy!r}")
+    if policy in BUILTIN_POLICIES:
+        return BUILTIN_POLICIES[policy]()
     try:
         obj = lookup("policy", policy)
     except ConfigError as exc:

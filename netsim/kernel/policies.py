@@ -39,6 +39,7 @@ __all__ = [
     "EarliestDeadlineFirst",
     "NonPreemptiveFixedPriority",
     "NonPreemptiveEDF",
+    "BUILTIN_POLICIES",
 ]
 
 
@@ -149,3 +150,11 @@ class NonPreemptiveEDF(EarliestDeadlineFirst):
 
     name = "np_edf"
     preemptive = False
+
+
+#: The built-in policies by name (resolved without loading every plugin of the registry).
+BUILTIN_POLICIES: dict[str, type[Policy]] = {
+    cls.name: cls
+    for cls in (FixedPriority, RateMonotonic, DeadlineMonotonic, EarliestDeadlineFirst,
+                NonPreemptiveFixedPriority, NonPreemptiveEDF)
+}
