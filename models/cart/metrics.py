@@ -131,9 +131,10 @@ def cart_metrics(
         from models.cart.jmap import reconstruct
 
         h = float(np.median(np.diff(t)))
+        end = min(len(t), int(np.nonzero(mask)[0][-1]) + 50)  # the run, not the tail after the 1 m
         for key, slack in (("Ev_jmap", 1), ("Ev_jmap0", 0)):
-            rec = reconstruct(np.asarray(counts_full), h, delta_full, slack=slack, v0=0.0)
-            out[key] = _rms_rel(rec.v[mask], vref)
+            rec = reconstruct(np.asarray(counts_full)[:end], h, delta_full, slack=slack, v0=0.0)
+            out[key] = _rms_rel(rec.v[mask[:end]], vref)
     return out
 
 

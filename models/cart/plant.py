@@ -32,7 +32,7 @@ import numpy as np
 from pydantic import Field
 
 from models.cart.controllers import KU
-from models.cart.dynamics import propagate
+from models.cart.dynamics import propagate, stop_time
 from models.cart.friction import FRICTION_STREAM, Friction, FrictionParams
 from netsim.errors import BuildError
 from netsim.plant import Plant
@@ -137,29 +137,44 @@ class CartPlant(Plant):
                 return None, t_first - tick, barrier
             t_end = t_first + (n_ok - 1) * tick
         td = self.params.td
+        u = self._u_acc
         t0, p0, v0 = self._t, float(self._x[0]), float(self._x[1])
         f, fs, f_next = self._f, self._fs, self._f_next
+        lo_band, hi_band = count * step, (count + 1) * step
         tk = t_first
         while tk <= t_end:
+            if v0 == 0.0 and abs(u) <= fs:
+                if output == 1 or lo_band <= p0 < hi_band:
+                    tk = t_end + tick  # at rest and stuck: nothing moves until an input changes
+                    break
             seg_end = min(f_next, t_end)
-            n = (seg_end - tk) // tick + 1 if seg_end >= tk else 0
-            ticks = tk + tick * np.arange(n)
-            tau = np.append((ticks - t0) * 1e-9, (f_next - t0) * 1e-9)
-            p, v = propagate(p0, v0, self._u_acc, f, fs, tau, td)
-            y = p if output == 0 else v
-            if n:
-                bad = np.floor(y[:n] / step) != count
+            # cheap test first: the position range over the segment (at most two monotone pieces)
+            dt_seg = (f_next - t0) * 1e-9
+            ts = stop_time(v0, u - math.copysign(f, v0), td) if v0 != 0.0 else math.inf
+            probe = np.array([ts, dt_seg]) if ts < dt_seg else np.array([dt_seg])
+            pe, ve = propagate(p0, v0, u, f, fs, probe, td)
+            if output == 0:
+                leaves = min(p0, float(pe.min())) < lo_band or max(p0, float(pe.max())) >= hi_band
+            else:
+                leaves = True
+            if leaves and seg_end >= tk:
+                n = (seg_end - tk) // tick + 1
+                ticks = tk + tick * np.arange(n)
+                p, v = propagate(p0, v0, u, f, fs, (ticks - t0) * 1e-9, td)
+                y = p if output == 0 else v
+                bad = np.floor(y / step) != count
                 if bad.any():
                     tc = int(ticks[int(np.argmax(bad))])
                     return tc, tc, tc
-                tk = int(ticks[-1]) + tick
+            if seg_end >= tk:
+                tk += ((seg_end - tk) // tick + 1) * tick
             if f_next > t_end:
                 break
-            t0, p0, v0 = f_next, float(p[-1]), float(v[-1])
+            t0, p0, v0 = f_next, float(pe[-1]), float(ve[-1])
             f = self.friction.level(p0)
             fs = self.friction.params.stiction * f
             f_next += self._grid
-        last = tk - tick
+        last = min(tk - tick, t_end)
         return None, last, last if barrier >= _NEVER else min(barrier, last)
 
 
