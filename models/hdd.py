@@ -214,3 +214,102 @@ def closed_loop_radius(model: HddModel, num=None, den=None) -> float:
     L = ct.series(Cz, P)
     cl = ct.feedback(L, 1)
     return float(np.max(np.abs(np.linalg.eigvals(np.asarray(cl.A)))))
+
+
+# ------------------------------------------------------------------------------------------ registrations
+from pydantic import Field  # noqa: E402
+
+from netsim.registry import register  # noqa: E402
+from netsim.units import StrictModel  # noqa: E402
+
+
+class HddPlantParams(StrictModel):
+    """Parameters of the registered ``hdd`` plant (readings: see the module docstring)."""
+
+    period: float = Field(T_HDD, gt=0, description="discretization period T in seconds")
+    resonance_gain: Literal["unity", "printed"] = "unity"
+    notch: Literal["attenuating", "printed"] = "attenuating"
+    ad12: float | None = None
+    disturbance: bool = Field(False, description="drive input u with d from eq (32)")
+    w_var: float = Field(1e-7, ge=0, description="Cov(w) of the disturbance model's noise")
+
+
+@register("plant", "hdd", "HDD benchmark eqs (30)-(32): 10th-order plant+notches at 20 us, optional eq (32) disturbance")
+def hdd_plant(params: HddPlantParams | None = None, **kwargs: object):
+    """The discrete HDD plant (input ``u``, output ``y``) as a :class:`netsim.plant.DiscretePlant`."""
+    from netsim.plant import DiscretePlant, LTIDisturbance
+
+    p = params if params is not None else HddPlantParams.model_validate(kwargs)
+    m = hdd_model(p.period, resonance_gain=p.resonance_gain, notch=p.notch, ad12=p.ad12)
+    dt_ns = int(round(p.period * 1e9))
+    plant = DiscretePlant(m.Ap, m.Bp, m.Cp, np.zeros((1, 1)), dt_ns, input_names=["u"], output_names=["y"], name="hdd")
+    if p.disturbance:
+        plant.add_disturbance("u", LTIDisturbance(m.Ad, m.Bd, m.Cd, dt_ns=dt_ns, noise_cov=p.w_var))
+    return plant
+
+
+hdd_plant.Params = HddPlantParams  # type: ignore[attr-defined]
+
+
+class HddControlParams(StrictModel):
+    """The control side of the HDD loop (``design: hdd_et`` of the ``et_controller`` program)."""
+
+    estimator: Literal["none", "augmented", "plant"] = Field(
+        "none", description="none: Cases 1-2; augmented: NUMRE on eq (3) (Cases 3-5); plant: NUMRE on eq (1) only (Case 6)")
+    h: int = Field(100, ge=0, description="future actions per packet (h >= N_max wanted)")
+    m: int = Field(2, ge=1, description="MRCI multi-rate ratio")
+    w_var: float = Field(1e-7, gt=0, description="Cov(w) assumed by the NUMRE (augmented model)")
+    v_var: float = Field(1e-6, gt=0, description="Cov(v) assumed by the NUMRE")
+    w_plant_var: float = Field(1e-2, gt=0, description="input-noise Cov assumed by the plant-only NUMRE (DOB case)")
+    dob: bool = Field(False, description="add the H-infinity disturbance observer (Case 6)")
+    dob_bandwidth: float = Field(1000.0, gt=0)
+    dob_dc_gain: float = Field(3.0, gt=0)
+    dob_hf_gain: float = Field(0.5, gt=0)
+    dob_eps: float = Field(1e-2, gt=0)
+    resonance_gain: Literal["unity", "printed"] = "unity"
+    notch: Literal["attenuating", "printed"] = "attenuating"
+    ad12: float | None = None
+    period: float = Field(T_HDD, gt=0)
+
+
+@lru_cache(maxsize=32)
+def _design_parts(key: str):
+    """Build-time objects shared by runs in a process (the NUMRE caches K(N); nothing here holds run state)."""
+    from netsim.control.dob import design_dob
+    from netsim.control.mrci import decompose
+    from netsim.control.numre import Numre
+
+    p = HddControlParams.model_validate_json(key)
+    m = hdd_model(p.period, resonance_gain=p.resonance_gain, notch=p.notch, ad12=p.ad12)
+    rho = closed_loop_radius(m)
+    if rho >= 1.0:
+        log.warning("hdd: controller eq (33) does not stabilize this plant reading (closed-loop spectral radius %.6f)", rho)
+    design = decompose(m.controller_num, m.controller_den, m=p.m, dt=p.period)
+    est = None
+    if p.estimator == "augmented":
+        est = Numre(m.A, m.B, m.C, m.Bw, [[p.w_var]], [[p.v_var]], Cbar=m.Cbar, h=p.h)
+    elif p.estimator == "plant":
+        est = Numre(m.Ap, m.Bp, m.Cp, m.Bp, [[p.w_plant_var]], [[p.v_var]], h=p.h)
+    dob = None
+    if p.dob:
+        dob = design_dob(m.Ap, m.Bp, m.Cp, m.controller_num, m.controller_den, p.period, bandwidth=p.dob_bandwidth,
+                         dc_gain=p.dob_dc_gain, hf_gain=p.dob_hf_gain, eps=p.dob_eps)
+    return m, design, est, dob
+
+
+@register("controller", "hdd_et", "HDD control side: eq (33) as MRCI (eq 34), optional NUMRE and DOB (Cases 1-6)")
+def hdd_et(design_params: dict | HddControlParams, *, reference, trigger):
+    """Build the :class:`~netsim.control.cascade.ControlSide` of the HDD loop."""
+    from netsim.control.cascade import ControlSide
+    from netsim.control.dob import DisturbanceObserver
+    from netsim.control.mrci import MrciController
+
+    p = design_params if isinstance(design_params, HddControlParams) else HddControlParams.model_validate(design_params)
+    if p.dob and p.estimator == "none":
+        raise ConfigError("hdd_et: the DOB works on the NUMRE's estimates; set estimator: plant")
+    _m, design, est, dob = _design_parts(p.model_dump_json())
+    return ControlSide(MrciController(design), reference, estimator=est,
+                       dob=None if dob is None else DisturbanceObserver(dob), trigger=trigger)
+
+
+hdd_et.Params = HddControlParams  # type: ignore[attr-defined]

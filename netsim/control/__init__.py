@@ -61,7 +61,7 @@ __all__ = [
     "simulate_loop",
 ]
 
-for _mod in ("netsim.control.programs",):
+for _mod in ("netsim.control.programs", "netsim.metrics"):
     try:
         importlib.import_module(_mod)
     except ModuleNotFoundError as _exc:  # programs need the kernel/runtime; skip while they are absent

@@ -1,0 +1,206 @@
+"""Task/handler programs of the event-triggered multi-rate loop (registry kind ``"program"``).
+
+``et_sensor`` (a periodic handler, timer period ``T``)
+    ``y = analog_in(channel)``; ``execute``; evaluate the sensor trigger (time-triggered, PET eq (6),
+    optionally OR the safety condition eq (7) / the reference-change condition eq (8)); if it fires, send
+    ``{"k": k, "y": y}`` to ``to`` on ``network`` (tag ``y``).
+``et_controller`` (an aperiodic task released by message arrival)
+    for each received sample: the control side (:class:`~netsim.control.cascade.ControlSide`: NUMRE,
+    MRCI, DOB, built by a registered kind ``"controller"`` design such as ``hdd_et``); ``execute`` (the
+    algorithm's CPU time); if eq (22) holds, send the packet ``{"k": k, "values": [u_k .. u_k+h]}``
+    (tag ``u``, ``header_bits + bits_per_value * (h + 1)`` bits).
+``playout_actuator`` (two handlers sharing the node's ``shared[key]`` buffer)
+    ``mode: receive`` (on message): take the packet into the :class:`~netsim.control.packets.PlayoutBuffer`,
+    ``execute``, ``analog_out`` the value for the current period; ``mode: tick`` (timer ``T``):
+    ``analog_out`` the buffer's value for the period (current action, then the future ones, then the last
+    one held).
+
+The fast-period index is ``k = (now - offset) // period``.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, Generator, Literal
+
+from pydantic import Field
+
+from netsim.control.controller_trigger import ControllerTrigger
+from netsim.control.packets import ControlPacket, PlayoutBuffer
+from netsim.control.triggers import AnyOf, MaxIntervalTrigger, MixedTrigger, ReferenceChangeTrigger, SendOnDelta, TimeTriggered
+from netsim.errors import BuildError
+from netsim.registry import lookup, register
+from netsim.units import Duration, StrictModel, Time
+
+__all__ = ["EtSensor", "EtController", "PlayoutActuator"]
+
+log = logging.getLogger(__name__)
+
+Body = Generator[Any, Any, None]
+
+
+def _k(now: int, period: int, offset: int) -> int:
+    return (now - offset) // period
+
+
+@register("program", "et_sensor", "sensor handler at T: analog_in, execute, PET/TT trigger (eqs 6-8), send")
+class EtSensor:
+    """Sensor handler evaluating the sampling trigger every period."""
+
+    class Params(StrictModel):
+        channel: str
+        network: str
+        to: str | None
+        period: Duration
+        offset: Time = 0
+        trigger: Literal["time", "pet", "send_on_delta"] = "pet"
+        sigma_s: float = Field(0.0, ge=0)
+        delta_s: float = Field(0.0, ge=0)
+        norm: Literal["squared", "2"] = "squared"
+        k_max: int | None = Field(None, ge=1, description="safety condition eq (7): send at least every k_max periods")
+        reference: str | None = None
+        reference_k_max: int | None = Field(None, ge=0, description="eq (8): send k_max periods after a reference change")
+        bits: int = Field(64, ge=1)
+        priority: int = 0
+        tag: str = "y"
+        record_as: str | None = "y_meas"
+
+    def __init__(self, ctx: Any, params: "EtSensor.Params") -> None:
+        self.ctx = ctx
+        self.p = p = params
+        if p.trigger == "time":
+            base = TimeTriggered()
+        elif p.trigger == "pet":
+            base = MixedTrigger(p.sigma_s, p.delta_s, p.norm)
+        else:
+            base = SendOnDelta(p.delta_s)
+        members = [base]
+        if p.k_max is not None:
+            members.append(MaxIntervalTrigger(p.k_max))
+        if p.reference_k_max is not None:
+            if p.reference is None:
+                raise BuildError(f"{ctx.node}.{ctx.task}: reference_k_max (eq 8) needs `reference`")
+            members.append(ReferenceChangeTrigger(p.reference_k_max))
+        self.trigger = base if len(members) == 1 else AnyOf(members)
+        self.ref = ctx.signal(p.reference) if p.reference else None
+
+    def __call__(self, job: Any) -> Body:
+        p = self.p
+        k = _k(job.now, p.period, p.offset)
+        y = float((yield job.analog_in(p.channel)))
+        if p.record_as:
+            self.ctx.record(p.record_as, y, job.now)
+        if self.ctx.execution is not None:
+            yield job.execute(self.ctx.execution)
+        r = self.ref(job.now) if self.ref is not None else None
+        if self.trigger.should_send(k, y, r):
+            yield job.send(p.network, p.to, {"k": k, "y": y}, p.bits, priority=p.priority, tag=p.tag)
+
+
+@register("program", "et_controller",
+          "control side on message arrival: NUMRE + MRCI (+DOB), execute, controller ET eq (22), send packet")
+class EtController:
+    """Controller task: one control-side update per received sample."""
+
+    class Params(StrictModel):
+        network: str
+        to: str | None
+        period: Duration
+        offset: Time = 0
+        reference: str
+        design: str = Field(description="registered kind 'controller' design, e.g. hdd_et")
+        design_params: dict = Field(default_factory=dict)
+        controller_et: bool = True
+        sigma_c: float = Field(0.0, ge=0)
+        delta_c: float = Field(0.0, ge=0)
+        norm: Literal["squared", "2"] = "squared"
+        bits_per_value: int = Field(32, ge=1)
+        header_bits: int = Field(0, ge=0)
+        priority: int = 0
+        tag: str = "u"
+        record: bool = True
+
+    def __init__(self, ctx: Any, params: "EtController.Params") -> None:
+        self.ctx = ctx
+        self.p = p = params
+        factory = lookup("controller", p.design)
+        r_t = ctx.signal(p.reference)
+        T, off = int(p.period), int(p.offset)
+        trig = ControllerTrigger(p.sigma_c, p.delta_c, p.norm, enabled=p.controller_et)
+        self.side = factory(p.design_params, reference=lambda k: float(r_t(off + k * T)), trigger=trig)
+        ctx.env.at_end(self._finish)
+
+    def _finish(self, t_end: int) -> None:
+        side = self.side
+        if side.horizon_violations:
+            log.warning("%s.%s: h=%d < N_max=%d (%d arrivals beyond the horizon): raise h (design_params.h)",
+                        self.ctx.node, self.ctx.task, side.h, side.N_max, side.horizon_violations)
+        self.ctx.record("numre_h_violations", float(side.horizon_violations), t_end)
+        self.ctx.record("numre_N_max", float(side.N_max), t_end)
+
+    def __call__(self, job: Any) -> Body:
+        p = self.p
+        while True:
+            msg = yield job.receive(p.network)
+            if msg is None:
+                return
+            payload = msg.payload
+            k, y = int(payload["k"]), float(payload["y"])
+            dec = self.side.on_measurement(k, y)
+            if p.record:
+                self.ctx.record("N", float(dec.N), job.now)
+                self.ctx.record("y_hat", dec.y_hat, job.now)
+                self.ctx.record("d_hat", dec.d_hat, job.now)
+                self.ctx.record("u_hat", dec.packet.values[0], job.now)
+            if self.ctx.execution is not None:
+                yield job.execute(self.ctx.execution)
+            if dec.send:
+                pkt = dec.packet
+                yield job.send(p.network, p.to, {"k": pkt.k, "values": pkt.values},
+                               pkt.bits(p.bits_per_value, p.header_bits), priority=p.priority, tag=p.tag)
+
+
+@register("program", "playout_actuator", "actuator: playout buffer of h-step packets; receive (on message) or tick (timer T)")
+class PlayoutActuator:
+    """Actuator handler: ``mode: receive`` takes packets, ``mode: tick`` plays one value per period."""
+
+    class Params(StrictModel):
+        mode: Literal["receive", "tick"]
+        channel: str
+        period: Duration
+        offset: Time = 0
+        network: str | None = None
+        key: str = "playout"
+        u0: float = 0.0
+        record_as: str | None = "u"
+
+    def __init__(self, ctx: Any, params: "PlayoutActuator.Params") -> None:
+        self.ctx = ctx
+        self.p = params
+        if params.mode == "receive" and not params.network:
+            raise BuildError(f"{ctx.node}.{ctx.task}: playout_actuator in mode 'receive' needs `network`")
+        shared = ctx.kernel.shared
+        if params.key not in shared:
+            shared[params.key] = PlayoutBuffer(params.u0)
+        self.buf: PlayoutBuffer = shared[params.key]
+
+    def __call__(self, job: Any) -> Body:
+        p = self.p
+        k = _k(job.now, p.period, p.offset)
+        if p.mode == "receive":
+            got = False
+            while True:
+                msg = yield job.receive(p.network)
+                if msg is None:
+                    break
+                pl = msg.payload
+                got = self.buf.receive(ControlPacket(int(pl["k"]), tuple(pl["values"]))) or got
+            if not got:
+                return
+        if self.ctx.execution is not None:
+            yield job.execute(self.ctx.execution)
+        u = self.buf.value(_k(job.now, p.period, p.offset))
+        yield job.analog_out(p.channel, u)
+        if p.record_as:
+            self.ctx.record(p.record_as, u, job.now)
+        del k

@@ -1,0 +1,163 @@
+"""Cost functions of section 4 of Cuenca et al. (eqs 23-29) and the ``et_control`` run metric.
+
+Pure functions on arrays and counts:
+
+* :func:`ise` eq (23) ``sqrt(sum (r_k - y_k)^2)`` (of the time-triggered run);
+* :func:`isep` eq (24) ``sqrt(sum (y_ETS_k - y_TTS_k)^2)``;
+* :func:`sampling_efficiency` eq (25) ``NE = ISEP / ISE``;
+* :func:`utilization` eqs (26)-(27) ``Uc = N_sc / N_TTS``, ``Ua = N_ca / N_TTS``;
+* :func:`computation_saving_pct` eq (20), :func:`controller_computation` eq (28) ``Cc = Uc (1 - CS) 100``;
+* :func:`gpi` eq (29) ``W1 Uc + W2 Ua + W3 NE`` (weights summing to 1).
+
+The registered metric ``et_control`` computes them from a run: the sample sequences ``r_k``, ``y_k`` are
+the recorded signals read at ``k T`` (held values), and the transmission counts come from the run's
+**messages table** (by tag), never from counters inside the algorithms. ``ISE`` is the baseline's (the TTS
+run of the same scenario) when a baseline is given -- "ISE will be a constant value along the study" --
+and the run's own otherwise; ``ISEP`` needs the baseline.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from netsim.errors import ConfigError
+from netsim.registry import register
+
+__all__ = [
+    "ise",
+    "isep",
+    "sampling_efficiency",
+    "utilization",
+    "computation_saving_pct",
+    "controller_computation",
+    "gpi",
+    "sample_signal",
+    "count_messages",
+    "et_control",
+]
+
+
+def ise(r, y) -> float:
+    """Eq (23): ``sqrt(sum_k (r_k - y_k)^2)``."""
+    e = np.asarray(r, float) - np.asarray(y, float)
+    return float(np.sqrt(np.sum(e * e)))
+
+
+def isep(y_ets, y_tts) -> float:
+    """Eq (24): ``sqrt(sum_k |y_ETS_k - y_TTS_k|^2)`` (same sample instants)."""
+    a, b = np.asarray(y_ets, float), np.asarray(y_tts, float)
+    if a.shape != b.shape:
+        raise ConfigError(f"ISEP needs outputs on the same instants, got {a.shape} and {b.shape} samples")
+    return float(np.sqrt(np.sum((a - b) ** 2)))
+
+
+def sampling_efficiency(isep_value: float, ise_value: float) -> float:
+    """Eq (25): ``NE = ISEP / ISE``."""
+    if ise_value <= 0:
+        raise ConfigError("NE = ISEP/ISE is undefined when ISE is 0 (the TTS run tracks perfectly)")
+    return float(isep_value) / float(ise_value)
+
+
+def utilization(n_ets: int, n_tts: int) -> float:
+    """Eqs (26)-(27): ``N_ETS / N_TTS``."""
+    if n_tts <= 0:
+        raise ConfigError("utilization needs N_TTS > 0")
+    return n_ets / n_tts
+
+
+def computation_saving_pct(m: int, n: int) -> float:
+    """Eq (20): ``CS = (m - 1)/(m + n) * 100`` %."""
+    return (m - 1) / (m + n) * 100.0
+
+
+def controller_computation(uc: float, m: int, n: int) -> float:
+    """Eq (28): ``Cc = Uc (1 - (m-1)/(m+n)) * 100`` %."""
+    return uc * (1.0 - (m - 1) / (m + n)) * 100.0
+
+
+def gpi(uc: float, ua: float, ne: float, weights=(0.45, 0.45, 0.1)) -> float:
+    """Eq (29): ``W1 Uc + W2 Ua + W3 NE`` with ``sum W = 1``."""
+    w = [float(x) for x in weights]
+    if len(w) != 3 or any(x < 0 for x in w) or not math.isclose(sum(w), 1.0, abs_tol=1e-9):
+        raise ConfigError(f"GPI weights must be three numbers >= 0 summing to 1, got {weights!r}")
+    return w[0] * uc + w[1] * ua + w[2] * ne
+
+
+def sample_signal(signals, name: str, times_s: np.ndarray) -> np.ndarray:
+    """Values of recorded signal ``name`` held at ``times_s`` (last sample at or before each instant)."""
+    if name not in signals.columns:
+        raise ConfigError(f"et_control: signal '{name}' was not recorded (recorded: {', '.join(map(str, signals.columns))})")
+    t = signals["time_s"].to_numpy(float)
+    v = signals[name].to_numpy(float)
+    ok = ~np.isnan(v)
+    t, v = t[ok], v[ok]
+    if t.size == 0:
+        raise ConfigError(f"et_control: signal '{name}' has no samples")
+    idx = np.searchsorted(t, times_s + 1e-12, side="right") - 1
+    idx = np.clip(idx, 0, t.size - 1)
+    return v[idx]
+
+
+def count_messages(messages, tag: str, *, delivered: bool = False, before_s: float | None = None) -> int:
+    """Messages sent with ``tag`` (optionally only delivered ones, sent before ``before_s``), from the table."""
+    if messages is None or len(messages) == 0:
+        return 0
+    sel = messages["tag"].astype(str) == tag
+    if before_s is not None:
+        sel &= messages["sent_s"].to_numpy(float) < before_s
+    if delivered:
+        sel &= ~messages["dropped"].astype(bool)
+    return int(sel.sum())
+
+
+@register("metric", "et_control", "Uc, Ua, Cc, CS, ISE, ISEP, NE, GPI of Cuenca et al. eqs (20)-(29)")
+def et_control(result: Any, params: dict, baseline: Any | None = None) -> dict[str, float]:
+    """Metrics of an event-triggered run (``params``: see below) against an optional TTS baseline.
+
+    ``params``: ``period`` (fast period T in s, required), ``reference`` (signal, default ``r``),
+    ``output`` (noise-free output signal, default ``y``), ``sensor_tag`` (``y``), ``actuator_tag`` (``u``),
+    ``m`` (2), ``n`` (1), ``weights`` ([0.45, 0.45, 0.1]), ``n_tts`` (default: periods in the run).
+    """
+    known = {"period", "reference", "output", "sensor_tag", "actuator_tag", "m", "n", "weights", "n_tts"}
+    unknown = set(params) - known
+    if unknown:
+        raise ConfigError(f"et_control: unknown parameter(s) {sorted(unknown)}; known: {sorted(known)}")
+    if "period" not in params:
+        raise ConfigError("et_control: give `period` (the fast sampling period T in seconds)")
+    T = float(params["period"])
+    ref, out = params.get("reference", "r"), params.get("output", "y")
+    m, n = int(params.get("m", 2)), int(params.get("n", 1))
+    weights = params.get("weights", (0.45, 0.45, 0.1))
+    duration = float(result.meta.get("duration_s") or 0.0) if hasattr(result, "meta") else 0.0
+    sig = result.signals
+    if not duration:
+        duration = float(sig["time_s"].max()) if len(sig) else 0.0
+    n_tts = int(params.get("n_tts") or int(math.floor(duration / T + 1e-9)))
+    t_k = np.arange(n_tts) * T
+    r_k = sample_signal(sig, ref, t_k)
+    y_k = sample_signal(sig, out, t_k)
+    # transmissions of the N_TTS periods [0, N_TTS T) (a run that also executes the instant N_TTS T must
+    # not count that extra sample)
+    n_sc = count_messages(result.messages, params.get("sensor_tag", "y"), before_s=n_tts * T)
+    n_ca = count_messages(result.messages, params.get("actuator_tag", "u"), before_s=n_tts * T)
+    uc = utilization(n_sc, n_tts)
+    ua = utilization(n_ca, n_tts)
+    own_ise = ise(r_k, y_k)
+    res = {
+        "N_TTS": float(n_tts), "Nsc": float(n_sc), "Nca": float(n_ca), "Uc": uc, "Ua": ua,
+        "CS": computation_saving_pct(m, n), "Cc": controller_computation(uc, m, n), "ISE_own": own_ise,
+    }
+    if baseline is not None:
+        yb = sample_signal(baseline.signals, out, t_k)
+        rb = sample_signal(baseline.signals, ref, t_k)
+        res["ISE"] = ise(rb, yb)
+        res["ISEP"] = isep(y_k, yb)
+    else:
+        res["ISE"] = own_ise
+        res["ISEP"] = 0.0
+    res["NE"] = sampling_efficiency(res["ISEP"], res["ISE"])
+    res["GPI"] = gpi(uc, ua, res["NE"], weights)
+    return res
