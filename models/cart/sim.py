@@ -67,6 +67,7 @@ def simulate(
     ku: float = KU,
     td: float | None = None,
     delta_p: float = DELTA_P,
+    rounding: str = "round",
 ) -> CartRun:
     """Run one step-response experiment of ``controller`` on the cart.
 
@@ -92,6 +93,9 @@ def simulate(
         Delay from sampling to actuation (controller execution), less than a period.
     ku, td
         Motor gain (m/s^2) and optional velocity time constant (s) of the plant.
+    delta_p, rounding
+        Full encoder resolution (m) and the count convention (``"round"``: paper eq. 1; ``"floor"``: the
+        netsim :class:`~netsim.io.Encoder`).
     """
     period = controller.period_ns
     if period % tick_ns:
@@ -100,7 +104,7 @@ def simulate(
         raise ConfigError(f"actuation delay must be in [0, period), got {delay_ns} ns")
     if not duration > 0:
         raise ConfigError(f"duration must be positive, got {duration}")
-    quant = Quantizer.from_bits(q, delta_p)
+    quant = Quantizer.from_bits(q, delta_p, rounding)
     full = Quantizer(delta_p)
     controller.reset()
     n_ticks = period // tick_ns
@@ -142,7 +146,7 @@ def simulate(
             vt = np.concatenate([va[:-1], vb])
         else:
             pt, vt = propagate(p, v, ku * uv, f, fs, tick_tau, td)
-        counts = np.floor(pt / quant.delta + 0.5).astype(np.int64)
+        counts = np.floor(pt / quant.delta + (0.5 if rounding == "round" else 0.0)).astype(np.int64)
         prev = np.concatenate(([count], counts[:-1]))
         changed = np.nonzero(counts != prev)[0]
         if changed.size:
