@@ -53,7 +53,7 @@ from netsim.kernel.states import BLOCKED, DONE, NEW, READY, RUNNING
 from netsim.kernel.task import (Handler, HandlerSpec, Task, TaskSpec, check_body, check_time,
                                 task_error)
 from netsim.network.message import Message
-from netsim.registry import lookup
+from netsim.registry import entries, lookup
 
 __all__ = ["Kernel", "Timer", "Trigger"]
 
@@ -86,7 +86,12 @@ def resolve_policy(policy: "str | Policy", node: str) -> Policy:
     try:
         obj = lookup("policy", policy)
     except ConfigError as exc:
-        raise BuildError(f"node '{node}': scheduling {exc}") from None
+        if ":" in policy:
+            raise BuildError(f"node '{node}': scheduling policy: {exc}") from None
+        known = [e.name for e in entries("policy")]
+        close = difflib.get_close_matches(policy, known, n=1, cutoff=0.4)
+        hint = f"; did you mean '{close[0]}'?" if close else f" (known: {', '.join(sorted(known))})"
+        raise BuildError(f"node '{node}': unknown policy '{policy}'{hint}") from None
     if isinstance(obj, type):
         obj = obj()
     if not isinstance(obj, Policy):
