@@ -49,9 +49,13 @@ class TdmaBus(Network):
                     )
             return self
 
+    utilization_mode = "weighted"
+
     def _setup(self) -> None:
         p = self.params
-        self._meter = self.meters["bus"] = BusyMeter(p.utilization_bin)
+        # one meter per owner (their busy times never overlap; the bus utilization is their sum)
+        for n in self.nodes:
+            self.meters[n] = BusyMeter(p.utilization_bin)
         self._slot = p.slot if p.slot is not None else tx_time_ns(p.slot_bits or 0, p.bitrate)
         self._cycle = self._slot * len(p.schedule)
         # owned windows of each node within one cycle, adjacent slots merged: [(start_offset, end_offset)]
@@ -99,7 +103,7 @@ class TdmaBus(Network):
     def _run(self, node: str) -> Generator[Any, Any, None]:
         sim = self.sim
         q = self.queues[node]
-        meter = self._meter
+        meter = self.meters[node]
         while True:
             if not len(q):
                 ev = self._wake[node] = sim.event()
