@@ -1,0 +1,86 @@
+"""The qualitative facts of section 5 of Cuenca et al., checked on the hdd_case*.yaml scenarios.
+
+Each scenario runs its Case 1 baseline too (ISE/ISEP). Runs are 464 periods (9.28 ms) as in the paper;
+one run takes about a second.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from netsim.runner import run
+
+SCEN = Path(__file__).resolve().parents[2] / "scenarios"
+
+
+@pytest.fixture(scope="module")
+def cases():
+    return {n: run(SCEN / f"hdd_case{n}.yaml", write=False) for n in (1, 2, 3, 4, 5)}
+
+
+def _m(res, key):
+    assert res.meta.get("status") == "ok", res.meta.get("error")
+    return float(res.metrics[key])
+
+
+def test_case1_equals_the_plain_numpy_loop(cases):
+    from models.hdd import hdd_model
+    from netsim.control import ControlSide, MrciController, TimeTriggered, decompose, simulate_loop
+
+    m = hdd_model()
+    side = ControlSide(MrciController(decompose(m.controller_num, m.controller_den, m=2)), lambda k: 1.0)
+    tr = simulate_loop(m.Ap, m.Bp, m.Cp, side, TimeTriggered(), 464, reference=lambda k: 1.0)
+    ise_np = float(np.sqrt(np.sum((1.0 - tr.y) ** 2)))  # independent: the ideal discrete loop
+    assert _m(cases[1], "ISE") == pytest.approx(ise_np, rel=1e-9)
+    assert (_m(cases[1], "Uc"), _m(cases[1], "Ua")) == (1.0, 1.0)
+    assert _m(cases[1], "Cc") == pytest.approx(200 / 3)  # eq (28) with CS = 1/3: paper Cc = 66 %
+
+
+def test_petc_alone_cuts_utilization_but_worsens_ne(cases):
+    assert _m(cases[2], "Uc") < 1.0 and _m(cases[2], "Ua") < _m(cases[2], "Uc")
+    assert _m(cases[2], "NE") > 0.1
+
+
+def test_numre_cuts_utilization_further_and_restores_performance(cases):
+    assert _m(cases[3], "Uc") < _m(cases[2], "Uc")
+    assert _m(cases[3], "Ua") < _m(cases[2], "Ua")
+    assert _m(cases[3], "NE") < 0.5 * _m(cases[2], "NE")
+
+
+def test_numre_reproduces_tts_output_when_every_packet_is_sent():
+    res = run(SCEN / "hdd_case3.yaml", write=False,
+              overrides={"nodes.controller.tasks[0].params.controller_et": False})
+    assert _m(res, "Uc") < 0.5
+    assert _m(res, "NE") < 0.01  # exact model, no noise: only the h-horizon and K(N) corrections remain
+
+
+def test_noise_and_disturbance_raise_utilization(cases):
+    assert _m(cases[4], "Uc") > _m(cases[3], "Uc")
+
+
+def test_narrower_thresholds_raise_utilization_and_lower_ne(cases):
+    assert _m(cases[5], "Uc") > _m(cases[4], "Uc")
+    assert _m(cases[5], "Ua") > _m(cases[4], "Ua")
+    assert _m(cases[5], "NE") < _m(cases[4], "NE")
+
+
+def test_transmission_counts_come_from_the_messages_table(cases):
+    res = cases[3]
+    msgs = res.messages
+    T = 20e-6
+    assert _m(res, "Nsc") == int(((msgs["tag"] == "y") & (msgs["sent_s"] < 464 * T)).sum())
+    assert _m(res, "Nca") == int(((msgs["tag"] == "u") & (msgs["sent_s"] < 464 * T)).sum())
+
+
+def test_short_duration_override_runs(cases):
+    res = run(SCEN / "hdd_case4.yaml", write=False, overrides={"duration": "1 ms"})
+    assert _m(res, "N_TTS") == 50
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="our H-infinity DOB (eq 18 reading) is an unstable filter and degrades "
+                   "the loop; see reports/hdd/README.md, Case 6")
+def test_dob_case_performs_close_to_known_model_case(cases):
+    res6 = run(SCEN / "hdd_case6.yaml", write=False)
+    assert _m(res6, "NE") < 2 * _m(cases[5], "NE") + 0.05

@@ -1,0 +1,67 @@
+"""Cost functions of Cuenca et al. eqs (20)-(29) and the et_control metric on hand-made run tables."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from netsim.errors import ConfigError
+from netsim.metrics import (
+    computation_saving_pct,
+    controller_computation,
+    et_control,
+    gpi,
+    ise,
+    isep,
+    sampling_efficiency,
+    utilization,
+)
+
+
+def test_pure_cost_functions_against_hand_computation():
+    assert ise([1, 1, 1], [0, 0.5, 1]) == pytest.approx(np.sqrt(1 + 0.25))
+    assert isep([1, 2], [1, 0]) == pytest.approx(2.0)
+    assert sampling_efficiency(0.54, 3.75) == pytest.approx(0.144)  # paper Case 2: 0.54/3.75 -> NE 0.14
+    assert utilization(250, 464) == pytest.approx(0.5388, abs=1e-4)  # paper Case 2: Uc = 0.54
+    assert computation_saving_pct(2, 1) == pytest.approx(33.333, abs=1e-3)  # eq (20), paper: CS = 33 %
+    assert controller_computation(1.0, 2, 1) == pytest.approx(66.667, abs=1e-3)  # paper Case 1: Cc = 66 %
+    assert controller_computation(0.26, 2, 1) == pytest.approx(17.33, abs=0.01)  # paper Case 3: Cc = 17 %
+    assert gpi(0.5, 0.2, 0.1) == pytest.approx(0.45 * 0.5 + 0.45 * 0.2 + 0.1 * 0.1)
+
+
+def test_bad_weights_and_zero_ise_are_refused():
+    with pytest.raises(ConfigError, match="sum"):
+        gpi(0.1, 0.1, 0.1, (0.5, 0.5, 0.5))
+    with pytest.raises(ConfigError, match="ISE is 0"):
+        sampling_efficiency(0.1, 0.0)
+
+
+def _result(y, tags_times, T=1.0):
+    t = np.arange(len(y)) * T
+    sig = pd.DataFrame({"time_s": t, "r": np.ones(len(y)), "y": y})
+    msgs = pd.DataFrame({"tag": [g for g, _ in tags_times], "sent_s": [s for _, s in tags_times],
+                         "dropped": [False] * len(tags_times)})
+    return SimpleNamespace(signals=sig, messages=msgs, meta={"duration_s": len(y) * T})
+
+
+def test_et_control_counts_messages_by_tag_and_compares_with_baseline():
+    T = 1.0
+    base = _result([0.0, 0.5, 1.0, 1.0], [("y", k + 0.1) for k in range(4)] + [("u", k + 0.2) for k in range(4)])
+    run = _result([0.0, 0.5, 0.8, 0.9], [("y", 0.1), ("y", 2.1), ("u", 0.2), ("y", 4.1)])  # 4.1: past N_TTS T
+    m = et_control(run, {"period": T}, base)
+    assert (m["N_TTS"], m["Nsc"], m["Nca"]) == (4, 2, 1)
+    assert m["Uc"] == pytest.approx(0.5) and m["Ua"] == pytest.approx(0.25)
+    assert m["ISE"] == pytest.approx(np.sqrt(1 + 0.25))  # the baseline's ISE, eq (23)
+    assert m["ISEP"] == pytest.approx(np.sqrt(0.04 + 0.01))  # eq (24)
+    assert m["NE"] == pytest.approx(m["ISEP"] / m["ISE"])
+    assert m["Cc"] == pytest.approx(0.5 * (2 / 3) * 100)
+    assert m["GPI"] == pytest.approx(0.45 * 0.5 + 0.45 * 0.25 + 0.1 * m["NE"])
+
+
+def test_et_control_reports_unknown_parameters_and_missing_signals():
+    run = _result([0.0, 1.0], [])
+    with pytest.raises(ConfigError, match="unknown parameter"):
+        et_control(run, {"period": 1.0, "sigma": 1}, None)
+    with pytest.raises(ConfigError, match="not recorded"):
+        et_control(run, {"period": 1.0, "output": "zz"}, None)
