@@ -5,6 +5,12 @@ each problem is reported as ``file:line: path: message``. Validation runs in thr
 when an earlier one finds problems: the base schema (:mod:`netsim.scenario.schema`), every plugin's own
 ``Params`` model, and the cross references (:mod:`netsim.scenario.validate`).
 
+Top-level keys starting with ``x-`` are ignored, so a file can hold YAML anchors for repeated entries::
+
+    x-task: &task {program: sampler, priority: 1, execution: 0.5 ms}
+    nodes:
+      a: {tasks: [{<<: *task, name: s1, period: 10 ms}]}
+
 Examples
 --------
 >>> sc = load_scenario({"name": "idle", "duration": "1 s"})
@@ -45,6 +51,9 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+#: Top-level keys starting with this are ignored: a place for YAML anchors shared by several entries.
+EXTENSION_PREFIX = "x-"
 
 Source = str | os.PathLike[str] | Mapping[str, Any] | Scenario
 
@@ -185,6 +194,8 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None) -> tuple[list[P
         kind = "a list" if isinstance(raw, list) else repr(raw)
         return done([Problem("", f"the top level must be a mapping (name: ..., duration: ...), got {kind}", 1)]), None
 
+    for key in [k for k in raw if isinstance(k, str) and k.startswith(EXTENSION_PREFIX)]:
+        del raw[key]  # a place for YAML anchors (``x-defaults: &task {...}``), ignored
     problems: list[Problem] = []
     for key, value in (overrides or {}).items():
         try:

@@ -163,7 +163,7 @@ def _message(err: dict[str, Any], root: type[BaseModel] | None) -> tuple[list[Pa
     if loc and loc[-1] == "[key]":
         if kind == "string_pattern_mismatch":
             return path, f"invalid name {show_value(value)}: use only letters, digits, '_' and '-'"
-        return path, f"invalid name {show_value(value)}: {msg}"
+        return path, f"invalid name {show_value(value)}: names are text of letters, digits, '_' and '-'"
     if kind == "string_pattern_mismatch":
         return path, f"invalid name {show_value(value)}: use only letters, digits, '_' and '-'"
     if kind == "io_type":

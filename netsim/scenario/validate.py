@@ -179,7 +179,7 @@ class _Checker:
             self.error(at, f"unknown network '{net}'{did_you_mean(net, self.networks, what='networks')}")
             return False
         if net not in self.attached.get(node, set()):
-            on = ", ".join(_l(_d(self.networks[net]).get("nodes"))) or "none"
+            on = ", ".join(str(n) for n in _l(_d(self.networks[net]).get("nodes"))) or "none"
             self.error(at, f"node '{node}' is not attached to network '{net}' (its nodes: {on}); add '{node}' to networks.{net}.nodes")
             return False
         return True

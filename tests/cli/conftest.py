@@ -1,10 +1,11 @@
-"""Fake plugins and helpers for the CLI tests (registered under ``zzc_*`` names no real plugin uses)."""
+"""Fake plugins for the CLI tests (registered under ``zzc_*`` names no real plugin uses) and a valid scenario
+using them (fixture ``good``: its YAML text)."""
 
 from __future__ import annotations
 
 import textwrap
-from pathlib import Path
 
+import pytest
 from pydantic import Field
 
 from netsim.registry import register
@@ -62,15 +63,7 @@ GOOD = textwrap.dedent(
 )
 
 
-def write(folder: Path, name: str, text: str) -> Path:
-    path = folder / name
-    path.write_text(text)
-    return path
-
-
-def line_of(path: Path, needle: str) -> int:
-    """1-based line of the first line containing ``needle`` (independent of the loader)."""
-    for i, line in enumerate(path.read_text().splitlines(), start=1):
-        if needle in line:
-            return i
-    raise AssertionError(needle)
+@pytest.fixture
+def good() -> str:
+    """YAML text of a valid two-node scenario using only the fake plugins."""
+    return GOOD

@@ -9,7 +9,6 @@ import types
 from pathlib import Path
 
 import pytest
-from cli_fakes import GOOD, write
 
 import netsim
 from netsim.cli import main
@@ -17,6 +16,20 @@ from netsim.errors import SimulationError
 from netsim.scenario import Scenario
 
 ROOT = Path(__file__).resolve().parents[2]
+
+def write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.write_text(text)
+    return path
+
+
+def line_of(path: Path, needle: str) -> int:
+    """1-based line of the first line containing ``needle`` (independent of the loader)."""
+    for i, line in enumerate(path.read_text().splitlines(), start=1):
+        if needle in line:
+            return i
+    raise AssertionError(needle)
+
 
 
 class _Calls:
@@ -44,9 +57,9 @@ def _result(status: str = "ok", **meta):
     return types.SimpleNamespace(meta={"status": status, **meta}, metrics={"cpu.a": 0.125}, out_dir="/tmp/run-x")
 
 
-def test_run_validates_applies_overrides_and_calls_the_runner(tmp_path, monkeypatch, capsys):
+def test_run_validates_applies_overrides_and_calls_the_runner(tmp_path, monkeypatch, capsys, good):
     rec = _fake_module(monkeypatch, "runner", "run", _result())
-    path = write(tmp_path, "good.yaml", GOOD)
+    path = write(tmp_path, "good.yaml", good)
     code = main(["run", str(path), "--out", str(tmp_path / "o"), "--seed", "5", "--plot",
                  "--set", "networks.net.bitrate=1 Mbit/s", "--set", "plant.x0=[2]"])
     assert code == 0
@@ -61,9 +74,9 @@ def test_run_validates_applies_overrides_and_calls_the_runner(tmp_path, monkeypa
     assert "cpu.a" in out and "0.125" in out
 
 
-def test_run_of_an_invalid_scenario_runs_nothing_and_exits_2(tmp_path, monkeypatch, capsys):
+def test_run_of_an_invalid_scenario_runs_nothing_and_exits_2(tmp_path, monkeypatch, capsys, good):
     rec = _fake_module(monkeypatch, "runner", "run", _result())
-    path = write(tmp_path, "bad.yaml", GOOD.replace("program: zzc_prog", "program: zzc_porg", 1))
+    path = write(tmp_path, "bad.yaml", good.replace("program: zzc_prog", "program: zzc_porg", 1))
     assert main(["run", str(path)]) == 2
     assert rec.calls == []
     err = capsys.readouterr().err
@@ -76,38 +89,38 @@ def test_run_of_a_missing_file_exits_2(tmp_path, capsys):
     assert "file not found" in capsys.readouterr().err
 
 
-def test_simulation_error_is_printed_without_traceback(tmp_path, monkeypatch, capsys):
+def test_simulation_error_is_printed_without_traceback(tmp_path, monkeypatch, capsys, good):
     _fake_module(monkeypatch, "runner", "run", error=SimulationError("integrator failed at t = 0.5 s"))
-    path = write(tmp_path, "good.yaml", GOOD)
+    path = write(tmp_path, "good.yaml", good)
     assert main(["run", str(path)]) == 1
     err = capsys.readouterr().err
     assert err == "netsim: error: integrator failed at t = 0.5 s\n"
 
 
-def test_a_run_that_did_not_finish_exits_1(tmp_path, monkeypatch, capsys):
+def test_a_run_that_did_not_finish_exits_1(tmp_path, monkeypatch, capsys, good):
     _fake_module(monkeypatch, "runner", "run", _result("diverged at t = 0.3 s", error="state blew up"))
-    path = write(tmp_path, "good.yaml", GOOD)
+    path = write(tmp_path, "good.yaml", good)
     assert main(["run", str(path)]) == 1
     captured = capsys.readouterr()
     assert captured.out.startswith("zzc_good: diverged at t = 0.3 s")
     assert "state blew up" in captured.err
 
 
-def test_malformed_set_is_a_usage_error(tmp_path, capsys):
-    path = write(tmp_path, "good.yaml", GOOD)
+def test_malformed_set_is_a_usage_error(tmp_path, capsys, good):
+    path = write(tmp_path, "good.yaml", good)
     assert main(["run", str(path), "--set", "plant.x0"]) == 2
     assert "write key.path=value" in capsys.readouterr().err
 
 
-def test_batch_expands_folders_and_skips_sweep_files(tmp_path, monkeypatch, capsys):
+def test_batch_expands_folders_and_skips_sweep_files(tmp_path, monkeypatch, capsys, good):
     rec = _fake_module(monkeypatch, "batch", "run_batch", (None, 1))
     folder = tmp_path / "sc"
     folder.mkdir()
-    write(folder, "b.yaml", GOOD)
-    write(folder, "a.yml", GOOD)
+    write(folder, "b.yaml", good)
+    write(folder, "a.yml", good)
     write(folder, "s.yaml", "sweep: x\nbase: b.yaml\n")
     write(folder, "notes.txt", "not a scenario")
-    extra = write(tmp_path, "c.yaml", GOOD)
+    extra = write(tmp_path, "c.yaml", good)
     assert main(["batch", str(folder), str(extra), "--workers", "2", "--out", "o", "--no-progress"]) == 1
     (args, kwargs), = rec.calls
     assert [p.name for p in args[0]] == ["a.yml", "b.yaml", "c.yaml"]

@@ -2,19 +2,34 @@
 
 from __future__ import annotations
 
-from cli_fakes import GOOD, line_of, write
+from pathlib import Path
+
 
 from netsim.cli import main
 
+def write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.write_text(text)
+    return path
 
-def test_valid_file_exits_zero(tmp_path, capsys):
-    path = write(tmp_path, "good.yaml", GOOD)
+
+def line_of(path: Path, needle: str) -> int:
+    """1-based line of the first line containing ``needle`` (independent of the loader)."""
+    for i, line in enumerate(path.read_text().splitlines(), start=1):
+        if needle in line:
+            return i
+    raise AssertionError(needle)
+
+
+
+def test_valid_file_exits_zero(tmp_path, capsys, good):
+    path = write(tmp_path, "good.yaml", good)
     assert main(["validate", str(path)]) == 0
     assert capsys.readouterr().out == f"{path}: valid\n"
 
 
-def test_each_problem_is_printed_with_file_line_and_path(tmp_path, capsys):
-    text = GOOD.replace("period: 10 ms", "period: 10 usec").replace("priority: 1", "priority: one")
+def test_each_problem_is_printed_with_file_line_and_path(tmp_path, capsys, good):
+    text = good.replace("period: 10 ms", "period: 10 usec").replace("priority: 1", "priority: one")
     text = text.replace("nodes: [a, b]", "nodes: [a, b, ghost]")
     path = write(tmp_path, "bad.yaml", text)
     assert main(["validate", str(path)]) == 3
@@ -25,19 +40,19 @@ def test_each_problem_is_printed_with_file_line_and_path(tmp_path, capsys):
     ]
 
 
-def test_problems_of_several_files_add_up(tmp_path, capsys):
-    good = write(tmp_path, "good.yaml", GOOD)
-    bad = write(tmp_path, "bad.yaml", GOOD.replace("duration: 1 s", "duration: -1 s"))
+def test_problems_of_several_files_add_up(tmp_path, capsys, good):
+    ok = write(tmp_path, "good.yaml", good)
+    bad = write(tmp_path, "bad.yaml", good.replace("duration: 1 s", "duration: -1 s"))
     missing = tmp_path / "missing.yaml"
-    assert main(["validate", str(good), str(bad), str(missing)]) == 2
+    assert main(["validate", str(ok), str(bad), str(missing)]) == 2
     out = capsys.readouterr().out.splitlines()
-    assert f"{good}: valid" in out
+    assert f"{ok}: valid" in out
     assert f"{bad}:2: duration: time must not be negative, got '-1 s'" in out
     assert f"{missing}: file not found: {missing}" in out
 
 
-def test_warnings_are_printed_but_not_counted(tmp_path, capsys):
-    path = write(tmp_path, "warn.yaml", GOOD.replace("execution: 1 ms", "execution: 1 ms\n        deadline: 20 ms"))
+def test_warnings_are_printed_but_not_counted(tmp_path, capsys, good):
+    path = write(tmp_path, "warn.yaml", good.replace("execution: 1 ms", "execution: 1 ms\n        deadline: 20 ms"))
     assert main(["validate", str(path)]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith(f"{path}:{line_of(path, 'deadline: 20 ms')}: warning: nodes.a.tasks[0].deadline: ")
@@ -54,8 +69,8 @@ def test_exit_code_is_capped_at_255(tmp_path, capsys):
     assert len(capsys.readouterr().out.splitlines()) == 300
 
 
-def test_set_applies_before_checking(tmp_path, capsys):
-    path = write(tmp_path, "good.yaml", GOOD)
+def test_set_applies_before_checking(tmp_path, capsys, good):
+    path = write(tmp_path, "good.yaml", good)
     assert main(["validate", str(path), "--set", "nodes.a.tasks[0].period=5 msec"]) == 1
     assert "nodes.a.tasks[0].period: unknown unit 'msec'; did you mean 'ms'?" in capsys.readouterr().out
 

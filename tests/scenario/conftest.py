@@ -1,10 +1,12 @@
-"""Small fake plugins for the scenario tests, registered under names no real plugin uses (``zzt_*``)."""
+"""Fake plugins for the scenario tests (registered under ``zzt_*`` names no real plugin uses) and a valid
+scenario built from them (fixture ``base``: a function returning a fresh copy)."""
 
 from __future__ import annotations
 
 import copy
 from typing import Any
 
+import pytest
 from pydantic import Field
 
 from netsim.registry import register
@@ -124,6 +126,12 @@ BASE: dict[str, Any] = {
 }
 
 
-def base() -> dict[str, Any]:
+def make_base() -> dict[str, Any]:
     """A fresh copy of a valid scenario using only the fake plugins."""
     return copy.deepcopy(BASE)
+
+
+@pytest.fixture
+def base() -> Any:
+    """A function returning a fresh copy of a valid scenario that uses only the fake plugins."""
+    return make_base

@@ -7,7 +7,6 @@ from pathlib import Path
 
 import pytest
 import yaml
-from scenario_fakes import base
 
 from netsim.scenario import ScenarioError, check_scenario, load_scenario
 
@@ -36,17 +35,17 @@ def _line_of(path: Path, needle: str) -> int:
     raise AssertionError(needle)
 
 
-def test_the_base_scenario_is_valid():
+def test_the_base_scenario_is_valid(base):
     assert check_scenario(base()) == []
 
 
-def test_unknown_key_lists_the_known_keys():
+def test_unknown_key_lists_the_known_keys(base):
     raw = base()
     raw["output"] = {"dir": None, "colour": "red"}
     assert _only(raw) == ("output.colour", "unknown key 'colour' (known keys: dir, plot)")
 
 
-def test_misspelt_key_gets_a_did_you_mean():
+def test_misspelt_key_gets_a_did_you_mean(base):
     raw = base()
     task = raw["nodes"]["sensor"]["tasks"][0]
     task["perod"] = task.pop("period")
@@ -54,7 +53,7 @@ def test_misspelt_key_gets_a_did_you_mean():
     assert problems["nodes.sensor.tasks[0].perod"] == "unknown key 'perod'; did you mean 'period'?"
 
 
-def test_wrong_type_names_the_expected_type():
+def test_wrong_type_names_the_expected_type(base):
     raw = base()
     raw["seed"] = "abc"
     raw["nodes"]["sensor"]["tasks"][0]["priority"] = "high"
@@ -65,13 +64,13 @@ def test_wrong_type_names_the_expected_type():
     }
 
 
-def test_negative_period_is_an_error():
+def test_negative_period_is_an_error(base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["period"] = "-10 ms"
     assert _only(raw) == ("nodes.sensor.tasks[0].period", "time must not be negative, got '-10 ms'")
 
 
-def test_zero_period_and_zero_duration_are_errors():
+def test_zero_period_and_zero_duration_are_errors(base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["period"] = "0 ms"
     raw["duration"] = 0
@@ -82,7 +81,7 @@ def test_zero_period_and_zero_duration_are_errors():
     }
 
 
-def test_unknown_unit_suggests_the_right_unit(tmp_path):
+def test_unknown_unit_suggests_the_right_unit(tmp_path, base):
     raw = base()
     raw["nodes"]["controller"]["tasks"].append(
         {"name": "log", "program": "zzt_idle", "period": "100 usec", "priority": 3}
@@ -94,31 +93,31 @@ def test_unknown_unit_suggests_the_right_unit(tmp_path):
     ]
 
 
-def test_unknown_model_suggests_the_registered_one():
+def test_unknown_model_suggests_the_registered_one(base):
     raw = base()
     raw["plant"]["model"] = "zzt_plnt"
     assert _only(raw) == ("plant.model", "unknown plant 'zzt_plnt'; did you mean 'zzt_plant'?")
 
 
-def test_unknown_program_is_reported_not_raised():
+def test_unknown_program_is_reported_not_raised(base):
     raw = base()
     raw["nodes"]["controller"]["tasks"][0]["program"] = "zzt_idel"
     assert _only(raw) == ("nodes.controller.tasks[0].program", "unknown program 'zzt_idel'; did you mean 'zzt_idle'?")
 
 
-def test_network_listing_a_node_that_does_not_exist():
+def test_network_listing_a_node_that_does_not_exist(base):
     raw = base()
     raw["networks"]["bus"]["nodes"].append("ghost")
     assert _only(raw) == ("networks.bus.nodes[3]", "unknown node 'ghost' (known nodes: actuator, controller, sensor)")
 
 
-def test_task_released_by_a_network_that_does_not_exist():
+def test_task_released_by_a_network_that_does_not_exist(base):
     raw = base()
     raw["nodes"]["controller"]["tasks"][0]["release"] = "on_message:ghost"
     assert _only(raw) == ("nodes.controller.tasks[0].release", "unknown network 'ghost' (known networks: bus)")
 
 
-def test_task_released_by_a_network_its_node_is_not_on():
+def test_task_released_by_a_network_its_node_is_not_on(base):
     raw = base()
     raw["networks"]["bus"]["nodes"] = ["sensor", "actuator"]
     raw["nodes"]["sensor"]["tasks"][0]["params"]["to"] = "actuator"
@@ -129,7 +128,7 @@ def test_task_released_by_a_network_its_node_is_not_on():
     )
 
 
-def test_message_to_a_node_not_on_the_network():
+def test_message_to_a_node_not_on_the_network(base):
     raw = base()
     raw["nodes"]["lonely"] = {"policy": "edf"}
     raw["nodes"]["sensor"]["tasks"][0]["params"]["to"] = "lonely"
@@ -140,7 +139,7 @@ def test_message_to_a_node_not_on_the_network():
     )
 
 
-def test_message_to_a_node_that_does_not_exist():
+def test_message_to_a_node_that_does_not_exist(base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["params"]["to"] = "controler"
     assert _only(raw) == ("nodes.sensor.tasks[0].params.to", "unknown node 'controler'; did you mean 'controller'?")
@@ -201,7 +200,7 @@ def test_missing_required_keys():
     }
 
 
-def test_every_problem_is_reported_at_once_with_its_line(tmp_path):
+def test_every_problem_is_reported_at_once_with_its_line(tmp_path, base):
     raw = base()
     raw["seed"] = "abc"  # schema
     raw["nodes"]["sensor"]["tasks"][0]["period"] = "10 msec"  # unit
@@ -221,7 +220,7 @@ def test_every_problem_is_reported_at_once_with_its_line(tmp_path):
     assert [p.line for p in problems] == sorted(p.line for p in problems)
 
 
-def test_plugin_parameter_errors_carry_the_full_path():
+def test_plugin_parameter_errors_carry_the_full_path(base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["params"]["bits"] = -1
     raw["nodes"]["sensor"]["tasks"][0]["params"]["bitz"] = 8
@@ -233,7 +232,7 @@ def test_plugin_parameter_errors_carry_the_full_path():
     assert len(problems) == 3
 
 
-def test_load_scenario_raises_with_every_problem():
+def test_load_scenario_raises_with_every_problem(base):
     raw = base()
     raw["seed"] = -1
     raw["nodes"]["sensor"]["tasks"][0]["period"] = "10 usec"

@@ -6,7 +6,6 @@ import sys
 import textwrap
 
 import pytest
-from scenario_fakes import ZztSampler, base
 
 from netsim import registry
 from netsim.scenario import check_scenario, load_scenario
@@ -19,7 +18,7 @@ def _problems(raw, severity="error"):
     return {p.path: p.message for p in check_scenario(raw) if p.severity == severity}
 
 
-def test_times_are_integer_nanoseconds_and_defaults_are_filled():
+def test_times_are_integer_nanoseconds_and_defaults_are_filled(base):
     sc = load_scenario(base())
     sample = sc.nodes["sensor"].tasks[0]
     assert sample.period == 10 * MS and sample.deadline == 10 * MS and sample.offset == 0
@@ -31,14 +30,14 @@ def test_times_are_integer_nanoseconds_and_defaults_are_filled():
     assert sc.duration == 1_000_000_000
 
 
-def test_task_without_period_or_release_is_aperiodic():
+def test_task_without_period_or_release_is_aperiodic(base):
     raw = base()
     raw["nodes"]["controller"]["tasks"].append({"name": "bg", "program": "zzt_idle"})
     task = load_scenario(raw).nodes["controller"].tasks[1]
     assert task.release == "aperiodic" and task.deadline is None
 
 
-def test_execution_spec_is_the_text_form_exectime_reads():
+def test_execution_spec_is_the_text_form_exectime_reads(base):
     sc = load_scenario(base())
     assert sc.nodes["sensor"].tasks[0].execution_spec() == "500 us"
     assert sc.nodes["controller"].tasks[0].execution_spec() == {"dist": "uniform", "low": "400 us", "high": "600 us"}
@@ -60,13 +59,13 @@ def test_execution_spec_is_the_text_form_exectime_reads():
          "expected a time such as '0.5 ms' or {dist: uniform, low: .., high: ..}, got a list"),
     ],
 )
-def test_bad_execution_times(spec, path, message):
+def test_bad_execution_times(spec, path, message, base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["execution"] = spec
     assert _problems(raw) == {path: message}
 
 
-def test_fixed_priority_tasks_need_a_priority():
+def test_fixed_priority_tasks_need_a_priority(base):
     raw = base()
     del raw["nodes"]["sensor"]["tasks"][0]["priority"]
     assert _problems(raw) == {
@@ -75,7 +74,7 @@ def test_fixed_priority_tasks_need_a_priority():
     }
 
 
-def test_periodic_task_needs_a_period_and_others_have_none():
+def test_periodic_task_needs_a_period_and_others_have_none(base):
     raw = base()
     raw["nodes"]["controller"]["tasks"].append({"name": "p", "program": "zzt_idle", "release": "periodic"})
     raw["nodes"]["controller"]["tasks"][0]["period"] = "5 ms"
@@ -87,7 +86,7 @@ def test_periodic_task_needs_a_period_and_others_have_none():
     }
 
 
-def test_deadline_longer_than_period_is_allowed_with_a_warning():
+def test_deadline_longer_than_period_is_allowed_with_a_warning(base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["deadline"] = "15 ms"
     assert _problems(raw) == {}
@@ -97,7 +96,7 @@ def test_deadline_longer_than_period_is_allowed_with_a_warning():
     assert load_scenario(raw).nodes["sensor"].tasks[0].deadline == 15 * MS
 
 
-def test_task_and_handler_names_are_unique_per_node():
+def test_task_and_handler_names_are_unique_per_node(base):
     raw = base()
     raw["nodes"]["actuator"]["tasks"] = [{"name": "act", "program": "zzt_idle", "priority": 2, "period": "1 s"}]
     assert _problems(raw) == {
@@ -106,13 +105,13 @@ def test_task_and_handler_names_are_unique_per_node():
     }
 
 
-def test_the_same_task_name_on_two_nodes_is_fine():
+def test_the_same_task_name_on_two_nodes_is_fine(base):
     raw = base()
     raw["nodes"]["controller"]["tasks"][0]["name"] = "sample"
     assert _problems(raw) == {}
 
 
-def test_overrun_handlers_must_exist_on_the_node():
+def test_overrun_handlers_must_exist_on_the_node(base):
     raw = base()
     raw["nodes"]["actuator"]["tasks"] = [
         {"name": "t", "program": "zzt_idle", "priority": 2, "period": "1 s", "wcet_handler": "act",
@@ -123,7 +122,7 @@ def test_overrun_handlers_must_exist_on_the_node():
     }
 
 
-def test_handler_trigger_takes_exactly_one_kind():
+def test_handler_trigger_takes_exactly_one_kind(base):
     raw = base()
     raw["nodes"]["actuator"]["handlers"][0]["trigger"] = {"on_message": "bus", "timer": {"period": "1 ms"}}
     assert _problems(raw) == {
@@ -132,7 +131,7 @@ def test_handler_trigger_takes_exactly_one_kind():
     }
 
 
-def test_handler_trigger_kinds():
+def test_handler_trigger_kinds(base):
     raw = base()
     raw["nodes"]["actuator"]["handlers"].append(
         {"name": "tick", "program": "zzt_idle", "trigger": {"timer": {"period": "20 us"}}}
@@ -146,7 +145,7 @@ def test_handler_trigger_kinds():
     assert handlers[2].trigger.external.min_interarrival == MS
 
 
-def test_handler_on_message_needs_the_node_on_that_network():
+def test_handler_on_message_needs_the_node_on_that_network(base):
     raw = base()
     raw["networks"]["bus"]["nodes"].remove("actuator")
     problems = _problems(raw)
@@ -156,7 +155,7 @@ def test_handler_on_message_needs_the_node_on_that_network():
     )
 
 
-def test_unknown_policy_gets_a_suggestion():
+def test_unknown_policy_gets_a_suggestion(base):
     raw = base()
     raw["nodes"]["controller"]["policy"] = "edff"
     assert _problems(raw) == {"nodes.controller.policy": "unknown policy 'edff'; did you mean 'edf'?"}
@@ -169,13 +168,13 @@ def test_unknown_policy_gets_a_suggestion():
         ("network", "bas", "nodes.sensor.tasks[0].params.network", "unknown network 'bas'; did you mean 'bus'?"),
     ],
 )
-def test_program_parameters_that_name_things_are_checked(key, value, path, message):
+def test_program_parameters_that_name_things_are_checked(key, value, path, message, base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["params"][key] = value
     assert _problems(raw) == {path: message}
 
 
-def test_reference_and_suffix_conventions_are_checked():
+def test_reference_and_suffix_conventions_are_checked(base):
     raw = base()
     raw["nodes"]["actuator"]["handlers"][0]["params"] = {"network": "bus", "reference": "rr", "out_channel": "v"}
     assert _problems(raw) == {
@@ -184,7 +183,7 @@ def test_reference_and_suffix_conventions_are_checked():
     }
 
 
-def test_defaulted_program_parameters_are_checked_too():
+def test_defaulted_program_parameters_are_checked_too(base):
     raw = base()
     del raw["io"]["u"]  # zzt_actuator's out_channel defaults to 'u'
     assert _problems(raw) == {
@@ -192,7 +191,7 @@ def test_defaulted_program_parameters_are_checked_too():
     }
 
 
-def test_io_ports_must_exist_on_the_plant():
+def test_io_ports_must_exist_on_the_plant(base):
     raw = base()
     raw["io"]["y"]["output"] = 1
     raw["io"]["u"]["input"] = "w"
@@ -202,7 +201,7 @@ def test_io_ports_must_exist_on_the_plant():
     }
 
 
-def test_io_channel_type_and_fields():
+def test_io_channel_type_and_fields(base):
     raw = base()
     raw["io"]["enc"] = {"type": "encoder", "output": "y", "step": 5e-5, "tick": "10 us"}
     raw["io"]["y"]["saturation"] = [1, -1]
@@ -217,7 +216,7 @@ def test_io_channel_type_and_fields():
     assert enc.tick == 10 * US and enc.mode == "exact" and enc.output == "y"
 
 
-def test_io_without_a_plant_is_an_error():
+def test_io_without_a_plant_is_an_error(base):
     raw = base()
     del raw["plant"]
     assert _problems(raw) == {
@@ -226,7 +225,7 @@ def test_io_without_a_plant_is_an_error():
     }
 
 
-def test_disturbances_name_plant_inputs_and_signals():
+def test_disturbances_name_plant_inputs_and_signals(base):
     raw = base()
     raw["plant"]["disturbances"] = {"d": "r", "q": "load"}
     problems = [p for p in check_scenario(raw) if p.is_error]
@@ -237,7 +236,7 @@ def test_disturbances_name_plant_inputs_and_signals():
     }
 
 
-def test_record_of_unknown_names_is_a_warning():
+def test_record_of_unknown_names_is_a_warning(base):
     raw = base()
     raw["record"] = ["y", "y[0]", "ctl_state"]
     assert _problems(raw) == {}
@@ -247,7 +246,7 @@ def test_record_of_unknown_names_is_a_warning():
     }
 
 
-def test_invalid_names_are_rejected():
+def test_invalid_names_are_rejected(base):
     raw = base()
     raw["nodes"]["bad.name"] = {"policy": "edf"}
     raw["name"] = "my scenario"
@@ -257,10 +256,10 @@ def test_invalid_names_are_rejected():
     }
 
 
-def test_validated_plugin_params_are_attached_with_defaults():
+def test_validated_plugin_params_are_attached_with_defaults(base):
     sc = load_scenario(base())
     params = sc.nodes["sensor"].tasks[0].validated_params()
-    assert isinstance(params, ZztSampler.Params)
+    assert isinstance(params, registry.lookup("program", "zzt_sampler").Params)
     assert (params.channel, params.bits, params.to) == ("y", 80, "controller")
     net = sc.networks["bus"].validated_params()
     assert net.bitrate == 80_000.0 and net.nodes == ["sensor", "controller", "actuator"]
@@ -269,20 +268,20 @@ def test_validated_plugin_params_are_attached_with_defaults():
     assert sc.plant.validated_params().gain == 2.0
 
 
-def test_validated_params_work_without_the_loader():
+def test_validated_params_work_without_the_loader(base):
     from netsim.scenario.schema import Scenario
 
     sc = Scenario.model_validate(base())
     assert sc.plant.validated_params().pole == 1.0
 
 
-def test_scenario_is_read_only():
+def test_scenario_is_read_only(base):
     sc = load_scenario(base())
     with pytest.raises(Exception):
         sc.seed = 3  # type: ignore[misc]
 
 
-def test_spec_lookups():
+def test_spec_lookups(base):
     sc = load_scenario(base())
     assert sc.node_networks("sensor") == ["bus"]
     assert sc.nodes["actuator"].handler("act").priority == 0
@@ -290,25 +289,25 @@ def test_spec_lookups():
     assert isinstance(sc.nodes["actuator"].handlers[0], HandlerSpec)
 
 
-def test_overrides_apply_before_validation():
+def test_overrides_apply_before_validation(base):
     sc = load_scenario(base(), overrides={"nodes.sensor.tasks[0].period": "5 ms", "plant.x0": [1, 0]})
     assert sc.nodes["sensor"].tasks[0].period == 5 * MS and sc.plant.x0 == [1.0, 0.0]
 
 
-def test_bad_override_is_a_problem():
+def test_bad_override_is_a_problem(base):
     problems = check_scenario(base(), overrides={"nodes.sensr.tasks[0].period": "5 ms"})
     assert [(p.path, p.message) for p in problems] == [
         ("nodes.sensr.tasks[0].period", "cannot apply override: no key 'sensr' in 'nodes'; did you mean 'sensor'?")
     ]
 
 
-def test_loading_never_modifies_the_input_dict():
+def test_loading_never_modifies_the_input_dict(base):
     raw = base()
     load_scenario(raw, overrides={"seed": 4})
     assert raw == base()
 
 
-def test_baseline_overrides_are_checked_and_applied():
+def test_baseline_overrides_are_checked_and_applied(base):
     raw = base()
     raw["baseline"] = {"overrides": {"nodes.sensor.tasks[0].period": "1 ms"}}
     sc = load_scenario(raw)
@@ -321,7 +320,7 @@ def test_baseline_overrides_are_checked_and_applied():
     ]
 
 
-def test_a_broken_plugin_module_becomes_a_warning_not_a_crash(tmp_path, monkeypatch):
+def test_a_broken_plugin_module_becomes_a_warning_not_a_crash(tmp_path, monkeypatch, base):
     (tmp_path / "zzt_broken_plugins.py").write_text("raise RuntimeError('half written')\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setattr(registry, "PLUGIN_MODULES", [*registry.PLUGIN_MODULES, "zzt_broken_plugins"])
@@ -338,7 +337,7 @@ def test_a_broken_plugin_module_becomes_a_warning_not_a_crash(tmp_path, monkeypa
     sys.modules.pop("zzt_broken_plugins", None)
 
 
-def test_module_path_plugins_resolve(tmp_path, monkeypatch):
+def test_module_path_plugins_resolve(tmp_path, monkeypatch, base):
     (tmp_path / "zzt_user_plugins.py").write_text(
         textwrap.dedent(
             """
@@ -361,7 +360,7 @@ def test_module_path_plugins_resolve(tmp_path, monkeypatch):
     sys.modules.pop("zzt_user_plugins", None)
 
 
-def test_a_node_has_one_receiver_per_network():
+def test_a_node_has_one_receiver_per_network(base):
     raw = base()
     raw["nodes"]["actuator"]["tasks"] = [{"name": "also", "program": "zzt_idle", "release": "on_message:bus",
                                          "priority": 1}]
@@ -372,13 +371,13 @@ def test_a_node_has_one_receiver_per_network():
     }
 
 
-def test_overriding_a_loaded_scenario_keeps_derived_defaults_derived():
+def test_overriding_a_loaded_scenario_keeps_derived_defaults_derived(base):
     sc = load_scenario(base())
     again = load_scenario(sc, overrides={"nodes.sensor.tasks[0].period": "4 ms"})
     assert again.nodes["sensor"].tasks[0].deadline == 4 * MS  # the default deadline follows the period
     assert load_scenario(sc) is sc
 
 
-def test_trigger_is_written_with_only_its_kind():
+def test_trigger_is_written_with_only_its_kind(base):
     data = load_scenario(base()).resolved_dict()
     assert data["nodes"]["actuator"]["handlers"][0]["trigger"] == {"on_message": "bus"}

@@ -7,13 +7,12 @@ import json
 
 import pytest
 import yaml
-from scenario_fakes import base
 
 from netsim.scenario import dump_resolved, load_scenario, resolved_dict, scenario_hash
 from netsim.timebase import MS
 
 
-def test_resolved_dict_fills_defaults_and_writes_times_as_text():
+def test_resolved_dict_fills_defaults_and_writes_times_as_text(base):
     data = load_scenario(base()).resolved_dict()
     task = data["nodes"]["sensor"]["tasks"][0]
     assert task["period"] == "10 ms" and task["deadline"] == "10 ms" and task["release"] == "periodic"
@@ -28,7 +27,7 @@ def test_resolved_dict_fills_defaults_and_writes_times_as_text():
     assert resolved_dict(load_scenario(base())) == data
 
 
-def test_resolved_scenario_loads_back_equal(tmp_path):
+def test_resolved_scenario_loads_back_equal(tmp_path, base):
     sc = load_scenario(base())
     path = tmp_path / "resolved.yaml"
     path.write_text(dump_resolved(sc))
@@ -38,7 +37,7 @@ def test_resolved_scenario_loads_back_equal(tmp_path):
     assert yaml.safe_load(path.read_text()) == sc.resolved_dict()  # plain YAML any reader understands
 
 
-def test_hash_is_sha256_of_the_canonical_resolved_json_without_output():
+def test_hash_is_sha256_of_the_canonical_resolved_json_without_output(base):
     sc = load_scenario(base())
     data = sc.resolved_dict()
     del data["output"]
@@ -46,7 +45,7 @@ def test_hash_is_sha256_of_the_canonical_resolved_json_without_output():
     assert scenario_hash(sc) == expected
 
 
-def test_hash_ignores_spelling_defaults_key_order_and_output():
+def test_hash_ignores_spelling_defaults_key_order_and_output(base):
     reference = scenario_hash(base())
     raw = base()
     raw["nodes"]["sensor"]["tasks"][0]["period"] = "0.01 s"
@@ -69,11 +68,11 @@ def test_hash_ignores_spelling_defaults_key_order_and_output():
         ("description", "other"),
     ],
 )
-def test_hash_changes_with_anything_that_can_change_results(path, value):
+def test_hash_changes_with_anything_that_can_change_results(path, value, base):
     assert scenario_hash(load_scenario(base(), overrides={path: value})) != scenario_hash(base())
 
 
 @pytest.mark.xfail(reason="netsim.timebase.format_time rounds times >= 1 s to the microsecond (reported to lead)")
-def test_resolved_times_keep_every_nanosecond():
+def test_resolved_times_keep_every_nanosecond(base):
     sc = load_scenario(base(), overrides={"duration": "1.0000005 s"})
     assert load_scenario(sc.resolved_dict()).duration == 1_000_000_500
