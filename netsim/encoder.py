@@ -17,6 +17,9 @@ old)``; an excursion that returns to the old count between two ticks is not seen
     until then, confirm on the plant and report; recompute whenever the plant's inputs change. Same
     ``(count, direction, stamp)`` sequence as polling with a small fraction of the events.
 
+The position output should have no direct feedthrough (``D = 0``): at an instant where the input changes
+on a tick, the two modes may otherwise read the output before or after the change.
+
 With process noise the noise enters at the plant's propagation instants, which differ between the two modes
 (polling propagates at every tick), so the modes then agree in distribution, not sample by sample.
 """
@@ -173,7 +176,11 @@ class Encoder:
     def _predict(self) -> None:
         env = self.env
         now = int(env.now)
-        self.plant.advance_to(now)
+        self._busy = True  # a noisy advance notifies listeners: do not re-enter
+        try:
+            self.plant.advance_to(now)
+        finally:
+            self._busy = False
         cand, examined, wake = self.plant.predict_exit(
             self.output, self.delta, self.count, self._next_tick, self.tick_ns, self.horizon_ticks
         )

@@ -552,12 +552,13 @@ class Plant:
 
     # ---------------------------------------------------------------- sampling and actuation
     def output(self, t_ns: int | None = None) -> np.ndarray:
-        """Outputs at ``t_ns`` (default now), after advancing the plant there."""
+        """Outputs at ``t_ns`` after advancing the plant there (default: ``env.now``, or the plant's own time
+        when that is later or the plant is unbound)."""
         self.advance_to(self._now(t_ns))
         return self._output_now()
 
     def state(self, t_ns: int | None = None) -> np.ndarray:
-        """State (a copy) at ``t_ns`` (default now), after advancing the plant there."""
+        """State (a copy) at ``t_ns`` after advancing the plant there (default as in :meth:`output`)."""
         self.advance_to(self._now(t_ns))
         return self._state_now()
 

@@ -238,6 +238,8 @@ class LTIPlant(_LTIBase):
         self._zu = np.zeros(nz + m)
         self._zu[:nz] = np.concatenate(z0)
         self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray | None]] = OrderedDict()
+        self._last_h = -1
+        self._last_entry: tuple[np.ndarray, np.ndarray | None] = (np.zeros(0), None)
         self._rows: dict[tuple[int, int, int], np.ndarray] = {}
         self.expm_count = 0
         self._update_effective_input(self._t)
@@ -287,7 +289,11 @@ class LTIPlant(_LTIBase):
         h = t - self._t
         if h <= 0 or t >= self._next_break or not self._started or self._has_held or self._record_events:
             return super().advance_to(t)
-        G, L = self.transition(h)
+        if h == self._last_h:  # periodic sampling: skip the cache look-up
+            G, L = self._last_entry
+        else:
+            G, L = self._last_entry = self.transition(h)
+            self._last_h = h
         z = G @ self._zu
         if L is not None:
             z += L @ self._rng.standard_normal(self._nz)  # type: ignore[union-attr]

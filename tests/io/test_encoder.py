@@ -156,3 +156,28 @@ def test_on_edge_can_change_the_input_synchronously():
     exact = run("exact")
     assert len(exact) > 5
     assert exact == run("polling")
+
+
+def test_exact_mode_on_a_noisy_plant_reports_the_count_it_sees():
+    # With process noise the two modes agree in distribution only; each report must still be the count of
+    # the plant output at its stamp.
+    env = SimEnv(seed=1)
+    plant = LTIPlant([[0.0, 1.0], [0.0, -1.0]], [0.0, 1.0], [1.0, 0.0], None, x0=[0.0, 0.2],
+                     process_noise=[0.0, 0.05])
+    plant.bind(env)
+    delta = 1e-4
+    seen = []
+
+    def isr(c, d, s):
+        seen.append((c, math.floor(plant.output(s)[0] / delta)))
+
+    def actuator():
+        while True:
+            plant.set_input(0, 0.2 * math.sin(env.now / S * 7))
+            yield env.timeout(1 * MS)
+
+    env.process(actuator())
+    Encoder(plant, 0, step=delta, tick_ns=10 * US).start(env, isr)
+    env.run(200 * MS)
+    assert len(seen) > 50
+    assert all(c == ref for c, ref in seen)
