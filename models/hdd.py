@@ -313,3 +313,6 @@ def hdd_et(design_params: dict | HddControlParams, *, reference, trigger):
 
 
 hdd_et.Params = HddControlParams  # type: ignore[attr-defined]
+
+# the case-study report registers itself as kind "report" "hdd"
+import models.hdd_report  # noqa: E402,F401
