@@ -240,7 +240,7 @@ class LTIPlant(_LTIBase):
         self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray | None]] = OrderedDict()
         self._last_h = -1
         self._last_entry: tuple[np.ndarray, np.ndarray | None] = (np.zeros(0), None)
-        self._rows: dict[tuple[int, int, int], np.ndarray] = {}
+        self._rows: dict[tuple[int, int], np.ndarray] = {}
         self.expm_count = 0
         self._update_effective_input(self._t)
 
@@ -333,9 +333,9 @@ class LTIPlant(_LTIBase):
     # ---------------------------------------------------------------- prediction for exact encoders
     def _rows_for(self, idx: int, tick: int, count: int) -> np.ndarray:
         """Rows ``r_j = [C D][idx] P^j`` (``P`` the tick transition on ``[z; u]``), j < count."""
-        key = (idx, tick, count)
+        key = (idx, tick)
         R = self._rows.get(key)
-        if R is None:
+        if R is None or R.shape[0] < count:
             nz, m = self._nz, self.n_inputs
             G, _ = self.transition(tick)
             P = np.eye(nz + m)
@@ -346,7 +346,7 @@ class LTIPlant(_LTIBase):
                 P = P @ P
             R = np.ascontiguousarray(R[:count])
             self._rows[key] = R
-        return R
+        return R[:count]
 
     def predict_exit(
         self, output: int, step: float, count: int, t_first: int, tick: int, max_ticks: int

@@ -378,6 +378,14 @@ class NonlinearPlant(Plant):
             {int(b) for s in self._sources if s.kind == "piecewise" and hasattr(s.signal, "breakpoints")
              for b in s.signal.breakpoints(self._t, t_end)}
         ) + [t_end]
+        switches = self.mode_switches  # predictions do not count as the plant's own mode switches
+        try:
+            return self._predict(y_of, band, breaks, step, count, t_first, tick, max_ticks, barrier)
+        finally:
+            self.mode_switches = switches
+
+    def _predict(self, y_of: Callable[..., float], band: tuple[Guard, Guard], breaks: list[int], step: float,
+                 count: int, t_first: int, tick: int, max_ticks: int, barrier: int) -> tuple[int | None, int, int]:
         t, x, mode = self._t, self._x.copy(), self.mode
         u = self._ueff.copy()
         y_now = y_of(t / S, x, self._input_fn(u)(t / S))

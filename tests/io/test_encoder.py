@@ -181,3 +181,20 @@ def test_exact_mode_on_a_noisy_plant_reports_the_count_it_sees():
     env.run(200 * MS)
     assert len(seen) > 50
     assert all(c == ref for c, ref in seen)
+
+
+def test_exact_and_polling_agree_with_a_noisy_discrete_disturbance_model():
+    # the disturbance draws its noise at its own instants (every 1 ms), whatever the plant's propagation
+    # steps, so both modes see the same sample path; the exact encoder must stop predicting at each draw
+    from netsim.plant import LTIDisturbance
+
+    def make():
+        plant = _cart([0.0, 0.02])
+        plant.add_disturbance(0, LTIDisturbance([[0.9]], [1.0], [1.0], dt_ns=1 * MS, noise_cov=4.0))
+        return plant
+
+    kw = dict(step=2e-5, tick=10 * US, duration=100 * MS, inputs=False)
+    exact, enc = _run(make, "exact", **kw)
+    polled, _ = _run(make, "polling", **kw)
+    assert len(exact) > 20
+    assert exact == polled

@@ -250,3 +250,13 @@ def test_input_change_listeners_are_called_with_the_instant():
     plant.set_input(0, 1.0, 6 * MS)  # same value: no change
     plant.set_input(0, 2.0, 7 * MS)
     assert seen == [5 * MS, 7 * MS]
+
+
+def test_generic_callable_disturbance_is_held_between_propagation_instants():
+    # a ramp d = t is not piecewise constant: it is sampled at each propagation start and held, so
+    # x' = d propagated in 1 ms steps gives the left Riemann sum sum_{k<1000} k 1e-3 * 1e-3 = 0.4995
+    plant = LTIPlant([[0.0]], [[1.0]], [[1.0]], None)
+    plant.add_disturbance(0, make_signal({"type": "ramp", "slope": 1.0}))
+    for k in range(1, 1001):
+        plant.advance_to(k * MS)
+    assert plant.output()[0] == pytest.approx(0.4995, rel=1e-12)
