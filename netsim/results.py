@@ -138,27 +138,37 @@ def signals_table(
     return frame.reset_index(drop=True)
 
 
+def _ns_column(values: list[Any]) -> np.ndarray:
+    """ns values (None allowed) -> float seconds array (None -> NaN)."""
+    return np.array([np.nan if v is None else v for v in values], dtype=float) / S
+
+
 def jobs_table(records: Iterable[Any], node: str | None = None) -> pd.DataFrame:
     """Jobs table from kernel :class:`JobRecord` objects (times in ns, converted to seconds)."""
-    rows = []
-    for r in records:
-        rows.append(
-            {
-                "node": _field(r, "node", node),
-                "task": _field(r, "task"),
-                "job_id": _field(r, "job_id"),
-                "release_s": _sec(_field(r, "release")),
-                "start_s": _sec(_field(r, "start")),
-                "finish_s": _sec(_field(r, "finish")),
-                "response_s": _sec(_field(r, "response")),
-                "deadline_s": _sec(_field(r, "deadline")),
-                "deadline_met": _field(r, "deadline_met"),
-                "preemptions": _field(r, "preemptions", 0),
-                "cpu_time_s": _sec(_field(r, "cpu_time", 0)),
-                "killed": bool(_field(r, "killed", False)),
-            }
-        )
-    frame = pd.DataFrame(rows, columns=JOB_COLUMNS)
+    recs = list(records)
+    if not recs:
+        return pd.DataFrame(columns=JOB_COLUMNS)
+
+    def col(name: str, default: Any = None) -> list[Any]:
+        return [_field(r, name, default) for r in recs]
+
+    frame = pd.DataFrame(
+        {
+            "node": [n if n is not None else node for n in col("node", node)],
+            "task": col("task"),
+            "job_id": col("job_id"),
+            "release_s": _ns_column(col("release")),
+            "start_s": _ns_column(col("start")),
+            "finish_s": _ns_column(col("finish")),
+            "response_s": _ns_column(col("response")),
+            "deadline_s": _ns_column(col("deadline")),
+            "deadline_met": pd.array(col("deadline_met"), dtype="boolean"),
+            "preemptions": col("preemptions", 0),
+            "cpu_time_s": _ns_column(col("cpu_time", 0)),
+            "killed": [bool(v) for v in col("killed", False)],
+        },
+        columns=JOB_COLUMNS,
+    )
     return frame
 
 
