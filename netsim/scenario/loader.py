@@ -278,7 +278,7 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None) ->
     if scenario is None:
         raise ScenarioError(problems or [Problem("", "invalid scenario")])
     for p in problems:
-        log.warning("%s", p)
+        log.warning("%s", p.describe(tag=False))
     return scenario
 
 

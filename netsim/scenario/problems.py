@@ -52,14 +52,18 @@ class Problem:
         return replace(self, line=self.line if self.line is not None else line, file=self.file or file)
 
     def __str__(self) -> str:
+        return self.describe()
+
+    def describe(self, *, tag: bool = True) -> str:
+        """``file:line: [warning: ]path: message`` (``tag=False`` leaves out the severity tag)."""
         where = ""
         if self.file:
             where = f"{self.file}:{self.line}: " if self.line is not None else f"{self.file}: "
         elif self.line is not None:
             where = f"line {self.line}: "
-        tag = "warning: " if self.severity == WARNING else ""
+        mark = "warning: " if tag and self.severity == WARNING else ""
         body = f"{self.path}: {self.message}" if self.path else self.message
-        return f"{where}{tag}{body}"
+        return f"{where}{mark}{body}"
 
 
 def sort_problems(problems: Iterable[Problem]) -> list[Problem]:
