@@ -1,0 +1,255 @@
+"""Response surfaces of two-factor sweeps (the GPI surface of Cuenca et al., Fig. 5) and their arg-min.
+
+From a sweep's ``summary.csv`` (one row per run), :func:`load_surface` builds ``z`` over the grid of the two
+factors ``x`` and ``y`` (mean over replicates, failed runs left out); :func:`find_optimum` returns the cell
+with the lowest ``z`` (ties: the first cell in sweep order); :func:`surface_from_summary` writes
+``surface.csv`` (the stored surface, long form), ``optimum.json`` and ``surface.png`` (a 3-D surface and a
+heat map with the optimum marked, log axes for log-spaced factors).
+
+Examples
+--------
+>>> surf = load_surface("reports/hdd_gpi/summary.csv", x="sigma_s", y="sigma_c", z="GPI")  # doctest: +SKIP
+>>> find_optimum(surf)["x_value"]                                                      # doctest: +SKIP
+1e-05
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from netsim.errors import ConfigError
+
+__all__ = [
+    "Surface",
+    "load_surface",
+    "find_optimum",
+    "plot_surface",
+    "surface_from_summary",
+    "describe_optimum",
+]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class Surface:
+    """``z`` on the grid ``xs`` x ``ys``.
+
+    Attributes
+    ----------
+    cells
+        Long form, one row per (x, y) cell in sweep order: ``x, y, z`` (mean over ok runs), ``runs`` (ok
+        runs in the cell), ``index`` (first run index of the cell), plus the mean of every other numeric
+        summary column (``metric`` columns, for the optimum's record).
+    xs, ys
+        Sorted distinct factor values.
+    Z
+        ``len(ys) x len(xs)`` array (NaN where no run succeeded).
+    """
+
+    x: str
+    y: str
+    z: str
+    cells: pd.DataFrame
+    xs: np.ndarray
+    ys: np.ndarray
+    Z: np.ndarray
+    logx: bool = False
+    logy: bool = False
+
+
+def load_surface(
+    summary: str | Path | pd.DataFrame, *, x: str, y: str, z: str = "GPI", logx: bool = False, logy: bool = False
+) -> Surface:
+    """Build the surface ``z(x, y)`` from a sweep summary (path or DataFrame).
+
+    Raises
+    ------
+    ConfigError
+        When a column is missing or a factor is not numeric.
+    """
+    df = summary if isinstance(summary, pd.DataFrame) else pd.read_csv(summary, keep_default_na=False, na_values=[""])
+    for col in (x, y, z):
+        if col not in df.columns:
+            raise ConfigError(f"surface: no column '{col}' in the summary (columns: {', '.join(map(str, df.columns))})")
+    df = df.sort_values("index") if "index" in df.columns else df.reset_index(names="index")
+    try:
+        xv = df[x].astype(float)
+        yv = df[y].astype(float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"surface: factors '{x}' and '{y}' must be numeric") from None
+    ok = df["status"].astype(str) == "ok" if "status" in df.columns else pd.Series(True, index=df.index)
+    zv = pd.to_numeric(df[z], errors="coerce").where(ok)
+    frame = pd.DataFrame({"x": xv.to_numpy(), "y": yv.to_numpy(), "z": zv.to_numpy(), "ok": ok.to_numpy(),
+                          "index": df["index"].to_numpy()})
+    skip = {x, y, z, "index", "replicate", "seed", "status", "error", "folder"}
+    extra = [c for c in df.columns if c not in skip and pd.api.types.is_numeric_dtype(df[c])]
+    for c in extra:
+        frame[f"metric:{c}"] = df[c].where(ok).to_numpy()
+    grouped = frame.groupby(["x", "y"], sort=False)
+    cells = grouped.agg(
+        z=("z", "mean"), runs=("ok", "sum"), index=("index", "min"),
+        **{c: (c, "mean") for c in frame.columns if c.startswith("metric:")},
+    ).reset_index()
+    cells = cells.sort_values("index", kind="stable").reset_index(drop=True)
+    cells["runs"] = cells["runs"].astype(int)
+    xs = np.unique(cells["x"].to_numpy(float))
+    ys = np.unique(cells["y"].to_numpy(float))
+    Z = np.full((ys.size, xs.size), np.nan)
+    ix = np.searchsorted(xs, cells["x"].to_numpy(float))
+    iy = np.searchsorted(ys, cells["y"].to_numpy(float))
+    Z[iy, ix] = cells["z"].to_numpy(float)
+    return Surface(x, y, z, cells, xs, ys, Z, logx, logy)
+
+
+def find_optimum(surface: Surface) -> dict[str, Any]:
+    """The cell with the lowest ``z`` (first in sweep order among equals).
+
+    Returns
+    -------
+    dict
+        ``x, y, z`` (names), ``x_value, y_value, z_value``, ``index`` (first run of the cell), ``runs``,
+        ``metrics`` (mean of the other numeric columns in that cell), ``cells`` and ``missing`` (cells
+        without a successful run).
+
+    Raises
+    ------
+    ConfigError
+        When no cell has a value.
+    """
+    z = surface.cells["z"].to_numpy(float)
+    if not np.isfinite(z).any():
+        raise ConfigError(f"surface: no successful run has a finite '{surface.z}'; nothing to minimise")
+    k = int(np.nanargmin(np.where(np.isfinite(z), z, np.nan)))
+    row = surface.cells.iloc[k]
+    metrics = {c.removeprefix("metric:"): _num(row[c]) for c in surface.cells.columns if c.startswith("metric:")}
+    return {
+        "x": surface.x,
+        "y": surface.y,
+        "z": surface.z,
+        "x_value": float(row["x"]),
+        "y_value": float(row["y"]),
+        "z_value": float(row["z"]),
+        "index": int(row["index"]),
+        "runs": int(row["runs"]),
+        "cells": int(len(surface.cells)),
+        "missing": int((~np.isfinite(z)).sum()),
+        "metrics": metrics,
+    }
+
+
+def _num(v: Any) -> float | None:
+    f = float(v)
+    return f if math.isfinite(f) else None
+
+
+def describe_optimum(opt: dict[str, Any]) -> str:
+    """``optimum: GPI = 0.1763 at sigma_s = 1e-05, sigma_c = 0.0132 (run 220)``."""
+    return (
+        f"optimum: {opt['z']} = {opt['z_value']:.6g} at {opt['x']} = {opt['x_value']:.6g}, "
+        f"{opt['y']} = {opt['y_value']:.6g} (run {opt['index']})"
+    )
+
+
+def _log_ticks(ax: Any, axis: str, values: np.ndarray) -> None:
+    lo, hi = math.floor(np.log10(values.min())), math.ceil(np.log10(values.max()))
+    ticks = np.arange(lo, hi + 1)
+    getattr(ax, f"set_{axis}ticks")(ticks)
+    getattr(ax, f"set_{axis}ticklabels")([f"1e{t:d}" for t in ticks])
+
+
+def plot_surface(surface: Surface, optimum: dict[str, Any] | None, path: str | Path) -> Path:
+    """Save a figure: 3-D surface (left) and heat map with the optimum marked (right)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    xs, ys, Z = surface.xs, surface.ys, surface.Z
+    px = np.log10(xs) if surface.logx else xs
+    py = np.log10(ys) if surface.logy else ys
+    X, Y = np.meshgrid(px, py)
+    fig = plt.figure(figsize=(13, 5.2))
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    finite = np.isfinite(Z)
+    lo, hi = (float(np.nanmin(Z)), float(np.nanmax(Z))) if finite.any() else (0.0, 1.0)
+    # plot_surface mis-colours masked arrays: draw missing cells at NaN (left as holes)
+    ax3.plot_surface(X, Y, np.where(finite, Z, np.nan), cmap="viridis", vmin=lo, vmax=hi, rstride=1, cstride=1,
+                     linewidth=0.2, edgecolor="k", antialiased=True)
+    ax3.set_xlabel(surface.x)
+    ax3.set_ylabel(surface.y)
+    ax3.set_zlabel(surface.z)
+    if surface.logx:
+        _log_ticks(ax3, "x", xs)
+    if surface.logy:
+        _log_ticks(ax3, "y", ys)
+    ax = fig.add_subplot(1, 2, 2)
+    mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(Z), shading="nearest", cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=surface.z)
+    if surface.logx:
+        ax.set_xscale("log")
+    if surface.logy:
+        ax.set_yscale("log")
+    ax.set_xlabel(surface.x)
+    ax.set_ylabel(surface.y)
+    if optimum is not None:
+        ox, oy, oz = optimum["x_value"], optimum["y_value"], optimum["z_value"]
+        ax.plot([ox], [oy], marker="*", color="red", markersize=16, markeredgecolor="white", linestyle="none",
+                label=f"min {surface.z} = {oz:.4g}\n{surface.x} = {ox:.3g}, {surface.y} = {oy:.3g}")
+        ax.legend(loc="upper left", fontsize=8, framealpha=0.8)
+        ax3.scatter([math.log10(ox) if surface.logx else ox], [math.log10(oy) if surface.logy else oy], [oz],
+                    color="red", s=60, depthshade=False)
+    ax.set_title(f"{surface.z} over {surface.x} x {surface.y}")
+    fig.tight_layout()
+    out = Path(path)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
+def surface_from_summary(
+    summary_path: str | Path,
+    *,
+    x: str,
+    y: str,
+    z: str = "GPI",
+    logx: bool = False,
+    logy: bool = False,
+    out: str | Path | None = None,
+    plot: bool = True,
+) -> tuple[dict[str, Any], dict[str, Path]]:
+    """Surface, optimum and figure of a sweep summary; writes ``surface.csv``, ``optimum.json``, ``surface.png``.
+
+    Returns
+    -------
+    (optimum, files)
+        The optimum (see :func:`find_optimum`) and the written files by name.
+    """
+    summary_path = Path(summary_path)
+    folder = Path(out) if out is not None else summary_path.parent
+    surf = load_surface(summary_path, x=x, y=y, z=z, logx=logx, logy=logy)
+    opt = find_optimum(surf)
+    opt["logx"], opt["logy"] = logx, logy
+    files: dict[str, Path] = {}
+    cells = surf.cells[["index", "x", "y", "z", "runs"]].rename(columns={"x": x, "y": y, "z": z})
+    files["surface"] = folder / "surface.csv"
+    from netsim.sweep.summary import format_value
+
+    lines = [",".join(cells.columns)]
+    for row in cells.itertuples(index=False):
+        lines.append(",".join(format_value(v.item() if hasattr(v, "item") else v) for v in row))
+    files["surface"].write_text("\n".join(lines) + "\n", encoding="utf-8")
+    files["optimum"] = folder / "optimum.json"
+    files["optimum"].write_text(json.dumps(opt, indent=1, sort_keys=True, allow_nan=False), encoding="utf-8")
+    if plot:
+        files["figure"] = plot_surface(surf, opt, folder / "surface.png")
+    log.info("%s", describe_optimum(opt))
+    return opt, files

@@ -1,0 +1,261 @@
+"""Where sweep points run: in this process, a local process pool, or a Dask cluster -- one code path.
+
+Every backend is a :class:`concurrent.futures.Executor`: a :class:`SerialExecutor` (runs each call at
+``submit``), a :class:`~concurrent.futures.ProcessPoolExecutor` (the default, all cores), or the executor a
+``dask.distributed.Client`` hands out (``client.get_executor()``). The sweep submits *chunks* of points
+(:func:`run_chunk`), so tiny runs do not pay the per-task overhead of a cluster one by one.
+
+A worker runs each point with the *point function* (``netsim.runner.run_point`` unless a caller injects
+another picklable module-level function with the same signature ``fn(raw, out, seed) -> metrics``) and
+writes the point's record ``point.json`` into the point's folder as soon as the point is done, so an
+interrupted sweep keeps every finished point.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import os
+import signal
+from concurrent.futures import Executor, Future, ProcessPoolExecutor
+from pathlib import Path
+from typing import Any, Callable, Iterator, Mapping
+
+from netsim.errors import NetsimError
+
+__all__ = [
+    "PointFn",
+    "SerialExecutor",
+    "SchedulerUnreachable",
+    "open_executor",
+    "run_chunk",
+    "read_record",
+    "RECORD_NAME",
+    "default_point_fn",
+]
+
+log = logging.getLogger(__name__)
+
+#: ``fn(raw_scenario, run_folder, seed) -> {metric: value}``
+PointFn = Callable[[Mapping[str, Any], Path, int], Mapping[str, float]]
+
+#: The per-point record written by the worker when a point finishes (ok or error).
+RECORD_NAME = "point.json"
+
+_SINGLE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+class SchedulerUnreachable(NetsimError):
+    """The Dask scheduler named by the user did not answer in time."""
+
+
+def default_point_fn(raw: Mapping[str, Any], out: Path, seed: int) -> dict[str, float]:
+    """The production point function: :func:`netsim.runner.run_point` (imported in the worker)."""
+    from netsim.runner import run_point
+
+    return run_point(raw, out, seed)
+
+
+class SerialExecutor(Executor):
+    """Runs each submitted call at once, in this process (the 1-worker backend; simplest to debug)."""
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:  # noqa: D102
+        fut: Future = Future()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except Exception as exc:  # noqa: BLE001 - delivered through the future like any executor
+            fut.set_exception(exc)
+        return fut
+
+
+def _init_worker() -> None:
+    """Pool worker start: single-threaded BLAS, ignore Ctrl-C (the parent stops the sweep cleanly)."""
+    os.environ.update(_SINGLE_THREAD_ENV)
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    with contextlib.suppress(ImportError):
+        from threadpoolctl import threadpool_limits
+
+        threadpool_limits(1)
+    with contextlib.suppress(ValueError):  # not the main thread
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _probe_scheduler(address: str, timeout: float) -> None:
+    """Ask the scheduler at ``address`` for its identity; raise :class:`SchedulerUnreachable` after ``timeout``.
+
+    ``Client(address, timeout=...)`` alone can wait forever on a socket that accepts but never answers, so
+    the whole handshake runs under one deadline here.
+    """
+
+    async def ask() -> Any:
+        from distributed.core import rpc
+
+        remote = rpc(address, timeout=timeout)
+        try:
+            return await remote.identity()
+        finally:
+            await remote.close_rpc()
+
+    async def main() -> Any:
+        return await asyncio.wait_for(ask(), timeout)
+
+    try:
+        ident = asyncio.run(main())
+    except (TimeoutError, asyncio.TimeoutError):
+        raise SchedulerUnreachable(
+            f"no Dask scheduler answered at '{address}' within {timeout:g} s; start one "
+            f"(`dask scheduler` + `dask worker {address}`) or drop --scheduler to use the local process pool"
+        ) from None
+    except Exception as exc:  # noqa: BLE001 - any failure here is "not a scheduler we can talk to"
+        raise SchedulerUnreachable(
+            f"cannot talk to a Dask scheduler at '{address}': {type(exc).__name__}: {exc}; "
+            "check the address (tcp://host:8786) or drop --scheduler to use the local process pool"
+        ) from None
+    if not isinstance(ident, dict) or ident.get("type") != "Scheduler":
+        raise SchedulerUnreachable(f"'{address}' answered but is not a Dask scheduler ({ident!r:.80})")
+
+
+@contextlib.contextmanager
+def open_executor(
+    *,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    local_dask: bool = False,
+    scratch: Path | None = None,
+    connect_timeout: float = 5.0,
+    cluster_kwargs: Mapping[str, Any] | None = None,
+) -> Iterator[tuple[Executor, int, str]]:
+    """Open the executor the options name; yield ``(executor, n_workers, description)``.
+
+    Parameters
+    ----------
+    workers
+        Number of worker processes (pool, local Dask). ``None`` = all cores; ``1`` (with no Dask option)
+        runs in this process.
+    scheduler
+        ``tcp://host:port`` of a running Dask scheduler.
+    local_dask
+        Start a Dask ``LocalCluster`` (scratch files in ``scratch``).
+    connect_timeout
+        Seconds to wait for the scheduler to answer.
+    cluster_kwargs
+        Extra ``LocalCluster`` arguments (e.g. ``{"processes": False}`` for an in-process cluster).
+
+    Raises
+    ------
+    SchedulerUnreachable
+        When ``scheduler`` does not answer within ``connect_timeout`` seconds.
+    """
+    os.environ.update(_SINGLE_THREAD_ENV)  # inherited by workers started from here
+    if scheduler or local_dask:
+        from distributed import Client, LocalCluster
+
+        cluster = None
+        if scheduler:
+            _probe_scheduler(scheduler, connect_timeout)
+            client = Client(scheduler, timeout=connect_timeout)
+            desc = f"dask scheduler {scheduler}"
+        else:
+            kwargs: dict[str, Any] = {
+                "n_workers": workers or os.cpu_count() or 1,
+                "threads_per_worker": 1,
+                "dashboard_address": None,
+            }
+            if scratch is not None:
+                scratch.mkdir(parents=True, exist_ok=True)
+                kwargs["local_directory"] = str(scratch)
+            kwargs.update(cluster_kwargs or {})
+            cluster = LocalCluster(**kwargs)
+            client = Client(cluster, timeout=connect_timeout)
+            desc = f"local dask cluster ({kwargs['n_workers']} workers)"
+        try:
+            n = sum(client.nthreads().values()) or 1
+            yield client.get_executor(pure=False), n, desc
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+        return
+    n = workers or os.cpu_count() or 1
+    if n <= 1:
+        yield SerialExecutor(), 1, "serial (this process)"
+        return
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
+    pool = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init_worker)
+    try:
+        yield pool, n, f"process pool ({n} workers)"
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _write_json(path: Path, data: Any) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1, sort_keys=True, allow_nan=True), encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def read_record(folder: Path) -> dict[str, Any] | None:
+    """The ``point.json`` of a point folder, or ``None`` when it is missing or unreadable."""
+    try:
+        data = json.loads((folder / RECORD_NAME).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def _hash(raw: Mapping[str, Any]) -> str:
+    from netsim.scenario import scenario_hash
+
+    return scenario_hash(dict(raw))
+
+
+@contextlib.contextmanager
+def _quiet_scenario_warnings() -> Iterator[None]:
+    """Scenario warnings were shown once for the base; do not repeat them for every point."""
+    logger = logging.getLogger("netsim.scenario")
+    old = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        yield
+    finally:
+        logger.setLevel(old)
+
+
+def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Run the points of one chunk in order; return (and write) one record per point.
+
+    Each task is ``{"index", "values", "replicate", "seed", "raw", "folder"}``. A point that raises an
+    ``Exception`` is recorded with ``status: "error"`` and its message; ``KeyboardInterrupt`` propagates.
+    """
+    os.environ.update(_SINGLE_THREAD_ENV)
+    out = []
+    with _quiet_scenario_warnings():
+        for task in tasks:
+            folder = Path(task["folder"])
+            folder.mkdir(parents=True, exist_ok=True)
+            (folder / RECORD_NAME).unlink(missing_ok=True)
+            record: dict[str, Any] = {
+                "index": task["index"],
+                "values": task["values"],
+                "replicate": task["replicate"],
+                "seed": task["seed"],
+                "scenario_hash": "",
+                "status": "ok",
+                "error": "",
+                "metrics": {},
+            }
+            try:
+                record["scenario_hash"] = _hash(task["raw"])
+                metrics = point_fn(task["raw"], folder, task["seed"])
+                record["metrics"] = {str(k): float(v) for k, v in dict(metrics).items()}
+            except Exception as exc:  # noqa: BLE001 - a failing point is a result of the sweep
+                record["status"] = "error"
+                record["error"] = f"{type(exc).__name__}: {exc}".strip()
+                record["metrics"] = {}
+            _write_json(folder / RECORD_NAME, record)
+            out.append(record)
+    return out

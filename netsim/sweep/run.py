@@ -1,0 +1,443 @@
+"""``run_sweep``: expand a sweep file, run its points on an executor, resume, summarise.
+
+Output folder layout::
+
+    <out>/sweep.json                 which sweep this folder holds (name, file, factors, number of runs)
+    <out>/points/<index>-<key>/      one run folder per run (scenario.yaml, *.csv, meta.json) + point.json
+    <out>/summary.csv                one row per run (see netsim.sweep.summary)
+    <out>/optimum.json, surface.png  when the sweep file has a ``surface:`` section (netsim.surface)
+    <out>/dask-scratch/              Dask's scratch space when a local Dask cluster ran the sweep
+
+A run is *finished* when its ``point.json`` says ``ok`` with the same seed and the same scenario hash
+(:func:`netsim.scenario.scenario_hash` of the point's scenario) as now; running the sweep again skips those
+and runs the rest (failed runs are retried). Ctrl-C stops the sweep: runs in progress are abandoned,
+finished ones are kept, ``summary.csv`` is written with ``status = pending`` for the rest, and the returned
+result has ``interrupted = True``.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import shutil
+import time
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from netsim.errors import ConfigError
+from netsim.sweep.executor import PointFn, default_point_fn, open_executor, read_record, run_chunk
+from netsim.sweep.spec import Point, Sweep, load_sweep
+from netsim.sweep.summary import write_summary
+
+__all__ = ["SweepResult", "run_sweep", "plan_chunks", "SWEEP_MARKER"]
+
+log = logging.getLogger(__name__)
+
+#: The file that marks a folder as holding a sweep.
+SWEEP_MARKER = "sweep.json"
+_OWNED = ("points", "summary.csv", "optimum.json", "surface.png", "surface.csv", SWEEP_MARKER, "dask-scratch")
+
+
+@dataclass
+class SweepResult:
+    """What :func:`run_sweep` did.
+
+    Attributes
+    ----------
+    name
+        The sweep name.
+    out_dir
+        The sweep's output folder.
+    summary
+        ``summary.csv`` as a DataFrame.
+    n_runs, n_ok, n_failed, n_pending
+        Runs in the sweep; finished ok; failed (error recorded); not run (interrupted).
+    n_executed, n_resumed
+        Runs executed by this call; runs found finished and skipped.
+    interrupted
+        True when Ctrl-C stopped the sweep.
+    optimum
+        The arg-min of the surface (``optimum.json``) when the sweep has a ``surface:`` section.
+    executor
+        Which backend ran the points.
+    wall_time_s
+        Wall time of this call.
+    """
+
+    name: str
+    out_dir: Path
+    summary: Any
+    n_runs: int
+    n_ok: int
+    n_failed: int
+    n_pending: int
+    n_executed: int
+    n_resumed: int
+    interrupted: bool
+    executor: str
+    wall_time_s: float
+    optimum: dict[str, Any] | None = None
+    files: dict[str, Path] = field(default_factory=dict)
+
+    @property
+    def summary_path(self) -> Path:
+        """``<out_dir>/summary.csv``."""
+        return self.out_dir / "summary.csv"
+
+    def describe(self) -> str:
+        """One paragraph for the terminal: counts, where the summary is, and the optimum."""
+        text = (
+            f"sweep {self.name}: {self.n_ok} ok, {self.n_failed} failed, {self.n_pending} not run "
+            f"of {self.n_runs} ({self.n_resumed} resumed, {self.n_executed} executed on {self.executor}, "
+            f"{self.wall_time_s:.1f} s)\nsummary: {self.summary_path}"
+        )
+        if self.optimum:
+            from netsim.surface import describe_optimum
+
+            text += "\n" + describe_optimum(self.optimum)
+        return text
+
+
+def plan_chunks(n: int, n_workers: int, max_chunk: int = 16) -> list[int]:
+    """Chunk sizes for ``n`` runs: guided scheduling, ``remaining / (4 workers)`` capped, shrinking to 1.
+
+    Big chunks first amortise the per-task overhead of the executor; small chunks last balance the tail.
+    """
+    sizes = []
+    left = n
+    while left > 0:
+        size = max(1, min(max_chunk, left // (4 * max(1, n_workers))))
+        sizes.append(size)
+        left -= size
+    return sizes
+
+
+def _prepare_out(out: Path, sweep: Sweep, overwrite: bool) -> None:
+    marker = out / SWEEP_MARKER
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"output '{out}' is a file; give a folder with --out")
+    if out.is_dir() and any(out.iterdir()):
+        held = None
+        if marker.exists():
+            try:
+                held = json.loads(marker.read_text(encoding="utf-8")).get("sweep")
+            except (OSError, ValueError, AttributeError):
+                held = "?"
+        if held != sweep.name and not overwrite:
+            what = f"sweep '{held}'" if held else "files that are not a sweep"
+            raise ConfigError(
+                f"output folder '{out}' holds {what}, not sweep '{sweep.name}'; choose another --out, "
+                "or pass --overwrite (overwrite=True) to replace it"
+            )
+        if overwrite:
+            for name in _OWNED:
+                target = out / name
+                if target.is_dir():
+                    shutil.rmtree(target)
+                elif target.exists():
+                    target.unlink()
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "points").mkdir(exist_ok=True)
+    info = {
+        "sweep": sweep.name,
+        "file": str(sweep.path) if sweep.path else None,
+        "base": str(sweep.base_path) if sweep.base_path else None,
+        "factors": {k: v.paths for k, v in sweep.spec.factors.items()},
+        "runs": len(sweep.points),
+        "spec": sweep.spec.model_dump(mode="json"),
+    }
+    marker.write_text(json.dumps(info, indent=1, sort_keys=True), encoding="utf-8")
+
+
+def _finished(point: Point, folder: Path, raw: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The point's record if it finished ok with the same seed and scenario hash as now."""
+    rec = read_record(folder)
+    if not rec or rec.get("status") != "ok" or rec.get("seed") != point.seed or rec.get("index") != point.index:
+        return None
+    from netsim.scenario import scenario_hash
+
+    try:
+        now = scenario_hash(dict(raw))
+    except ConfigError:
+        return None
+    return rec if rec.get("scenario_hash") == now else None
+
+
+def _task(sweep: Sweep, point: Point, out: Path, raw: dict[str, Any]) -> dict[str, Any]:
+    return {
+        "index": point.index,
+        "values": point.values,
+        "replicate": point.replicate,
+        "seed": point.seed,
+        "raw": raw,
+        "folder": str(out / point.folder),
+    }
+
+
+class _Progress:
+    """A rich progress bar on stderr (or nothing)."""
+
+    def __init__(self, enabled: bool, total: int, label: str) -> None:
+        self.bar = None
+        self.failed = 0
+        if not enabled:
+            return
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self.bar = Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("failed {task.fields[failed]}"),
+            TimeElapsedColumn(),
+            TextColumn("left"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            transient=False,
+        )
+        self.task = self.bar.add_task(label, total=total, failed=0)
+
+    def __enter__(self) -> "_Progress":
+        if self.bar is not None:
+            self.bar.start()
+        return self
+
+    def advance(self, records: list[dict[str, Any]]) -> None:
+        self.failed += sum(1 for r in records if r.get("status") != "ok")
+        if self.bar is not None:
+            self.bar.update(self.task, advance=len(records), failed=self.failed)
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+def _execute(
+    sweep: Sweep,
+    todo: list[tuple[Point, dict[str, Any]]],
+    out: Path,
+    point_fn: PointFn,
+    *,
+    workers: int | None,
+    scheduler: str | None,
+    local_dask: bool,
+    progress: bool,
+    chunk_size: int | None,
+    connect_timeout: float,
+    cluster_kwargs: Mapping[str, Any] | None,
+) -> tuple[bool, str]:
+    """Run ``todo`` (point, raw) on the chosen executor; return ``(interrupted, executor description)``."""
+    interrupted = False
+    with open_executor(
+        workers=workers,
+        scheduler=scheduler,
+        local_dask=local_dask,
+        scratch=out / "dask-scratch",
+        connect_timeout=connect_timeout,
+        cluster_kwargs=cluster_kwargs,
+    ) as (executor, n_workers, desc):
+        sizes = [chunk_size] * -(-len(todo) // chunk_size) if chunk_size else plan_chunks(len(todo), n_workers)
+        chunks, start = [], 0
+        for size in sizes:
+            part = todo[start : start + size]
+            start += size
+            if part:
+                chunks.append([_task(sweep, p, out, raw) for p, raw in part])
+        log.info("sweep %s: %d runs in %d chunks on %s", sweep.name, len(todo), len(chunks), desc)
+        in_flight: dict[Future, list[dict[str, Any]]] = {}
+        limit = 2 * n_workers
+        queue = iter(chunks)
+        with _Progress(progress, len(todo), f"{sweep.name}") as bar:
+            try:
+                while True:
+                    for chunk in queue:
+                        in_flight[executor.submit(run_chunk, point_fn, chunk)] = chunk
+                        if len(in_flight) >= limit:
+                            break
+                    if not in_flight:
+                        break
+                    done, _ = wait(list(in_flight), return_when=FIRST_COMPLETED)
+                    for fut in done:
+                        chunk = in_flight.pop(fut)
+                        try:
+                            records = fut.result()
+                        except KeyboardInterrupt:
+                            raise
+                        except BaseException as exc:  # noqa: BLE001 - a lost chunk fails its points, not the sweep
+                            records = [_lost(task, exc) for task in chunk]
+                        bar.advance(records)
+            except KeyboardInterrupt:
+                interrupted = True
+                log.warning("sweep %s interrupted; finished runs are kept, run it again to resume", sweep.name)
+                for fut in in_flight:
+                    fut.cancel()
+    return interrupted, desc
+
+
+def _lost(task: dict[str, Any], exc: BaseException) -> dict[str, Any]:
+    """Record of a point whose chunk never came back (worker crashed, could not be pickled ...)."""
+    from netsim.sweep.executor import RECORD_NAME, _write_json
+
+    rec = {
+        "index": task["index"],
+        "values": task["values"],
+        "replicate": task["replicate"],
+        "seed": task["seed"],
+        "scenario_hash": "",
+        "status": "error",
+        "error": f"{type(exc).__name__}: {exc}".strip(),
+        "metrics": {},
+    }
+    folder = Path(task["folder"])
+    if read_record(folder) is None:
+        folder.mkdir(parents=True, exist_ok=True)
+        _write_json(folder / RECORD_NAME, rec)
+    return rec
+
+
+def run_sweep(
+    path: str | Path,
+    *,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    local_dask: bool = False,
+    overwrite: bool = False,
+    progress: bool = True,
+    point_fn: PointFn | None = None,
+    chunk_size: int | None = None,
+    connect_timeout: float = 5.0,
+    cluster_kwargs: Mapping[str, Any] | None = None,
+) -> SweepResult:
+    """Run a sweep file; write the point folders, ``summary.csv`` and the surface; resume when re-run.
+
+    Parameters
+    ----------
+    path
+        The sweep YAML file.
+    out
+        Output folder (default ``reports/<sweep name>/``).
+    workers
+        Worker processes (default: all cores; ``1`` runs in this process).
+    scheduler
+        Address ``tcp://host:port`` of a Dask scheduler to run on.
+    local_dask
+        Run on a local Dask cluster started for this sweep (scratch in ``<out>/dask-scratch``).
+    overwrite
+        Replace an output folder that holds another sweep, and re-run every point.
+    progress
+        Show a progress bar on stderr.
+    point_fn
+        The function run for each point, ``fn(raw, out, seed) -> metrics`` (default
+        :func:`netsim.runner.run_point`); must be a picklable module-level function for process backends.
+    chunk_size
+        Runs per executor task (default: guided, from 16 down to 1).
+    connect_timeout
+        Seconds to wait for the Dask scheduler.
+    cluster_kwargs
+        Extra ``LocalCluster`` arguments for ``local_dask`` (e.g. ``{"processes": False}``).
+
+    Raises
+    ------
+    ConfigError
+        For a bad sweep file (unknown factor path with a "did you mean", empty factors ...), an invalid
+        base scenario, an output folder that holds another sweep, or a scheduler that does not answer.
+    """
+    t0 = time.perf_counter()
+    if scheduler and local_dask:
+        raise ConfigError("give either a scheduler address or local_dask=True, not both")
+    sweep = load_sweep(path)
+    folder = Path(out) if out is not None else Path("reports") / sweep.name
+    raws = [sweep.point_raw(p) for p in sweep.points]
+    from netsim.scenario import load_scenario
+
+    load_scenario(raws[0])  # the base (with the first point's values) must be valid; warnings shown once
+    _prepare_out(folder, sweep, overwrite)
+
+    todo: list[tuple[Point, dict[str, Any]]] = []
+    resumed = 0
+    for point, raw in zip(sweep.points, raws):
+        if _finished(point, folder / point.folder, raw) is not None:
+            resumed += 1
+        else:
+            todo.append((point, raw))
+    if resumed:
+        log.info("sweep %s: %d of %d runs already finished, %d to run", sweep.name, resumed, len(raws), len(todo))
+
+    interrupted, desc = False, "nothing to run"
+    if todo:
+        interrupted, desc = _execute(
+            sweep,
+            todo,
+            folder,
+            point_fn or default_point_fn,
+            workers=workers,
+            scheduler=scheduler,
+            local_dask=local_dask,
+            progress=progress,
+            chunk_size=chunk_size,
+            connect_timeout=connect_timeout,
+            cluster_kwargs=cluster_kwargs,
+        )
+    return _collect(sweep, folder, len(todo), resumed, interrupted, desc, time.perf_counter() - t0)
+
+
+def _collect(
+    sweep: Sweep, folder: Path, executed: int, resumed: int, interrupted: bool, desc: str, elapsed: float
+) -> SweepResult:
+    """Read every point's record, write ``summary.csv`` (and the surface), build the result."""
+    import pandas as pd
+
+    rows = []
+    for point in sweep.points:
+        rec = read_record(folder / point.folder)
+        if not rec or rec.get("index") != point.index or rec.get("seed") != point.seed:
+            rec = {"index": point.index, "values": point.values, "replicate": point.replicate,
+                   "seed": point.seed, "status": "pending", "error": "", "metrics": {}}
+        rec = {**rec, "values": point.values, "folder": point.folder}
+        rows.append(rec)
+    factors = list(sweep.spec.factors)
+    summary_path = write_summary(folder / "summary.csv", factors, rows)
+    summary = pd.read_csv(summary_path, keep_default_na=False, na_values=[""])
+    n_ok = sum(r["status"] == "ok" for r in rows)
+    n_pending = sum(r["status"] == "pending" for r in rows)
+    files = {"summary": summary_path}
+    optimum = None
+    if sweep.spec.surface is not None and not interrupted and n_ok:
+        from netsim.surface import surface_from_summary
+
+        surf = sweep.spec.surface
+        logx = surf.logx if surf.logx is not None else sweep.spec.factors[surf.x].is_log
+        logy = surf.logy if surf.logy is not None else sweep.spec.factors[surf.y].is_log
+        optimum, written = surface_from_summary(
+            summary_path, x=surf.x, y=surf.y, z=surf.z, logx=logx, logy=logy, out=folder
+        )
+        files.update(written)
+    result = SweepResult(
+        name=sweep.name,
+        out_dir=folder,
+        summary=summary,
+        n_runs=len(rows),
+        n_ok=n_ok,
+        n_failed=len(rows) - n_ok - n_pending,
+        n_pending=n_pending,
+        n_executed=executed - n_pending,
+        n_resumed=resumed,
+        interrupted=interrupted,
+        executor=desc,
+        wall_time_s=elapsed,
+        optimum=optimum,
+        files=files,
+    )
+    log.info("%s", result.describe())
+    return result

@@ -1,0 +1,365 @@
+"""Sweep files: the schema, loading, and the expansion into points with order-independent seeds.
+
+A sweep file names a base scenario and *factors*. A factor is one column of ``summary.csv``; it sets one
+or more dotted paths of the base scenario (tied paths, e.g. ``delta_s = sigma_s``) to each of its values.
+``mode: product`` runs the cartesian product of the factor values (the first factor varies slowest);
+``mode: list`` runs the explicit ``points``. Every point runs ``replicates`` times.
+
+Each run's seed is a hash of the sweep seed, the point's factor values and the replicate number, never of the
+order in which runs execute, so 1 worker, N workers and a Dask cluster give the same numbers.
+
+Examples
+--------
+>>> spec = SweepSpec.model_validate({"sweep": "demo", "base": "case.yaml",
+...     "factors": {"gain": {"paths": ["plant.params.gain"], "values": [1, 2]}}})
+>>> [p.values for p in expand_points(spec)]
+[{'gain': 1}, {'gain': 2}]
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import Field, ValidationError, field_validator, model_validator
+
+from netsim.errors import ConfigError
+from netsim.units import StrictModel
+
+__all__ = [
+    "Grid",
+    "LogGrid",
+    "Factor",
+    "SurfaceSpec",
+    "SweepSpec",
+    "Point",
+    "Sweep",
+    "load_sweep",
+    "expand_points",
+    "derive_seed",
+    "canonical_json",
+]
+
+
+class Grid(StrictModel):
+    """``linspace``: ``num`` evenly spaced values from ``start`` to ``stop`` (both included)."""
+
+    start: float
+    stop: float
+    num: int = Field(ge=1)
+
+    def values(self) -> list[float]:
+        """The grid values as Python floats."""
+        return [float(v) for v in np.linspace(self.start, self.stop, self.num)]
+
+
+class LogGrid(Grid):
+    """``logspace``: ``base**x`` for ``num`` evenly spaced exponents ``x`` from ``start`` to ``stop``."""
+
+    base: float = Field(default=10.0, gt=0)
+
+    def values(self) -> list[float]:
+        """The grid values as Python floats."""
+        return [float(v) for v in np.logspace(self.start, self.stop, self.num, base=self.base)]
+
+
+class Factor(StrictModel):
+    """One factor: the scenario paths it sets (tied) and its values (one of three forms)."""
+
+    paths: list[str] = Field(min_length=1)
+    values: list[Any] | None = None
+    linspace: Grid | None = None
+    logspace: LogGrid | None = None
+
+    @field_validator("paths", mode="before")
+    @classmethod
+    def _one_path(cls, v: Any) -> Any:
+        return [v] if isinstance(v, str) else v
+
+    def levels(self) -> list[Any]:
+        """The values this factor takes (empty when the sweep lists its points explicitly)."""
+        if self.values is not None:
+            return list(self.values)
+        if self.linspace is not None:
+            return self.linspace.values()
+        if self.logspace is not None:
+            return self.logspace.values()
+        return []
+
+    @property
+    def is_log(self) -> bool:
+        """True when the factor is log-spaced (the surface figure then uses log axes)."""
+        return self.logspace is not None
+
+    @model_validator(mode="after")
+    def _one_form(self) -> "Factor":
+        given = [k for k in ("values", "linspace", "logspace") if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ValueError(f"give only one of values/linspace/logspace, got {', '.join(given)}")
+        if self.values is not None and not self.values:
+            raise ValueError("'values' is empty; give at least one value")
+        return self
+
+
+class SurfaceSpec(StrictModel):
+    """The surface figure and arg-min of a two-factor sweep: ``z`` over ``x`` and ``y``."""
+
+    x: str
+    y: str
+    z: str = "GPI"
+    logx: bool | None = None
+    logy: bool | None = None
+
+
+class SweepSpec(StrictModel):
+    """A sweep file (see the module docstring and the README section "Sweep files")."""
+
+    sweep: str = Field(pattern=r"^[A-Za-z0-9_-]+$")
+    base: str
+    description: str = ""
+    seed: int = Field(default=0, ge=0)
+    mode: Literal["product", "list"] = "product"
+    factors: dict[str, Factor]
+    replicates: int = Field(default=1, ge=1)
+    points: list[dict[str, Any]] | None = None
+    surface: SurfaceSpec | None = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "SweepSpec":
+        if not self.factors:
+            raise ValueError("'factors' is empty; name at least one factor with its paths and values")
+        reserved = {"index", "replicate", "seed", "status", "error", "folder"}
+        clash = sorted(reserved & set(self.factors))
+        if clash:
+            raise ValueError(f"factor name(s) {clash} are reserved summary.csv columns; rename them")
+        if self.mode == "product":
+            if self.points is not None:
+                raise ValueError("'points' is only used with mode: list")
+            missing = [name for name, f in self.factors.items() if not f.levels()]
+            if missing:
+                raise ValueError(f"factor(s) {missing} have no values/linspace/logspace (needed for mode: product)")
+        else:
+            if not self.points:
+                raise ValueError("mode: list needs a non-empty 'points' list, e.g. [{factor: value, ...}]")
+            names = set(self.factors)
+            for i, p in enumerate(self.points):
+                unknown, missing = sorted(set(p) - names), sorted(names - set(p))
+                if unknown or missing:
+                    raise ValueError(
+                        f"points[{i}]: " + "; ".join(
+                            ([f"unknown factor(s) {unknown}"] if unknown else [])
+                            + ([f"missing factor(s) {missing}"] if missing else [])
+                        )
+                    )
+        if self.surface is not None:
+            for axis in ("x", "y"):
+                name = getattr(self.surface, axis)
+                if name not in self.factors:
+                    raise ValueError(f"surface.{axis}: '{name}' is not a factor (factors: {', '.join(self.factors)})")
+        return self
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars and tuples as plain JSON-able Python values."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    return value
+
+
+def canonical_json(data: Any) -> str:
+    """Compact JSON with sorted keys; floats written with ``repr`` (exact, platform-independent)."""
+    return json.dumps(_plain(data), sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=True)
+
+
+def derive_seed(sweep_seed: int, values: dict[str, Any], replicate: int) -> int:
+    """The seed of one run: SHA-256 of the sweep seed, the point's factor values and the replicate.
+
+    Returns a non-negative integer below ``2**63``; independent of the order in which points run.
+    """
+    text = canonical_json({"sweep_seed": int(sweep_seed), "values": values, "replicate": int(replicate)})
+    return int.from_bytes(hashlib.sha256(text.encode()).digest()[:8], "big") >> 1
+
+
+@dataclass(frozen=True)
+class Point:
+    """One run of a sweep: its position, factor values, replicate, seed and folder name."""
+
+    index: int
+    values: dict[str, Any]
+    replicate: int
+    seed: int
+    key: str = field(default="")
+
+    @property
+    def folder(self) -> str:
+        """``points/<index>-<key>`` relative to the sweep's output folder."""
+        return f"points/{self.index:05d}-{self.key}"
+
+
+def expand_points(spec: SweepSpec) -> list[Point]:
+    """The sweep's runs in summary order: points in product (or list) order, replicates innermost."""
+    names = list(spec.factors)
+    if spec.mode == "product":
+        grids = [spec.factors[n].levels() for n in names]
+        combos = [dict(zip(names, map(_plain, c))) for c in _product(grids)]
+    else:
+        combos = [{n: _plain(p[n]) for n in names} for p in spec.points or []]
+    out: list[Point] = []
+    for values in combos:
+        for r in range(spec.replicates):
+            key = hashlib.sha256(canonical_json({"values": values, "replicate": r}).encode()).hexdigest()[:10]
+            out.append(Point(len(out), values, r, derive_seed(spec.seed, values, r), key))
+    return out
+
+
+def _product(grids: list[list[Any]]) -> list[tuple[Any, ...]]:
+    import itertools
+
+    return list(itertools.product(*grids))
+
+
+@dataclass
+class Sweep:
+    """A loaded sweep: the spec, its file, the base scenario (raw mapping) and the expanded points."""
+
+    spec: SweepSpec
+    path: Path | None
+    base_path: Path | None
+    base: dict[str, Any]
+    points: list[Point]
+
+    def point_raw(self, point: Point) -> dict[str, Any]:
+        """The base scenario with the point's factor values written at every tied path (a deep copy)."""
+        import copy
+
+        from netsim.scenario.paths import set_path
+
+        raw = copy.deepcopy(self.base)
+        for name, value in point.values.items():
+            for path in self.spec.factors[name].paths:
+                set_path(raw, path, copy.deepcopy(value))
+        return raw
+
+    @property
+    def name(self) -> str:
+        """The sweep name (the ``sweep:`` key)."""
+        return self.spec.sweep
+
+
+_FLOW_PATHS = re.compile(r"^(?P<head>\s*paths\s*:\s*)\[(?P<items>[^\"'#]*)\](?P<tail>\s*(?:#.*)?)$")
+
+
+def quote_flow_paths(text: str) -> str:
+    """Quote the items of ``paths: [a.b[0].c, ...]`` lines so YAML reads them as strings.
+
+    In a YAML flow list, ``[`` and ``]`` are syntax, so the contract's ``paths: [nodes.s.tasks[0].x]`` is not
+    valid YAML as written; the items of such lines (unquoted, no comments inside) are quoted here. Line
+    numbers are kept.
+    """
+    out = []
+    for line in text.splitlines(keepends=True):
+        body = line.rstrip("\r\n")
+        m = _FLOW_PATHS.match(body)
+        if m and "[" in m.group("items"):
+            items = [i.strip() for i in m.group("items").split(",") if i.strip()]
+            quoted = ", ".join(json.dumps(i) for i in items)
+            line = f"{m.group('head')}[{quoted}]{m.group('tail')}" + line[len(body):]
+        out.append(line)
+    return "".join(out)
+
+
+def _read_yaml(path: Path, *, sweep_file: bool = False) -> Any:
+    from ruamel.yaml import YAML
+    from ruamel.yaml.error import YAMLError
+
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(f"cannot read '{path}': {exc.strerror or exc}") from None
+    if sweep_file:
+        text = quote_flow_paths(text)
+    try:
+        return YAML(typ="safe", pure=True).load(text)
+    except YAMLError as exc:
+        first = str(exc).splitlines()[0]
+        mark = getattr(exc, "problem_mark", None)
+        where = f" (line {mark.line + 1})" if mark is not None else ""
+        raise ConfigError(
+            f"'{path}' is not valid YAML{where}: {first}; quote values that contain [ ] inside flow lists, "
+            "e.g. paths: ['nodes.ctrl.tasks[0].params.k']"
+        ) from None
+
+
+def _format_validation(exc: ValidationError, where: str) -> str:
+    lines = []
+    for err in exc.errors():
+        loc = ""
+        for part in err["loc"]:
+            loc += f"[{part}]" if isinstance(part, int) else (f".{part}" if loc else str(part))
+        msg = err["msg"].removeprefix("Value error, ")
+        lines.append(f"{where}: {loc or '(top level)'}: {msg}")
+    return "\n".join(lines)
+
+
+def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | None = None) -> Sweep:
+    """Read and check a sweep file (or mapping): schema, base scenario, factor paths, points.
+
+    Parameters
+    ----------
+    source
+        Path of the sweep YAML, or its content as a mapping (then ``base`` in it is read relative to the
+        current folder unless ``base`` is given here).
+    base
+        The base scenario as a raw mapping, overriding the file named by the sweep's ``base:``.
+
+    Raises
+    ------
+    ConfigError
+        For schema errors, an unreadable base, an empty factor list, or a factor path that does not exist
+        in the base scenario (with a "did you mean").
+    """
+    path = None if isinstance(source, dict) else Path(source)
+    data = dict(source) if isinstance(source, dict) else _read_yaml(path, sweep_file=True)  # type: ignore[arg-type]
+    where = str(path) if path else "sweep"
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where}: a sweep file is a mapping with keys sweep, base, factors, ...")
+    if "factors" in data and not data["factors"]:
+        raise ConfigError(f"{where}: 'factors' is empty; name at least one factor with its paths and values", "factors")
+    try:
+        spec = SweepSpec.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(_format_validation(exc, where)) from None
+    base_path: Path | None = None
+    if base is None:
+        base_path = (path.parent if path else Path.cwd()) / spec.base
+        raw = _read_yaml(base_path)
+        if not isinstance(raw, dict):
+            raise ConfigError(f"{where}: base scenario '{base_path}' is not a mapping")
+    else:
+        raw = base
+    _check_paths(spec, raw, where)
+    return Sweep(spec, path, base_path, raw, expand_points(spec))
+
+
+def _check_paths(spec: SweepSpec, raw: dict[str, Any], where: str) -> None:
+    from netsim.scenario.paths import get_path
+
+    problems = []
+    for name, factor in spec.factors.items():
+        for i, p in enumerate(factor.paths):
+            try:
+                get_path(raw, p)
+            except ConfigError as exc:
+                problems.append(f"{where}: factors.{name}.paths[{i}]: '{p}' is not in the base scenario: {exc.message}")
+    if problems:
+        raise ConfigError("\n".join(problems))
+

@@ -1,0 +1,73 @@
+"""``summary.csv`` of a sweep: one row per run, byte-identical whatever executed the runs.
+
+Columns: ``index, replicate``, then one column per factor (in the sweep file's order), then every metric
+(in order of first appearance, scanning rows by index), then ``status, seed, error, folder``. Rows are
+sorted by ``index``. Floats are written with Python's shortest round-trip ``repr`` (exact and stable across
+processes and machines); a metric a run did not produce is an empty cell; non-scalar factor values are
+written as compact JSON.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from pathlib import Path
+from typing import Any, Iterable, Mapping, Sequence
+
+from netsim.sweep.spec import canonical_json
+
+__all__ = ["format_value", "summary_text", "write_summary", "TRAILING_COLUMNS"]
+
+#: Columns after the metrics.
+TRAILING_COLUMNS = ("status", "seed", "error", "folder")
+
+
+def format_value(value: Any) -> str:
+    """One CSV cell: floats via ``repr`` (``nan``/``inf`` spelled so), bools ``True``/``False``, None empty."""
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        return repr(value)
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, str):
+        return value
+    if hasattr(value, "item"):  # numpy scalar
+        return format_value(value.item())
+    return canonical_json(value)
+
+
+def summary_text(factors: Sequence[str], rows: Iterable[Mapping[str, Any]]) -> str:
+    """The CSV text of the summary for ``rows`` (records with index, replicate, values, metrics, ...)."""
+    ordered = sorted(rows, key=lambda r: int(r["index"]))
+    metrics: dict[str, None] = {}
+    for r in ordered:
+        for name in r.get("metrics") or {}:
+            metrics.setdefault(name, None)
+    header = ["index", "replicate", *factors, *metrics, *TRAILING_COLUMNS]
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(header)
+    for r in ordered:
+        values = r.get("values") or {}
+        got = r.get("metrics") or {}
+        cells = [r["index"], r["replicate"], *(values.get(f) for f in factors)]
+        cells += [got.get(m) for m in metrics]
+        cells += [r.get("status", ""), r.get("seed"), r.get("error", ""), r.get("folder", "")]
+        writer.writerow([format_value(c) for c in cells])
+    return buf.getvalue()
+
+
+def write_summary(path: Path, factors: Sequence[str], rows: Iterable[Mapping[str, Any]]) -> Path:
+    """Write :func:`summary_text` to ``path`` atomically; return ``path``."""
+    text = summary_text(factors, rows)
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text, encoding="utf-8", newline="")
+    os.replace(tmp, path)
+    return path
