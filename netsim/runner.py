@@ -193,7 +193,10 @@ def run(
         baseline, base_sim, base_fail = simulate(base_sc)
         if base_fail is not None and not isinstance(base_fail, DivergenceError):
             raise base_fail
-        baseline.metrics = pd.Series(_metrics(baseline, base_sim, base_sc, None), dtype=float, name="value")
+        from netsim.runtime_metrics import generic_metrics
+
+        t_base = int(round(baseline.meta["t_end_s"] * S))
+        baseline.metrics = pd.Series(generic_metrics(baseline, base_sim, t_base), dtype=float, name="value")
 
     result, sim, failure = simulate(scenario)
     result.scenario = scenario.resolved_dict()

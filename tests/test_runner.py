@@ -69,3 +69,29 @@ def test_invalid_scenario_raises_with_every_problem(tmp_path):
     bad["duraton"] = "1 s"
     with pytest.raises(ScenarioError, match="duraton"):
         run(bad, out=tmp_path / "x")
+
+
+def test_baseline_run_is_passed_to_metrics(tmp_path):
+    from netsim.registry import register
+
+    @register("metric", "test_runner_final_ratio", "test helper: final y over the baseline's final y")
+    def final_ratio(result, params, baseline):
+        return {"ratio": float(result.signals["y"].iloc[-1] / baseline.signals["y"].iloc[-1])}
+
+    sc = {"name": "base", "duration": "5 ms",
+          "plant": {"model": "dc_servo", "x0": [1.0, 0.0], "record_grid": "1 ms"},
+          "metrics": [{"type": "test_runner_final_ratio"}],
+          "baseline": {"overrides": {"plant.x0": [4.0, 0.0]}}}
+    result = run(sc, out=tmp_path / "r")
+    # no input: the angle stays at x0[0], so the ratio is 1/4
+    assert result.metrics["ratio"] == pytest.approx(0.25)
+    assert result.meta["baseline"] == {"status": "ok"}
+
+
+def test_run_point_writes_the_folder_and_returns_metrics(tmp_path):
+    from netsim.runner import run_point
+
+    metrics = run_point(_unstable("0.1 s"), tmp_path / "p", seed=3)
+    assert isinstance(metrics, dict)
+    meta = json.loads((tmp_path / "p" / "meta.json").read_text())
+    assert meta["seed"] == 3 and meta["status"] == "ok"
