@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import difflib
 import importlib
+import logging
 from dataclasses import dataclass
 from typing import Any, Callable, TypeVar
 
@@ -54,12 +55,16 @@ class Entry:
 
 _REGISTRY: dict[str, dict[str, Entry]] = {k: {} for k in KINDS}
 _PLUGINS_LOADED = False
+_PLUGIN_FAILURES: list[tuple[str, str]] = []
+_log = logging.getLogger(__name__)
 
 #: Modules imported by :func:`load_plugins` so their ``register`` calls run.
 PLUGIN_MODULES: list[str] = [
     "netsim.kernel",
     "netsim.network",
     "netsim.control",
+    "netsim.metrics",
+    "netsim.runtime_metrics",
     "netsim.signals",
     "netsim.programs",
     "models",
@@ -80,18 +85,28 @@ def register(kind: str, name: str, summary: str = "") -> Callable[[T], T]:
     return deco
 
 
-def load_plugins() -> None:
-    """Import the modules that register things (idempotent). Missing optional modules are skipped."""
+def load_plugins() -> list[tuple[str, str]]:
+    """Import the modules that register things (idempotent).
+
+    Each module is imported on its own: one that is missing or broken does not stop the others. Returns the
+    ``(module, error)`` pairs of the modules that failed (also logged), so callers can report them.
+    """
     global _PLUGINS_LOADED
     if _PLUGINS_LOADED:
-        return
+        return list(_PLUGIN_FAILURES)
     _PLUGINS_LOADED = True
     for mod in PLUGIN_MODULES:
         try:
             importlib.import_module(mod)
         except ModuleNotFoundError as exc:
-            if exc.name is None or not mod.startswith(exc.name):
-                raise
+            if exc.name is not None and mod.startswith(exc.name):
+                continue  # an optional plugin package that is not there
+            _PLUGIN_FAILURES.append((mod, f"{type(exc).__name__}: {exc}"))
+            _log.warning("could not load plugin module %s: %s", mod, exc)
+        except Exception as exc:  # a broken plugin must not hide the others
+            _PLUGIN_FAILURES.append((mod, f"{type(exc).__name__}: {exc}"))
+            _log.warning("could not load plugin module %s: %s", mod, exc)
+    return list(_PLUGIN_FAILURES)
 
 
 def entries(kind: str) -> list[Entry]:

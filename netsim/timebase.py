@@ -19,6 +19,7 @@ from __future__ import annotations
 import difflib
 import math
 import re
+from decimal import ROUND_HALF_EVEN, Decimal
 from typing import Final
 
 __all__ = [
@@ -123,13 +124,9 @@ def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int
             tip = f"; did you mean '{hint}'?" if hint else " (units: ns, us, ms, s, min, h)"
             raise TimeParseError(f"unknown unit '{unit}'{tip}")
         scale = UNITS[unit]
-        if re.fullmatch(r"[-+]?\d+", number):
-            ns = int(number) * scale
-        else:
-            x = float(number) * scale
-            if not math.isfinite(x):
-                raise TimeParseError(f"time must be finite, got {value!r}")
-            ns = round(x)
+        # decimal arithmetic: "1.0000005 s" is exactly 1000000500 ns, whatever its length
+        exact = Decimal(number) * scale
+        ns = int(exact.to_integral_value(rounding=ROUND_HALF_EVEN))
     else:
         raise TimeParseError(f"expected a time such as '1 ms', got {type(value).__name__} {value!r}")
     if ns < 0 and not allow_negative:
@@ -156,10 +153,15 @@ def from_seconds(seconds: float) -> int:
 
 
 def format_time(ns: int) -> str:
-    """Format nanoseconds with the largest unit that keeps the value readable (``'1.5 ms'``)."""
-    for unit, scale in (("s", S), ("ms", MS), ("us", US)):
-        if abs(ns) >= scale:
-            value = ns / scale
-            text = f"{value:.6f}".rstrip("0").rstrip(".")
-            return f"{text} {unit}"
-    return f"{ns} ns"
+    """Format nanoseconds exactly, with the largest unit that keeps the value readable (``'1.5 ms'``).
+
+    The text parses back to the same integer (``parse_time(format_time(t)) == t``): no digit is rounded away.
+    """
+    sign = "-" if ns < 0 else ""
+    mag = abs(int(ns))
+    for unit, scale, digits in (("s", S, 9), ("ms", MS, 6), ("us", US, 3)):
+        if mag >= scale:
+            whole, frac = divmod(mag, scale)
+            text = f"{whole}.{frac:0{digits}d}".rstrip("0").rstrip(".")
+            return f"{sign}{text} {unit}"
+    return f"{sign}{mag} ns"

@@ -67,3 +67,14 @@ def test_seconds_round_trip_and_formatting():
     assert format_time(1_500_000) == "1.5 ms"
     assert format_time(2 * S) == "2 s"
     assert format_time(999) == "999 ns"
+
+
+def test_formatted_time_parses_back_to_the_same_nanoseconds():
+    # exactness of the text form: resolved scenarios and scenario hashes depend on it
+    import random
+
+    rng = random.Random(1)
+    samples = [1_000_000_500, 123_456_789_012, 3_600 * S + 1, -1_500_000] + [rng.randrange(10**15) for _ in range(2000)]
+    for t in samples:
+        assert parse_time(format_time(t), allow_negative=True) == t
+    assert format_time(1_000_000_500) == "1.0000005 s"

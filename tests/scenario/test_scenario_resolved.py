@@ -72,7 +72,6 @@ def test_hash_changes_with_anything_that_can_change_results(path, value, base):
     assert scenario_hash(load_scenario(base(), overrides={path: value})) != scenario_hash(base())
 
 
-@pytest.mark.xfail(reason="netsim.timebase.format_time rounds times >= 1 s to the microsecond (reported to lead)")
 def test_resolved_times_keep_every_nanosecond(base):
     sc = load_scenario(base(), overrides={"duration": "1.0000005 s"})
     assert load_scenario(sc.resolved_dict()).duration == 1_000_000_500
