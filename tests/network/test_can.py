@@ -1,7 +1,5 @@
 """CAN bus: priority arbitration, non-preemption, frame formats, and agreement with the CAN analysis."""
 
-import pytest
-
 from netsim.analysis.can import CanMessage, can_response_times
 from netsim.network import Message
 from netsim.timebase import MS, US

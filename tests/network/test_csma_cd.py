@@ -2,7 +2,6 @@
 
 import pytest
 
-from netsim.network import Message
 from netsim.timebase import MS, US
 
 P = {"nodes": ["a", "b", "c"], "bitrate": "80 kbit/s", "min_frame_bits": 80}  # 1 ms frames and slots

@@ -1,7 +1,5 @@
 """Switched Ethernet: full duplex, store and forward, FIFO output ports, finite switch memory."""
 
-import pytest
-
 from netsim.timebase import MS
 
 P = {"nodes": ["a", "b", "c"], "bitrate": "1 Mbit/s", "min_frame_bits": 1000}  # 1 ms per 1000 bits
