@@ -245,3 +245,16 @@ def test_params_model_instances_are_accepted():
     p = CanBus.Params(nodes=["a", "b"], bitrate="1 Mbit/s", pre_delay="3 us")
     net = make_network(SimEnv(), "n", "can", p)
     assert net.params is p and net.params.pre_delay == 3 * US
+
+
+@pytest.mark.parametrize("type_name", ["link", "ideal", "can", "tdma", "csma_cd", "ethernet", "round_robin", "fdma"])
+def test_params_round_trip_through_their_json_dump(type_name):
+    # the resolved scenario.yaml holds model_dump(mode="json"); reading it back must give the same params
+    from netsim.network import network_class
+
+    extra = {"tdma": {"slot": "1 ms", "schedule": ["a", None, "b"]}, "fdma": {"shares": [0.2, 0.3, 0.5]},
+             "link": {"delay": {"dist": "shifted_gamma", "shape": 2, "scale": "1 ms"},
+                      "loss": {"model": "gilbert_elliott", "p_good_to_bad": 0.1, "p_bad_to_good": 0.5}}}
+    P = network_class(type_name).Params
+    p = P.model_validate({**CAN3, "pre_delay": "1.5 us", **extra.get(type_name, {})})
+    assert P.model_validate(p.model_dump(mode="json")) == p
