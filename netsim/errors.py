@@ -34,7 +34,12 @@ class ConfigError(NetsimError):
     def __init__(self, message: str, path: str | None = None) -> None:
         self.path = path
         self.message = message
-        super().__init__(f"{path}: {message}" if path else message)
+        # args hold the constructor arguments so copies made from ``type(exc)(*exc.args)`` (simpy does this)
+        # are equal to the original
+        super().__init__(message, path)
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.message}" if self.path else self.message
 
 
 class BuildError(ConfigError):
@@ -50,7 +55,10 @@ class DivergenceError(SimulationError):
 
     def __init__(self, message: str, time_ns: int) -> None:
         self.time_ns = time_ns
-        super().__init__(message)
+        super().__init__(message, time_ns)
+
+    def __str__(self) -> str:
+        return str(self.args[0])
 
 
 class LivelockError(SimulationError):
@@ -58,4 +66,7 @@ class LivelockError(SimulationError):
 
     def __init__(self, message: str, involved: list[str]) -> None:
         self.involved = involved
-        super().__init__(message)
+        super().__init__(message, involved)
+
+    def __str__(self) -> str:
+        return str(self.args[0])

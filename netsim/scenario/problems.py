@@ -94,6 +94,10 @@ class ScenarioError(ConfigError):
         lines = "\n".join(f"  {p}" for p in self.problems)
         super().__init__(f"{head}:\n{lines}" if lines else head)
         self.path = first.path if first else None
+        self.args = (self.problems,)  # re-creatable from args, like the other netsim errors
+
+    def __str__(self) -> str:
+        return self.message
 
     @property
     def errors(self) -> list[Problem]:

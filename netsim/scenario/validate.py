@@ -28,7 +28,6 @@ What is checked
 from __future__ import annotations
 
 import copy
-import importlib
 import logging
 from typing import Any, Iterable
 
@@ -59,25 +58,13 @@ def plugin_load_problems() -> list[Problem]:
         return list(_PLUGIN_WARNINGS)
     from netsim import registry
 
-    warnings: list[Problem] = []
-    try:
-        registry.load_plugins()
-    except Exception:  # noqa: BLE001 - a broken plugin module is reported, not raised
-        for module in registry.PLUGIN_MODULES:
-            try:
-                importlib.import_module(module)
-            except ModuleNotFoundError as exc:
-                if exc.name is None or not module.startswith(exc.name):
-                    warnings.append(_load_warning(module, exc))
-            except Exception as exc:  # noqa: BLE001
-                warnings.append(_load_warning(module, exc))
+    warnings = [
+        Problem("", f"plugin module '{module}' failed to import ({error}); its plugins are unavailable", severity=WARNING)
+        for module, error in registry.load_plugins()
+    ]
     _PLUGIN_WARNINGS = warnings
     return list(warnings)
 
-
-def _load_warning(module: str, exc: BaseException) -> Problem:
-    log.warning("plugin module %s failed to import", module, exc_info=exc)
-    return Problem("", f"plugin module '{module}' failed to import ({type(exc).__name__}: {exc}); its plugins are unavailable", severity=WARNING)
 
 
 def _params_model(plugin: Any) -> type[BaseModel] | None:
