@@ -118,6 +118,9 @@ def simulate(scenario: Any) -> tuple[RunResult, Any, BaseException | None]:
         failure = exc
     wall = time.perf_counter() - t0
     result = _collect(sim, t_end)
+    warnings = _unrecorded(scenario, sim.env.recorder)
+    for text in warnings:
+        log.warning("%s: %s", scenario.name, text)
     result.meta.update(
         {
             "status": status,
@@ -126,9 +129,22 @@ def simulate(scenario: Any) -> tuple[RunResult, Any, BaseException | None]:
             "duration_s": scenario.duration / S,
             "wall_time_s": wall,
             "events": _event_count(sim.env),
+            "warnings": warnings,
         }
     )
     return result, sim, failure
+
+
+def _unrecorded(scenario: Any, recorder: Any) -> list[str]:
+    """Warnings for ``record:`` names that nothing recorded during the run (a typo, most often)."""
+    if not scenario.record:
+        return []
+    seen = {name.split("[", 1)[0] for name in recorder.names()} | set(recorder.names())
+    missing = [name for name in scenario.record if name not in seen]
+    if not missing:
+        return []
+    known = ", ".join(sorted({n.split("[", 1)[0] for n in recorder.names()})) or "none"
+    return [f"record: nothing recorded '{name}' (recorded signals: {known})" for name in missing]
 
 
 def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | None) -> dict[str, float]:

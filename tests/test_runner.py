@@ -95,3 +95,14 @@ def test_run_point_writes_the_folder_and_returns_metrics(tmp_path):
     assert isinstance(metrics, dict)
     meta = json.loads((tmp_path / "p" / "meta.json").read_text())
     assert meta["seed"] == 3 and meta["status"] == "ok"
+
+
+def test_record_names_nothing_recorded_are_reported_in_meta(tmp_path):
+    result = run(
+        "scenarios/dc_servo_ideal.yaml",
+        out=tmp_path / "run",
+        overrides={"duration": "50 ms", "record": ["y", "r", "yy"]},
+    )
+    assert result.meta["warnings"] == ["record: nothing recorded 'yy' (recorded signals: r, y)"]
+    assert json.loads((tmp_path / "run" / "meta.json").read_text())["warnings"] == result.meta["warnings"]
+    assert list(result.signals.columns) == ["time_s", "y", "r"]

@@ -20,8 +20,7 @@ What is checked
 - I/O channel plant ports lie within the plant's inputs/outputs when the plant factory declares them
   (``ports(params) -> (input_names, output_names)``, or attributes ``input_names``/``output_names`` or
   ``n_inputs``/``n_outputs``); plant ``disturbances`` name plant inputs and scenario signals.
-- ``record`` names an io channel, a signal or a plant output; other names get a **warning** (programs may
-  record them under that name).
+- ``record`` entries are names; the runner warns (in ``meta.json``) about names nothing recorded.
 - ``baseline.overrides`` paths can be applied and give a valid scenario.
 """
 
@@ -385,14 +384,11 @@ class _Checker:
             self.params(plugin, {} if raw is None else raw, ["metrics", i, "params"], f"metrics[{i}]")
 
     def record(self, outputs: list[Any] | None) -> None:
-        known = set(self.io) | set(self.signals) | {o for o in outputs or [] if isinstance(o, str)}
+        """``record`` entries must be names (text); whether each is ever recorded is known only after the run
+        (programs record under names of their own), so the runner reports the names that stayed empty."""
         for i, name in enumerate(_l(self.raw.get("record"))):
-            if not isinstance(name, str):
-                continue
-            base = name.split("[", 1)[0]
-            if base not in known:
-                hint = did_you_mean(base, known)
-                self.warn(["record", i], f"'{name}' is not an io channel, signal or plant output{hint}; it is recorded only if a program records it")
+            if not isinstance(name, str) or not name.strip():
+                self.error(["record", i], f"expected a signal name, got {name!r}")
 
     def baseline(self) -> None:
         baseline = self.raw.get("baseline")

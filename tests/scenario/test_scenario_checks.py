@@ -236,14 +236,12 @@ def test_disturbances_name_plant_inputs_and_signals(base):
     }
 
 
-def test_record_of_unknown_names_is_a_warning(base):
+def test_record_names_must_be_text_and_are_not_guessed_statically(base):
     raw = base()
-    raw["record"] = ["y", "y[0]", "ctl_state"]
-    assert _problems(raw) == {}
-    assert _problems(raw, "warning") == {
-        "record[2]": "'ctl_state' is not an io channel, signal or plant output; it is recorded only if a program "
-        "records it"
-    }
+    raw["record"] = ["y", "y[0]", "ctl_state", 3]
+    # 'ctl_state' may be recorded by a program: no warning before the run; a number is an error
+    assert _problems(raw, "warning") == {}
+    assert _problems(raw) == {"record[3]": "expected a signal name, got 3"}
 
 
 def test_invalid_names_are_rejected(base):
