@@ -81,7 +81,8 @@ class NetworkParams(StrictModel):
                 raise ValueError(f"node_delays: '{n}' is not one of the network's nodes {self.nodes}")
         if self.loss is not None and self.loss_probability > 0:
             raise ValueError("give either loss_probability or loss, not both")
-        if self.max_frame_bits is not None and self.max_frame_bits < self.min_frame_bits:
+        raw_frames = getattr(self, "frame_format", "raw") == "raw"  # CAN data-field limits are not frame sizes
+        if raw_frames and self.max_frame_bits is not None and self.max_frame_bits < self.min_frame_bits:
             raise ValueError(
                 f"max_frame_bits ({self.max_frame_bits}) is smaller than min_frame_bits ({self.min_frame_bits})"
             )
