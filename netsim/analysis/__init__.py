@@ -1,0 +1,38 @@
+"""Analytic cross-checks beside the simulation.
+
+- :mod:`netsim.analysis.rta`: response-time analysis of fixed-priority preemptive task sets (blocking and
+  release-jitter terms) and the EDF processor-demand test.
+- :mod:`netsim.analysis.can`: worst-case response times of CAN messages (non-preemptive fixed priority,
+  blocking by one lower-priority frame).
+"""
+
+from netsim.analysis.can import CanMessage, CanResponse, can_analysis, can_response_times
+from netsim.analysis.rta import (
+    RTATask,
+    busy_period,
+    deadline_monotonic,
+    edf_demand,
+    edf_schedulable,
+    fp_schedulable,
+    hyperperiod,
+    rate_monotonic,
+    response_times,
+    utilization,
+)
+
+__all__ = [
+    "RTATask",
+    "response_times",
+    "fp_schedulable",
+    "rate_monotonic",
+    "deadline_monotonic",
+    "utilization",
+    "hyperperiod",
+    "busy_period",
+    "edf_demand",
+    "edf_schedulable",
+    "CanMessage",
+    "CanResponse",
+    "can_analysis",
+    "can_response_times",
+]
