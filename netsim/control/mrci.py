@@ -29,7 +29,6 @@ import logging
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.signal as sps
 
 from netsim.errors import ConfigError
 
@@ -50,6 +49,8 @@ class Section:
 
     def tf(self) -> tuple[np.ndarray, np.ndarray]:
         """Numerator and denominator (descending powers of z) of this section."""
+        import scipy.signal as sps  # lazy: scipy.signal costs ~1 s to import
+
         num, den = sps.ss2tf(self.A, self.B.reshape(-1, 1), self.C.reshape(1, -1), [[self.D]])
         return np.atleast_1d(np.squeeze(num)), np.atleast_1d(den)
 
@@ -135,6 +136,8 @@ def _section_from_pair(r: complex, p: complex) -> Section:
 
 
 def _sections(num, den, tol: float) -> tuple[list[Section], float]:
+    import scipy.signal as sps  # lazy: scipy.signal costs ~1 s to import
+
     r, p, k = sps.residue(np.asarray(num, float), np.asarray(den, float), tol=tol)
     direct = float(np.real(k[0])) if len(k) else 0.0
     if len(k) > 1:
