@@ -38,6 +38,7 @@ import difflib
 import logging
 from collections import deque
 from heapq import heappop, heappush
+from types import GeneratorType
 from typing import Any, Callable, Iterable
 
 from netsim.env import SimEnv
@@ -102,7 +103,7 @@ def resolve_policy(policy: "str | Policy", node: str) -> Policy:
 class Timer:
     """A periodic or one-shot timer that invokes a handler."""
 
-    __slots__ = ("name", "handler", "period", "start", "data", "active", "fired")
+    __slots__ = ("name", "handler", "period", "start", "data", "active", "fired", "invoker")
 
     def __init__(self, name: str, handler: str, period: int | None, start: int, data: Any) -> None:
         self.name = name
@@ -112,6 +113,7 @@ class Timer:
         self.data = data
         self.active = True
         self.fired = 0
+        self.invoker = f"timer:{name}"
 
 
 class Trigger:
@@ -187,7 +189,7 @@ class Kernel:
         self._ready: list[tuple[Any, int, Job]] = []
         self._seq = 0
         self._running: Job | None = None
-        self._seg_ev: Wake | None = None
+        self._seg_job: Job | None = None  # the running job while one of its segments is under way
         self._last_task_job: Job | None = None
         self._busy = False
         self._dispatch_pending = False
@@ -462,7 +464,7 @@ class Kernel:
         out = {t.name: t.cpu for t in self.tasks.values()}
         out.update({h.name: h.cpu for h in self.handlers.values()})
         job = self._running
-        if job is not None and self._seg_ev is not None:
+        if job is not None and self._seg_job is job:
             out[job.task_name] += max(0, self._clock() - job._seg_start)
         return out
 
@@ -499,7 +501,7 @@ class Kernel:
         return obj
 
     def _release(self, task: Task, data: Any) -> Job:
-        now = self._sim.now
+        now = self._sim._now
         spec = task.spec
         jid = task.released
         task.released = jid + 1
@@ -523,7 +525,7 @@ class Kernel:
         return job
 
     def _invoke(self, handler: Handler, data: Any, invoker: str | None) -> Job:
-        now = self._sim.now
+        now = self._sim._now
         job = Job(self, handler, handler.invocations, handler.data if data is None else data, now, None, True,
                   invoker)
         handler.invocations += 1
@@ -541,7 +543,7 @@ class Kernel:
         self._seq += 1
         job._seq = self._seq
         heappush(self._ready, (job._rank, job._seq, job))
-        if self.trace:
+        if self.trace and job._task.trace_state != "ready":
             self._trace(job._task, "ready", now)
 
     def _unblock(self, job: Job, value: Any) -> None:
@@ -576,7 +578,8 @@ class Kernel:
         if not timer.active:
             return
         timer.fired += 1
-        self._invoke(self._get(self.handlers, timer.handler, "handler"), timer.data, f"timer:{timer.name}")
+        handler = self.handlers.get(timer.handler) or self._get(self.handlers, timer.handler, "handler")
+        self._invoke(handler, timer.data, timer.invoker)
         if timer.period is not None:
             Wake(self._sim, timer.period, NORMAL, self._on_timer, timer)
         else:
@@ -600,20 +603,45 @@ class Kernel:
         self._fire_overrun(job._task.deadline_handler, job, "deadline")
         self._request_dispatch()
 
-    def _on_segment_done(self, ev: Wake) -> None:
-        if ev is not self._seg_ev:
-            return  # invalidated by a preemption or kill
-        self._seg_ev = None
-        job = self._running
-        assert job is not None
-        now = self._sim.now
-        self._charge(job, now - job._seg_start)
-        if job._pre_left == 0 and job._remaining == 0:
-            self._busy = True
-            try:
-                self._advance(job, now)  # the code after the segment runs at its end, on the CPU
-            finally:
-                self._busy = False
+    def _on_segment_event(self, ev: Wake) -> None:
+        job: Job = ev._value
+        if ev is not job._ev:
+            return  # superseded by a nearer wake-up of the same job
+        job._ev = None
+        if self._seg_job is not job:
+            return  # preempted, blocked or killed meanwhile: a new wake-up is armed when it runs again
+        now = self._sim._now
+        end = job._seg_end
+        if now < end:  # the job was preempted and resumed: its segment ends later than first planned
+            job._ev = Wake(self._sim, end - now, NORMAL, self._on_segment_event, job)
+            job._ev_time = end
+            return
+        self._seg_job = None
+        if job._pre_left or job._budget is not None:
+            self._charge(job, now - job._seg_start)
+        else:  # the common case, inlined: an execute segment without budget ran to its end
+            elapsed = now - job._seg_start
+            job._remaining -= elapsed
+            job.cpu_time += elapsed
+            job._task.cpu += elapsed
+        if not job._pre_left:
+            if not job._remaining:
+                self._busy = True
+                try:
+                    self._advance(job, now)  # the code after the segment runs at its end, on the CPU
+                finally:
+                    self._busy = False
+                if self._running is not job:
+                    self._request_dispatch()
+                    return
+            remaining = job._remaining
+            budget = job._budget
+            ready = self._ready
+            # fast path: the job keeps the CPU for its next segment unless a ready job beats it (starting
+            # a segment runs no code, so doing it before other events of this instant changes nothing)
+            if remaining and (budget is None or budget >= remaining) and (not ready or not ready[0][0] < job._rank):
+                self._start_segment(job, remaining, now)
+                return
         self._request_dispatch()
 
     def _on_deferred_dispatch(self, _ev: Any) -> None:
@@ -626,7 +654,8 @@ class Kernel:
         if self._busy or self._dispatch_pending:
             return
         sim = self._sim
-        if sim.peek() > sim.now:
+        queue = sim._queue  # simpy's event heap: dispatch at once if nothing else is due now
+        if not queue or queue[0][0] > sim._now:
             self._dispatch()
         else:
             self._dispatch_pending = True
@@ -640,49 +669,45 @@ class Kernel:
         Wake(self._sim, 0, DISPATCH, self._on_deferred_dispatch)
 
     def _dispatch(self) -> None:
+        """Give the CPU to the most urgent job and run it until it starts a segment or the CPU idles."""
         self._busy = True
         try:
-            self._dispatch_loop()
-        finally:
-            self._busy = False
-
-    def _dispatch_loop(self) -> None:
-        now = self._sim.now
-        ready = self._ready
-        while True:
-            while ready and ready[0][2]._state != READY:
-                heappop(ready)  # killed while ready
-            cur = self._running
-            if cur is not None:
-                if ready:
-                    top = ready[0][0]
-                    if top < cur._rank:
+            now = self._sim._now
+            ready = self._ready
+            while True:
+                while ready and ready[0][2]._state != READY:
+                    heappop(ready)  # killed while ready
+                cur = self._running
+                if cur is not None:
+                    if ready and ready[0][0] < cur._rank:
                         self._preempt(cur, now)
                         cur = None
-                if cur is not None and self._seg_ev is not None:
-                    return  # keeps running its segment
-            if cur is None:
-                if not ready:
-                    self._last_task_job = None  # idle: the next task pays a context switch
+                    elif self._seg_job is cur:
+                        return  # keeps running its segment
+                if cur is None:
+                    if not ready:
+                        self._last_task_job = None  # idle: the next task pays a context switch
+                        return
+                    cur = heappop(ready)[2]
+                    self._switch_in(cur, now)
+                if cur._pre_left:
+                    self._start_segment(cur, cur._pre_left, now)
                     return
-                cur = heappop(ready)[2]
-                self._switch_in(cur, now)
-            if cur._pre_left:
-                self._start_segment(cur, cur._pre_left, now)
-                return
-            remaining = cur._remaining
-            if remaining:
-                budget = cur._budget
-                if budget is not None and budget < remaining:
-                    if budget <= 0:
-                        cur._budget = None
-                        cur.wcet_overrun = True
-                        self._fire_overrun(cur._task.wcet_handler, cur, "wcet")
-                        continue
-                    remaining = budget
-                self._start_segment(cur, remaining, now)
-                return
-            self._advance(cur, now)
+                remaining = cur._remaining
+                if remaining:
+                    budget = cur._budget
+                    if budget is not None and budget < remaining:
+                        if budget <= 0:
+                            cur._budget = None
+                            cur.wcet_overrun = True
+                            self._fire_overrun(cur._task.wcet_handler, cur, "wcet")
+                            continue
+                        remaining = budget
+                    self._start_segment(cur, remaining, now)
+                    return
+                self._advance(cur, now)
+        finally:
+            self._busy = False
 
     def _switch_in(self, job: Job, now: int) -> None:
         job._state = RUNNING
@@ -696,13 +721,20 @@ class Kernel:
             self.switches += 1
             if self.context_switch:
                 job._pre_left = self.context_switch
-        if self.trace:
+        if self.trace and job._task.trace_state != "running":
             self._trace(job._task, "running", now)
 
     def _start_segment(self, job: Job, length: int, now: int) -> None:
         job._seg_start = now
+        end = now + length
+        job._seg_end = end
+        self._seg_job = job
         self.segments += 1
-        self._seg_ev = Wake(self._sim, length, NORMAL, self._on_segment_done)
+        # One wake-up per job, re-armed lazily: a preempted job keeps its pending wake-up, which re-arms
+        # itself for the later end when it fires early, so a preemption costs no new simpy event.
+        if job._ev is None or job._ev_time > end:
+            job._ev = Wake(self._sim, length, NORMAL, self._on_segment_event, job)
+            job._ev_time = end
 
     def _charge(self, job: Job, elapsed: int) -> None:
         if job._pre_left:
@@ -717,14 +749,14 @@ class Kernel:
         job._task.cpu += elapsed
 
     def _preempt(self, job: Job, now: int) -> None:
-        if self._seg_ev is not None:
-            self._seg_ev = None
+        if self._seg_job is job:
+            self._seg_job = None
             self._charge(job, now - job._seg_start)
         job.preemptions += 1
         job._state = READY
         heappush(self._ready, (job._rank, job._seq, job))  # keeps its place among equals
         self._running = None
-        if self.trace:
+        if self.trace and job._task.trace_state != "ready":
             self._trace(job._task, "ready", now)
 
     def _fire_overrun(self, ref: Any, job: Job, kind: str) -> None:
@@ -861,7 +893,7 @@ class Kernel:
 
     def _make_generator(self, job: Job) -> Any:
         gen = job._task.body(job)
-        if not hasattr(gen, "send") or not hasattr(gen, "close"):
+        if type(gen) is not GeneratorType and not (hasattr(gen, "send") and hasattr(gen, "close")):
             raise SimulationError(f"node '{self.name}': body of '{job.task_name}' returned {gen!r}, not a "
                                   "generator; the body must contain `yield job.<request>(...)`")
         return gen
@@ -924,6 +956,7 @@ class Kernel:
     # ================================================================= ending jobs
     def _finish(self, job: Job, now: int, killed: bool) -> None:
         job._state = DONE
+        job._gen = None  # break the job <-> generator-frame cycle so the job is freed at once
         job.finish = now
         job.killed = killed
         if self._running is job:
@@ -944,8 +977,8 @@ class Kernel:
     def _kill(self, job: Job) -> None:
         now = self._sim.now
         if job is self._running:
-            if self._seg_ev is not None:
-                self._seg_ev = None
+            if self._seg_job is job:
+                self._seg_job = None
                 self._charge(job, now - job._seg_start)
             self._running = None
         elif job._state == NEW:
@@ -969,8 +1002,6 @@ class Kernel:
                 pass  # the job is killing itself from its own running code: _advance closes it
             except Exception:  # noqa: BLE001 - a body's cleanup must not hide the kill
                 log.exception("node %s: body of %s raised while being killed", self.name, job.task_name)
-            if job._gen is None:
-                job._gen = gen
 
     def _finalize(self, t_end: int) -> None:
         """Close open trace intervals and add records of the jobs unfinished at ``t_end``."""
@@ -980,7 +1011,7 @@ class Kernel:
             self.job_records[:] = [r for r in self.job_records if id(r) not in stale]
         self._unfinished = []
         running, partial = self._running, 0
-        if running is not None and self._seg_ev is not None:
+        if running is not None and self._seg_job is running:
             partial = self._sim.now - running._seg_start
         for task in self.tasks.values():
             jobs = ([task.active] if task.active is not None else []) + list(task.queue)
