@@ -1,0 +1,376 @@
+"""CSV tables (and figures) from a run folder, a batch folder or a sweep folder: ``netsim report DIR``.
+
+:func:`report` reads the run folders (``metrics.csv``, ``jobs.csv``, ``messages.csv``, ``meta.json``) and
+returns, and writes as CSV into ``out`` (default ``<DIR>/report/``):
+
+``utilization``
+    One row per case (run, batch entry or sweep run): ``case`` (sweep runs: ``index``, ``replicate`` and
+    the factor columns), ``status``, then the indices of Cuenca et al. as the run's ``et_control`` metric
+    computed them: ``Nsc_count, Nca_count, NTTS_count`` (transmissions sensor->controller,
+    controller->actuator, and of the time-triggered run), ``Uc_ratio, Ua_ratio`` (eqs 26-27),
+    ``Cc_pct`` (eq 28), ``CS_pct`` (eq 20), ``ISE, ISEP`` (eqs 23-24, in output units), ``NE_ratio``
+    (eq 25) and ``GPI`` (eq 29). A metric a run does not have is empty.
+``nodes``
+    One row per case and node: ``case, node, cpu_util_ratio`` (all tasks, handlers and context switches,
+    the run's ``cpu.<node>.utilization`` metric).
+``tasks``
+    One row per case and task (from ``jobs.csv``): ``case, node, task, jobs_count, cpu_time_s,
+    cpu_util_ratio`` (CPU time / run duration), ``response_mean_s, response_std_s, response_min_s,
+    response_p95_s, response_max_s, deadline_misses_count, preemptions_count, killed_count``.
+``networks``
+    One row per case and network (from ``messages.csv``; one row there per receiver copy):
+    ``case, network, messages_count, delivered_count, dropped_count, loss_ratio, bits_total,
+    delay_mean_s, delay_std_s, delay_min_s, delay_p95_s, delay_max_s`` (delivered copies, send to
+    delivery), ``wait_mean_s`` (send to start of transmission), ``utilization_ratio`` (the run's
+    ``net.<name>.utilization`` metric).
+``summary`` (sweeps)
+    ``summary.csv`` as written by the sweep; ``optimum`` (sweeps with a surface) one row.
+
+Figures (``plots=True``): ``utilization.png`` (Uc, Ua, NE and GPI per case, up to 40 cases),
+``response_times.png`` and ``network_delays.png`` (mean and max per task/network, up to 40 rows), and for
+sweeps with a ``surface:`` the surface figure again.
+
+If the argument is not a folder but the name of a registered ``report`` (``netsim list reports``), that
+case-study report function ``fn(out_dir, plots)`` is called instead.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from pathlib import Path
+from typing import Any, Iterable
+
+import numpy as np
+import pandas as pd
+
+from netsim.errors import ConfigError
+
+__all__ = [
+    "report",
+    "UTILIZATION_COLUMNS",
+    "TASK_COLUMNS",
+    "NETWORK_COLUMNS",
+    "find_runs",
+    "utilization_table",
+    "task_table",
+    "network_table",
+    "node_table",
+    "NODE_COLUMNS",
+]
+
+log = logging.getLogger(__name__)
+
+#: (metric name in metrics.csv, column in the utilization table)
+UTILIZATION_COLUMNS: list[tuple[str, str]] = [
+    ("Nsc", "Nsc_count"),
+    ("Nca", "Nca_count"),
+    ("N_TTS", "NTTS_count"),
+    ("Uc", "Uc_ratio"),
+    ("Ua", "Ua_ratio"),
+    ("Cc", "Cc_pct"),
+    ("CS", "CS_pct"),
+    ("ISE", "ISE"),
+    ("ISEP", "ISEP"),
+    ("NE", "NE_ratio"),
+    ("GPI", "GPI"),
+]
+TASK_COLUMNS = [
+    "case", "node", "task", "jobs_count", "cpu_time_s", "cpu_util_ratio", "response_mean_s", "response_std_s",
+    "response_min_s", "response_p95_s", "response_max_s", "deadline_misses_count", "preemptions_count",
+    "killed_count",
+]
+NETWORK_COLUMNS = [
+    "case", "network", "messages_count", "delivered_count", "dropped_count", "loss_ratio", "bits_total",
+    "delay_mean_s", "delay_std_s", "delay_min_s", "delay_p95_s", "delay_max_s", "wait_mean_s",
+    "utilization_ratio",
+]
+NODE_COLUMNS = ["case", "node", "cpu_util_ratio"]
+_MAX_PLOTTED = 40
+
+
+# --------------------------------------------------------------------------------------------- finding runs
+def _is_run(folder: Path) -> bool:
+    return (folder / "metrics.csv").exists() or (folder / "meta.json").exists() and (folder / "jobs.csv").exists()
+
+
+def find_runs(folder: Path) -> tuple[str, list[tuple[str, Path, dict[str, Any]]]]:
+    """The kind of ``folder`` (``run``, ``sweep`` or ``batch``) and its runs as ``(case, folder, extra)``.
+
+    ``extra`` holds columns placed after ``case`` (sweep runs: index, replicate, factor values).
+    """
+    from netsim.sweep.run import SWEEP_MARKER
+
+    if (folder / SWEEP_MARKER).exists() and (folder / "summary.csv").exists():
+        info = json.loads((folder / SWEEP_MARKER).read_text(encoding="utf-8"))
+        factors = list(info.get("factors") or {})
+        summary = pd.read_csv(folder / "summary.csv", keep_default_na=False, na_values=[""])
+        runs = []
+        for row in summary.to_dict("records"):
+            sub = folder / str(row["folder"])
+            extra = {"index": row["index"], "replicate": row["replicate"], **{f: row[f] for f in factors}}
+            if _is_run(sub):
+                runs.append((sub.name, sub, extra))
+        return "sweep", runs
+    if _is_run(folder):
+        return "run", [(_case_name(folder), folder, {})]
+    subs = sorted(p for p in folder.iterdir() if p.is_dir() and _is_run(p))
+    if not subs:
+        raise ConfigError(
+            f"'{folder}' is not a run folder (no metrics.csv), a sweep folder (no sweep.json) or a batch folder "
+            "(no run folders inside); give the folder that `netsim run/batch/sweep` wrote"
+        )
+    return "batch", [(p.name, p, {}) for p in subs]
+
+
+def _case_name(folder: Path) -> str:
+    meta = _meta(folder)
+    return str(meta.get("scenario") or folder.name)
+
+
+def _meta(folder: Path) -> dict[str, Any]:
+    try:
+        data = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _metrics(folder: Path) -> dict[str, float]:
+    path = folder / "metrics.csv"
+    if not path.exists():
+        return {}
+    frame = pd.read_csv(path)
+    return {str(k): float(v) for k, v in zip(frame["metric"], frame["value"])}
+
+
+def _read(folder: Path, name: str) -> pd.DataFrame:
+    path = folder / name
+    if not path.exists():
+        return pd.DataFrame()
+    return pd.read_csv(path, keep_default_na=False, na_values=[""])
+
+
+def _duration_s(folder: Path, meta: dict[str, Any]) -> float:
+    for key in ("duration_s", "t_end_s"):
+        value = meta.get(key)
+        if isinstance(value, (int, float)) and value > 0:
+            return float(value)
+    return math.nan
+
+
+def _as_bool(series: pd.Series) -> pd.Series:
+    if series.dtype == bool:
+        return series
+    return series.astype(str).str.strip().str.lower().isin({"true", "1", "1.0", "yes"})
+
+
+# --------------------------------------------------------------------------------------------- tables
+def utilization_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+    """The utilization table (see the module docstring) of ``runs``."""
+    rows = []
+    extra_cols: list[str] = []
+    for case, folder, extra in runs:
+        for k in extra:
+            if k not in extra_cols:
+                extra_cols.append(k)
+        metrics = _metrics(folder)
+        row: dict[str, Any] = {"case": case, **extra, "status": str(_meta(folder).get("status", ""))}
+        for metric, col in UTILIZATION_COLUMNS:
+            row[col] = metrics.get(metric, math.nan)
+        rows.append(row)
+    columns = ["case", *extra_cols, "status", *(c for _, c in UTILIZATION_COLUMNS)]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def _stats(values: np.ndarray) -> tuple[float, float, float, float, float]:
+    v = values[np.isfinite(values)]
+    if v.size == 0:
+        return (math.nan,) * 5  # type: ignore[return-value]
+    return float(v.mean()), float(v.std(ddof=0)), float(v.min()), float(np.percentile(v, 95)), float(v.max())
+
+
+def task_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+    """Per-task CPU utilization and response-time statistics (from ``jobs.csv``)."""
+    rows = []
+    for case, folder, _ in runs:
+        jobs = _read(folder, "jobs.csv")
+        if jobs.empty:
+            continue
+        duration = _duration_s(folder, _meta(folder))
+        for (node, task), g in jobs.groupby(["node", "task"], sort=True):
+            response = pd.to_numeric(g["response_s"], errors="coerce").to_numpy(float)
+            cpu = float(pd.to_numeric(g["cpu_time_s"], errors="coerce").fillna(0.0).sum())
+            mean, std, lo, p95, hi = _stats(response)
+            met = _as_bool(g["deadline_met"]) if "deadline_met" in g else pd.Series(True, index=g.index)
+            has_deadline = pd.to_numeric(g.get("deadline_s"), errors="coerce").notna() if "deadline_s" in g else met
+            rows.append({
+                "case": case, "node": node, "task": task, "jobs_count": int(len(g)), "cpu_time_s": cpu,
+                "cpu_util_ratio": cpu / duration if duration > 0 else math.nan,
+                "response_mean_s": mean, "response_std_s": std, "response_min_s": lo, "response_p95_s": p95,
+                "response_max_s": hi, "deadline_misses_count": int((~met & has_deadline).sum()),
+                "preemptions_count": int(pd.to_numeric(g.get("preemptions"), errors="coerce").fillna(0).sum())
+                if "preemptions" in g else 0,
+                "killed_count": int(_as_bool(g["killed"]).sum()) if "killed" in g else 0,
+            })
+    return pd.DataFrame(rows, columns=TASK_COLUMNS)
+
+
+def network_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+    """Per-network delay and loss statistics (from ``messages.csv``)."""
+    rows = []
+    for case, folder, _ in runs:
+        msgs = _read(folder, "messages.csv")
+        if msgs.empty:
+            continue
+        metrics = _metrics(folder)
+        for net, g in msgs.groupby("network", sort=True):
+            dropped = _as_bool(g["dropped"])
+            delivered = ~dropped & pd.to_numeric(g["delivered_s"], errors="coerce").notna()
+            delay = pd.to_numeric(g["delay_s"], errors="coerce")[delivered].to_numpy(float)
+            wait = (pd.to_numeric(g["tx_start_s"], errors="coerce") - pd.to_numeric(g["sent_s"], errors="coerce"))
+            mean, std, lo, p95, hi = _stats(delay)
+            n = int(len(g))
+            rows.append({
+                "case": case, "network": net, "messages_count": n, "delivered_count": int(delivered.sum()),
+                "dropped_count": int(dropped.sum()), "loss_ratio": float(dropped.sum()) / n if n else math.nan,
+                "bits_total": float(pd.to_numeric(g["bits"], errors="coerce").sum()),
+                "delay_mean_s": mean, "delay_std_s": std, "delay_min_s": lo, "delay_p95_s": p95,
+                "delay_max_s": hi, "wait_mean_s": float(wait.mean()) if wait.notna().any() else math.nan,
+                "utilization_ratio": metrics.get(f"net.{net}.utilization", math.nan),
+            })
+    return pd.DataFrame(rows, columns=NETWORK_COLUMNS)
+
+
+def node_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+    """Per-node CPU utilization (tasks, handlers and context switches) from the run's ``cpu.<node>.utilization``."""
+    rows = []
+    for case, folder, _ in runs:
+        for name, value in _metrics(folder).items():
+            parts = name.split(".")
+            if len(parts) == 3 and parts[0] == "cpu" and parts[2] == "utilization":
+                rows.append({"case": case, "node": parts[1], "cpu_util_ratio": value})
+    frame = pd.DataFrame(rows, columns=NODE_COLUMNS)
+    return frame.sort_values(["case", "node"], kind="stable").reset_index(drop=True) if rows else frame
+
+
+# --------------------------------------------------------------------------------------------- figures
+def _bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: list[str], title: str, path: Path) -> Path | None:
+    data = frame.dropna(subset=value_cols, how="all").head(_MAX_PLOTTED)
+    if data.empty:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    labels = [" / ".join(str(r[c]) for c in label_cols) for _, r in data.iterrows()]
+    y = np.arange(len(data))
+    height = 0.8 / len(value_cols)
+    fig, ax = plt.subplots(figsize=(9, 1.2 + 0.35 * len(data) * max(1, len(value_cols) / 2)))
+    for i, col in enumerate(value_cols):
+        ax.barh(y + i * height, data[col].to_numpy(float), height=height, label=col)
+    ax.set_yticks(y + height * (len(value_cols) - 1) / 2)
+    ax.set_yticklabels(labels, fontsize=8)
+    ax.invert_yaxis()
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    ax.grid(axis="x", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _sweep_surface(folder: Path, out: Path, plots: bool) -> pd.DataFrame | None:
+    """Re-make the surface of a sweep folder with a ``surface:`` section; the optimum as a one-row table."""
+    from netsim.surface import surface_from_summary
+    from netsim.sweep.spec import SweepSpec
+
+    info = json.loads((folder / "sweep.json").read_text(encoding="utf-8"))
+    if not (info.get("spec") or {}).get("surface"):
+        return None
+    spec = SweepSpec.model_validate(info["spec"])
+    surf = spec.surface
+    assert surf is not None
+    logx = surf.logx if surf.logx is not None else spec.factors[surf.x].is_log
+    logy = surf.logy if surf.logy is not None else spec.factors[surf.y].is_log
+    opt, _ = surface_from_summary(folder / "summary.csv", x=surf.x, y=surf.y, z=surf.z, logx=logx, logy=logy,
+                                  out=out, plot=plots)
+    row = {k: v for k, v in opt.items() if k != "metrics"}
+    row.update({f"metric:{k}": v for k, v in opt["metrics"].items()})
+    return pd.DataFrame([row])
+
+
+def _figures(tables: dict[str, pd.DataFrame], out: Path, folder: Path, kind: str) -> list[Path]:
+    made: list[Path | None] = []
+    util = tables["utilization"]
+    if kind != "sweep" or len(util) <= _MAX_PLOTTED:
+        made.append(_bar_figure(util, ["case"], ["Uc_ratio", "Ua_ratio", "NE_ratio", "GPI"],
+                                "Utilization and performance indices", out / "utilization.png"))
+        made.append(_bar_figure(tables["tasks"], ["case", "node", "task"], ["response_mean_s", "response_max_s"],
+                                "Task response times [s]", out / "response_times.png"))
+        made.append(_bar_figure(tables["networks"], ["case", "network"], ["delay_mean_s", "delay_max_s"],
+                                "Network delays [s]", out / "network_delays.png"))
+    return [p for p in made if p is not None]
+
+
+# --------------------------------------------------------------------------------------------- entry point
+def report(path_or_name: str | Path, *, out: str | Path | None = None, plots: bool = True) -> dict[str, pd.DataFrame]:
+    """Tables (and figures) of a run, batch or sweep folder, or a registered case-study report.
+
+    Parameters
+    ----------
+    path_or_name
+        A folder written by ``netsim run``/``batch``/``sweep``, or the name of a registered ``report``.
+    out
+        Where to write the CSV tables and figures (default ``<folder>/report/``; for a registered report,
+        passed to it as is).
+    plots
+        Also write the figures.
+
+    Returns
+    -------
+    dict[str, pandas.DataFrame]
+        ``utilization``, ``nodes``, ``tasks``, ``networks`` (and ``summary``, ``optimum`` for sweeps).
+
+    Raises
+    ------
+    ConfigError
+        When the argument is neither such a folder nor a registered report name.
+    """
+    folder = Path(path_or_name)
+    if not folder.is_dir():
+        from netsim.registry import lookup
+
+        name = str(path_or_name)
+        try:
+            fn = lookup("report", name)
+        except ConfigError as exc:
+            raise ConfigError(f"'{name}' is neither a folder nor a registered report: {exc}") from None
+        return fn(Path(out) if out is not None else None, plots)
+    kind, runs = find_runs(folder)
+    tables: dict[str, pd.DataFrame] = {
+        "utilization": utilization_table(runs),
+        "nodes": node_table(runs),
+        "tasks": task_table(runs),
+        "networks": network_table(runs),
+    }
+    if kind == "sweep":
+        tables["summary"] = pd.read_csv(folder / "summary.csv", keep_default_na=False, na_values=[""])
+    target = Path(out) if out is not None else folder / "report"
+    target.mkdir(parents=True, exist_ok=True)
+    if kind == "sweep":
+        optimum = _sweep_surface(folder, target, plots)
+        if optimum is not None:
+            tables["optimum"] = optimum
+    if plots:
+        _figures(tables, target, folder, kind)
+    from netsim.results import write_csv
+
+    for name, frame in tables.items():
+        if name != "summary":
+            write_csv(frame, target / f"{name}.csv")
+    log.info("report of %s (%s, %d runs) written to %s", folder, kind, len(runs), target)
+    return tables
