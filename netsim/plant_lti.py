@@ -186,6 +186,15 @@ class LTIPlant(_LTIBase):
             kwargs.setdefault(key, value)
         return cls(A, B, C, D, **kwargs)
 
+    def set_process_noise(self, process_noise: Any) -> None:
+        """Set the intensity ``Qc`` of white process noise (n x n, or a vector for a diagonal) before the run."""
+        n = self.n_states
+        q = np.array(process_noise, dtype=float)
+        Qc = as_matrix("process_noise", np.diag(np.atleast_1d(q)) if q.ndim <= 1 else q, (n, n))
+        _psd_factor("process_noise", Qc)
+        self.Qc = Qc
+        self._build(self._zu[:n].copy())
+
     # ---------------------------------------------------------------- augmented model
     def _check_source(self, src: _Source) -> None:
         pass  # every kind is supported
@@ -467,6 +476,13 @@ class DiscretePlant(_LTIBase):
             self._L = _psd_factor("process_noise", Q) if np.any(Q != 0) else None
         self._rng: np.random.Generator | None = None
         self._ueff = np.zeros(self.n_inputs)
+
+    def set_process_noise(self, process_noise: Any) -> None:
+        """Set the covariance of the additive state noise per step (n x n, or a vector) before the run."""
+        n = self.n_states
+        q = np.array(process_noise, dtype=float)
+        Q = as_matrix("process_noise", np.diag(np.atleast_1d(q)) if q.ndim <= 1 else q, (n, n))
+        self._L = _psd_factor("process_noise", Q) if np.any(Q != 0) else None
 
     @classmethod
     def from_system(cls, sys: Any, **kwargs: Any) -> "DiscretePlant":
