@@ -115,7 +115,7 @@ def reconstruct(
     cols = np.concatenate([2 * k + 2, 2 * k, 2 * k + 1, 2 * k + 3, 2 * k + 1])
     vals = np.concatenate([np.ones(m), -np.ones(m), -np.ones(m), np.ones(m), -np.ones(m)])
     d = sp.csc_matrix((vals, (rows, cols)), shape=(2 * m, 2 * n))
-    w = sp.block_diag([rinv] * m, format="csc")
+    w = sp.kron(sp.identity(m, format="csc"), sp.csc_matrix(rinv), format="csc")
     p_mat = sp.triu((d.T @ w @ d).tocsc(), format="csc")
     q_vec = np.zeros(2 * n)
     sel = sp.csc_matrix((np.ones(n), (np.arange(n), 2 * np.arange(n))), shape=(n, 2 * n))
