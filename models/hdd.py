@@ -262,10 +262,14 @@ class HddControlParams(StrictModel):
     v_var: float = Field(1e-6, gt=0, description="Cov(v) assumed by the NUMRE")
     w_plant_var: float = Field(1e-2, gt=0, description="input-noise Cov assumed by the plant-only NUMRE (DOB case)")
     dob: bool = Field(False, description="add the H-infinity disturbance observer (Case 6)")
-    dob_bandwidth: float = Field(1000.0, gt=0)
-    dob_dc_gain: float = Field(3.0, gt=0)
-    dob_hf_gain: float = Field(0.5, gt=0)
-    dob_eps: float = Field(1e-2, gt=0)
+    dob_form: Literal["estimator", "eq18"] = Field(
+        "estimator", description="generalized plant of problem (17): estimator (stable D by construction) or the "
+        "closed-loop LFT eq18 (gives an unstable D for the HDD: refused at build time); see netsim.control.dob")
+    dob_bandwidth: float = Field(1000.0, gt=0, description="Hz where the weighted estimation error may reach 1 "
+                                 "(near the loop crossover ~790 Hz, below the 5 kHz resonance)")
+    dob_dc_error: float = Field(1e-2, gt=0, lt=1, description="low-frequency relative estimation error asked for")
+    dob_peak: float = Field(2.0, gt=1, description="high-frequency bound of |1 - D2 G|")
+    dob_eps: float = Field(1e-2, gt=0, description="regularising measurement noise of problem (17)")
     resonance_gain: Literal["unity", "printed"] = "unity"
     notch: Literal["attenuating", "printed"] = "attenuating"
     ad12: float | None = None
@@ -292,8 +296,8 @@ def _design_parts(key: str):
         est = Numre(m.Ap, m.Bp, m.Cp, m.Bp, [[p.w_plant_var]], [[p.v_var]], h=p.h)
     dob = None
     if p.dob:
-        dob = design_dob(m.Ap, m.Bp, m.Cp, m.controller_num, m.controller_den, p.period, bandwidth=p.dob_bandwidth,
-                         dc_gain=p.dob_dc_gain, hf_gain=p.dob_hf_gain, eps=p.dob_eps)
+        dob = design_dob(m.Ap, m.Bp, m.Cp, m.controller_num, m.controller_den, p.period, form=p.dob_form,
+                         bandwidth=p.dob_bandwidth, dc_error=p.dob_dc_error, peak=p.dob_peak, eps=p.dob_eps)
     return m, design, est, dob
 
 
