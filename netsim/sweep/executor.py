@@ -34,6 +34,7 @@ __all__ = [
     "read_record",
     "RECORD_NAME",
     "default_point_fn",
+    "point_hash",
 ]
 
 log = logging.getLogger(__name__)
@@ -207,10 +208,25 @@ def read_record(folder: Path) -> dict[str, Any] | None:
     return data if isinstance(data, dict) else None
 
 
-def _hash(raw: Mapping[str, Any]) -> str:
+def point_hash(raw: Mapping[str, Any], seed: int) -> str:
+    """The scenario hash of a run: :func:`netsim.scenario.scenario_hash` of ``raw`` with its ``seed`` set.
+
+    This equals the ``scenario_hash`` the runner writes into the run's ``meta.json``.
+    """
     from netsim.scenario import scenario_hash
 
-    return scenario_hash(dict(raw))
+    return scenario_hash({**dict(raw), "seed": int(seed)})
+
+
+def _run_hash(folder: Path, raw: Mapping[str, Any], seed: int) -> str:
+    """The hash from the run folder's ``meta.json`` (written by the runner) or, failing that, computed."""
+    try:
+        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
+        if int(meta.get("seed", -1)) == int(seed) and isinstance(meta.get("scenario_hash"), str) and meta["scenario_hash"]:
+            return meta["scenario_hash"]
+    except (OSError, ValueError, TypeError, AttributeError):
+        pass
+    return point_hash(raw, seed)
 
 
 @contextlib.contextmanager
@@ -248,10 +264,11 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
                 "error": "",
                 "metrics": {},
             }
+            (folder / "meta.json").unlink(missing_ok=True)
             try:
-                record["scenario_hash"] = _hash(task["raw"])
                 metrics = point_fn(task["raw"], folder, task["seed"])
                 record["metrics"] = {str(k): float(v) for k, v in dict(metrics).items()}
+                record["scenario_hash"] = _run_hash(folder, task["raw"], task["seed"])
             except Exception as exc:  # noqa: BLE001 - a failing point is a result of the sweep
                 record["status"] = "error"
                 record["error"] = f"{type(exc).__name__}: {exc}".strip()

@@ -9,7 +9,8 @@ Output folder layout::
     <out>/dask-scratch/              Dask's scratch space when a local Dask cluster ran the sweep
 
 A run is *finished* when its ``point.json`` says ``ok`` with the same seed and the same scenario hash
-(:func:`netsim.scenario.scenario_hash` of the point's scenario) as now; running the sweep again skips those
+(:func:`netsim.scenario.scenario_hash` of the point's scenario with its seed, as in the run's
+``meta.json``) as now; running the sweep again skips those
 and runs the rest (failed runs are retried). Ctrl-C stops the sweep: runs in progress are abandoned,
 finished ones are kept, ``summary.csv`` is written with ``status = pending`` for the rest, and the returned
 result has ``interrupted = True``.
@@ -27,7 +28,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from netsim.errors import ConfigError
-from netsim.sweep.executor import PointFn, default_point_fn, open_executor, read_record, run_chunk
+from netsim.sweep.executor import PointFn, default_point_fn, open_executor, point_hash, read_record, run_chunk
 from netsim.sweep.spec import Point, Sweep, load_sweep
 from netsim.sweep.summary import write_summary
 
@@ -156,10 +157,8 @@ def _finished(point: Point, folder: Path, raw: Mapping[str, Any]) -> dict[str, A
     rec = read_record(folder)
     if not rec or rec.get("status") != "ok" or rec.get("seed") != point.seed or rec.get("index") != point.index:
         return None
-    from netsim.scenario import scenario_hash
-
     try:
-        now = scenario_hash(dict(raw))
+        now = point_hash(raw, point.seed)
     except ConfigError:
         return None
     return rec if rec.get("scenario_hash") == now else None

@@ -1,0 +1,70 @@
+"""Benchmark: the 21 x 21 HDD GPI sweep on the local process pool, and the executor's per-point overhead.
+
+Run with ``pytest -m benchmark -s tests/benchmarks/test_bench_sweep.py``. Prints the wall time of the full
+sweep (target < 60 s on 2 cores), points per second, and the per-point cost of the sweep machinery (process
+pool, chunking, scenario hash, point record) against calling the point function directly in this process.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from netsim.sweep import load_sweep, run_sweep
+
+ROOT = Path(__file__).resolve().parents[2]
+SWEEP = ROOT / "scenarios" / "hdd_gpi_sweep.yaml"
+
+
+def noop_point(raw, out, seed):
+    """A point that does nothing: what is left is the executor's own cost."""
+    return {"GPI": float(seed % 7)}
+
+
+@pytest.mark.benchmark
+def test_bench_executor_overhead_per_point(tmp_path: Path) -> None:
+    sweep = load_sweep(SWEEP)
+    n = len(sweep.points)
+    t0 = time.perf_counter()
+    for p in sweep.points:
+        noop_point(sweep.point_raw(p), tmp_path, p.seed)
+    direct = (time.perf_counter() - t0) / n
+    for label, kwargs in (("serial", {"workers": 1}), ("pool", {"workers": os.cpu_count()})):
+        t0 = time.perf_counter()
+        res = run_sweep(SWEEP, out=tmp_path / label, point_fn=noop_point, progress=False, **kwargs)
+        wall = time.perf_counter() - t0
+        assert res.n_ok == n
+        print(f"\n{label:6s}: {n} no-op points in {wall:.2f} s = {wall / n * 1e3:.2f} ms/point wall "
+              f"(direct call {direct * 1e6:.1f} us/point) -> machinery {wall / n / max(direct, 1e-9):.0f}x direct")
+
+
+@pytest.mark.benchmark
+def test_bench_hdd_gpi_sweep_local_pool(tmp_path: Path) -> None:
+    from netsim.runner import run_point
+
+    sweep = load_sweep(SWEEP)
+    n = len(sweep.points)
+    sample = [sweep.points[i] for i in (0, n // 2, n - 1)]
+    run_point(sweep.point_raw(sample[0]), tmp_path / "warm", sample[0].seed)  # imports, registry, caches
+    t0 = time.perf_counter()
+    for k, p in enumerate(sample):
+        run_point(sweep.point_raw(p), tmp_path / f"direct{k}", p.seed)
+    direct = (time.perf_counter() - t0) / len(sample)
+    workers = os.cpu_count() or 1
+    t0 = time.perf_counter()
+    res = run_sweep(SWEEP, out=tmp_path / "gpi", workers=workers, progress=False)
+    wall = time.perf_counter() - t0
+    per_point = wall * workers / n
+    print(f"\nHDD GPI sweep {n} points on {workers} workers: {wall:.1f} s wall (target < 60 s), "
+          f"{n / wall:.2f} points/s, {res.n_failed} failed")
+    print(f"direct run_point: {direct:.3f} s/point; through the pool: {per_point:.3f} s/point-worker "
+          f"-> overhead {per_point - direct:+.3f} s/point ({per_point / direct:.2f}x)")
+    if res.optimum:
+        from netsim.surface import describe_optimum
+
+        print(describe_optimum(res.optimum))
+    assert res.n_runs == n
