@@ -1,7 +1,7 @@
 """Kernel speed (opt in: ``pytest -m benchmark -s tests/benchmarks/test_bench_kernel.py``).
 
-Figures are ratios to a bare simpy loop of the same number of timeouts run in the same process, so they
-do not depend much on the machine's load; wall times are printed for the record.
+Figures are ratios to a bare simpy loop of the same number of timeouts run in the same process. Times are
+CPU times (``time.process_time``), less sensitive than wall time to other processes on a busy machine.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ pytestmark = pytest.mark.benchmark
 
 
 def _bare_simpy(n: int, delay: int = 1000) -> float:
-    """Wall time of a simpy process that yields ``n`` timeouts."""
+    """CPU time of a simpy process that yields ``n`` timeouts."""
     env = simpy.Environment()
 
     def proc():
@@ -27,9 +27,9 @@ def _bare_simpy(n: int, delay: int = 1000) -> float:
             yield env.timeout(delay)
 
     env.process(proc())
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     env.run()
-    return time.perf_counter() - t0
+    return time.process_time() - t0
 
 
 def _best(fn, repeat: int = 3) -> float:
@@ -37,7 +37,9 @@ def _best(fn, repeat: int = 3) -> float:
 
 
 def test_bench_kernel_overhead_per_segment_vs_bare_simpy():
-    n = 200_000
+    # One task executing n segments back to back (each a preemptible execute with its own simpy wake-up)
+    # against a bare simpy process yielding n timeouts; runs interleaved, best of 5 each.
+    n = 100_000
 
     def one_task() -> float:
         env = SimEnv()
@@ -49,17 +51,19 @@ def test_bench_kernel_overhead_per_segment_vs_bare_simpy():
 
         k.create_task("t", body, priority=1)
         k.create_job("t")
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         env.run(n * 1000 + 1)
-        dt = time.perf_counter() - t0
+        dt = time.process_time() - t0
         assert k.segments == n
         return dt
 
-    bare = _best(lambda: _bare_simpy(n))
-    kern = _best(one_task)
-    ratio = kern / bare
-    print(f"\nbare simpy: {bare / n * 1e6:.2f} us/timeout; kernel, one task: {kern / n * 1e6:.2f} us/segment; "
-          f"ratio x{ratio:.2f} (target <= 3)")
+    bare, kern = [], []
+    for _ in range(5):
+        bare.append(_bare_simpy(n))
+        kern.append(one_task())
+    ratio = min(kern) / min(bare)
+    print(f"\nbare simpy: {min(bare) / n * 1e6:.2f} us/timeout; kernel, one task: {min(kern) / n * 1e6:.2f} "
+          f"us/segment; ratio x{ratio:.2f} (target <= 3)")
     assert ratio <= 3.0
 
 
@@ -80,9 +84,9 @@ def test_bench_kernel_preemptive_task_set_per_segment_vs_bare_simpy():
 
         for name, c, t in (("a", 1, 4), ("b", 2, 6), ("c", 3, 13)):
             k.create_task(name, make(c * MS), period=t * MS)
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         env.run(horizon)
-        return time.perf_counter() - t0, k.segments
+        return time.process_time() - t0, k.segments
 
     kern, segments = min(run() for _ in range(3))
     bare = _best(lambda: _bare_simpy(segments))
@@ -107,17 +111,18 @@ def test_bench_100khz_isr_with_1khz_control_task_for_2_s():
         k.create_handler("isr", isr)
         k.create_timer("tick", "isr", period=10 * US)
         k.create_task("control", control, period=1 * MS, priority=1)
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         env.run(2 * S)
-        return time.perf_counter() - t0, k
+        return time.process_time() - t0, k
 
     wall, k = run(True)
     wall_nt, _ = run(False)
-    bare = _bare_simpy(200_000, 10 * US)
+    bare = min(_bare_simpy(200_000, 10 * US) for _ in range(3))
     inv = k.handlers["isr"].invocations
     worst = max(r.response for r in k.job_records if r.finish is not None)
-    print(f"\n100 kHz ISR + 1 kHz task, 2 s simulated: {wall:.2f} s wall with trace, {wall_nt:.2f} s without "
+    print(f"\n100 kHz ISR + 1 kHz task, 2 s simulated: {wall:.2f} s CPU with trace, {wall_nt:.2f} s without "
           f"({inv} ISR invocations, {k.segments} segments, worst control response {worst / US:.0f} us); "
-          f"bare simpy 100 kHz loop {bare:.2f} s; target < 5 s: {'met' if wall < 5 else 'NOT met'}")
+          f"bare simpy 100 kHz loop {bare:.2f} s (ratio x{wall / bare:.1f}); "
+          f"target < 5 s: {'met' if wall < 5 else 'NOT met (machine load?)'}")
     assert inv == 200_001
     assert worst == 556 * US  # RTA: R = 500 + ceil(R/10) * 1 us
