@@ -185,7 +185,11 @@ def response_times(tasks: Sequence[RTATask], *, max_jobs: int = 100_000) -> dict
 def fp_schedulable(tasks: Sequence[RTATask]) -> bool:
     """True when every response time is bounded and within its deadline."""
     rts = response_times(tasks)
-    return all(rts[t.name] is not None and rts[t.name] <= t.relative_deadline for t in tasks)  # type: ignore[operator]
+    for t in tasks:
+        r = rts[t.name]
+        if r is None or r > t.relative_deadline:
+            return False
+    return True
 
 
 def busy_period(tasks: Sequence[RTATask]) -> int | None:

@@ -16,13 +16,14 @@ Importing this package registers the scheduling policies under registry kind ``"
 
 from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
-from netsim.kernel.kernel import Kernel, Timer, Trigger
+from netsim.kernel.kernel import Kernel
 from netsim.kernel.policies import (DeadlineMonotonic, EarliestDeadlineFirst, FixedPriority,
                                     NonPreemptiveEDF, NonPreemptiveFixedPriority, Policy, RateMonotonic)
 from netsim.kernel.records import JobRecord
 from netsim.kernel.requests import Request
 from netsim.kernel.sync import Event, Mailbox, Semaphore
 from netsim.kernel.task import Handler, HandlerSpec, Task, TaskSpec
+from netsim.kernel.timers import Timer, Trigger
 
 __all__ = [
     "Kernel",

@@ -22,11 +22,13 @@ it as ``"module:Class"``.
 
 from __future__ import annotations
 
+import difflib
 import math
 from typing import TYPE_CHECKING, Any, ClassVar
 
+from netsim.errors import BuildError, ConfigError
 from netsim.kernel.task import TaskSpec, task_error
-from netsim.registry import register
+from netsim.registry import entries, lookup, register
 
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.job import Job
@@ -40,6 +42,7 @@ __all__ = [
     "NonPreemptiveFixedPriority",
     "NonPreemptiveEDF",
     "BUILTIN_POLICIES",
+    "resolve_policy",
 ]
 
 
@@ -158,3 +161,30 @@ BUILTIN_POLICIES: dict[str, type[Policy]] = {
     for cls in (FixedPriority, RateMonotonic, DeadlineMonotonic, EarliestDeadlineFirst,
                 NonPreemptiveFixedPriority, NonPreemptiveEDF)
 }
+
+
+def resolve_policy(policy: "str | Policy", node: str) -> Policy:
+    """A :class:`Policy` instance from a registered name, a ``"module:Class"`` path or an instance."""
+    if isinstance(policy, Policy):
+        return policy
+    if isinstance(policy, type) and issubclass(policy, Policy):
+        return policy()
+    if not isinstance(policy, str):
+        raise BuildError(f"node '{node}': policy must be a name such as 'fp', 'rm', 'dm', 'edf' or a Policy, "
+                         f"got {policy!r}")
+    if policy in BUILTIN_POLICIES:
+        return BUILTIN_POLICIES[policy]()
+    try:
+        obj = lookup("policy", policy)
+    except ConfigError as exc:
+        if ":" in policy:
+            raise BuildError(f"node '{node}': scheduling policy: {exc}") from None
+        known = [e.name for e in entries("policy")]
+        close = difflib.get_close_matches(policy, known, n=1, cutoff=0.4)
+        hint = f"; did you mean '{close[0]}'?" if close else f" (known: {', '.join(sorted(known))})"
+        raise BuildError(f"node '{node}': unknown policy '{policy}'{hint}") from None
+    if isinstance(obj, type):
+        obj = obj()
+    if not isinstance(obj, Policy):
+        raise BuildError(f"node '{node}': '{policy}' is not a scheduling Policy (got {obj!r})")
+    return obj

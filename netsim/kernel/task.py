@@ -6,16 +6,26 @@ build time) is kept apart from the mutable :class:`Task`/:class:`Handler` (job q
 
 from __future__ import annotations
 
+import difflib
 import functools
 import inspect
 import numbers
 from collections import deque
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Iterable
 
 from netsim.errors import BuildError
 
-__all__ = ["TaskSpec", "HandlerSpec", "Task", "Handler", "task_error", "check_body", "check_time"]
+__all__ = ["TaskSpec", "HandlerSpec", "Task", "Handler", "task_error", "check_body", "check_time", "did_you_mean"]
+
+
+def did_you_mean(name: str, known: Iterable[str]) -> str:
+    """``"; did you mean 'x'?"`` for the closest of ``known``, else the list of known names."""
+    known = list(known)
+    close = difflib.get_close_matches(name, known, n=1)
+    if close:
+        return f"; did you mean '{close[0]}'?"
+    return f" (known: {', '.join(sorted(known)) or 'none'})"
 
 
 def task_error(node: str, task: str, field: str, message: str) -> BuildError:

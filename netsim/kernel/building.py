@@ -1,0 +1,230 @@
+"""Building a kernel: creating tasks, handlers, timers and triggers, and wiring I/O and networks.
+
+:class:`KernelBuilder` is the build-time half of :class:`~netsim.kernel.kernel.Kernel` (a mixin): every
+method validates its arguments and raises a :class:`~netsim.errors.BuildError` naming the node, the task
+and the field to change, before anything runs.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from typing import TYPE_CHECKING, Any, Callable
+
+from netsim.errors import BuildError
+from netsim.kernel.events import NORMAL, Wake
+from netsim.kernel.task import (Handler, HandlerSpec, Task, TaskSpec, check_body, check_time, did_you_mean,
+                                task_error)
+from netsim.kernel.timers import Timer, Trigger
+
+if TYPE_CHECKING:  # pragma: no cover
+    from netsim.kernel.job import Job
+
+__all__ = ["KernelBuilder"]
+
+
+class KernelBuilder:
+    """Build-time methods of a kernel (mixed into :class:`~netsim.kernel.kernel.Kernel`)."""
+
+    # provided by Kernel
+    name: str
+    policy: Any
+    tasks: dict[str, Task]
+    handlers: dict[str, Handler]
+    timers: dict[str, Timer]
+    triggers: dict[str, Trigger]
+    networks: dict[str, Any]
+    _sim: Any
+    _inboxes: dict[str, deque[Any]]
+    _bindings: dict[str, str]
+    _ain: dict[str, Callable[[int], Any]]
+    _aout: dict[str, Callable[[int, Any], None]]
+    _on_periodic_release: Callable[[Any], None]
+    _on_timer: Callable[[Any], None]
+    _get: Callable[..., Any]
+
+    def create_task(self, name: str, body: Callable[[Job], Any], *, period: int | None = None, offset: int = 0,
+                    deadline: int | None = None, priority: int | float | None = None, wcet: int | None = None,
+                    preemptible: bool = True, data: Any = None,
+                    wcet_handler: "str | Callable[[Job], Any] | None" = None,
+                    deadline_handler: "str | Callable[[Job], Any] | None" = None) -> Task:
+        """Create a periodic (``period`` set) or aperiodic task.
+
+        Parameters
+        ----------
+        name
+            Unique name on this node (tasks and handlers share one name space).
+        body
+            Generator function ``body(job)``, called once per job.
+        period, offset, deadline
+            Period and first release (ns, periodic tasks); relative deadline (default: the period).
+        priority
+            Fixed priority (lower = more urgent), required by ``fp``.
+        wcet
+            Execution budget per job (ns); exceeding it fires ``wcet_handler``.
+        preemptible
+            ``False``: a started job is preempted only by interrupt handlers.
+        data
+            Default ``job.data`` for jobs released without data.
+        wcet_handler, deadline_handler
+            A handler name (invoked with the overrunning job as data) or a callable ``fn(job)`` run at
+            the overrun instant.
+
+        Raises
+        ------
+        BuildError
+            Naming the task and field for an invalid value.
+        """
+        node = self.name
+        if not isinstance(name, str) or not name:
+            raise BuildError(f"node '{node}': task name must be a non-empty string, got {name!r}")
+        if name in self.tasks or name in self.handlers:
+            raise task_error(node, name, "name", "is already used by another task or handler on this node")
+        check_body(node, name, body)
+        period_ns = check_time(node, name, "period", period, positive=True, allow_none=True)
+        offset_ns = check_time(node, name, "offset", offset)
+        assert offset_ns is not None
+        if period_ns is None and offset_ns:
+            raise task_error(node, name, "offset", "applies to periodic tasks only; give a period or drop it")
+        deadline_ns = check_time(node, name, "deadline", deadline, positive=True, allow_none=True)
+        if deadline_ns is None:
+            deadline_ns = period_ns
+        if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
+            raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
+        wcet_ns = check_time(node, name, "wcet", wcet, positive=True, allow_none=True)
+        for field, ref in (("wcet_handler", wcet_handler), ("deadline_handler", deadline_handler)):
+            if ref is not None and not isinstance(ref, str) and not callable(ref):
+                raise task_error(node, name, field, f"must be a handler name or a callable fn(job), got {ref!r}")
+        if wcet_handler is not None and wcet_ns is None:
+            raise task_error(node, name, "wcet_handler", "needs a 'wcet' budget to detect overruns")
+        if deadline_handler is not None and deadline_ns is None:
+            raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
+        spec = TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(preemptible))
+        self.policy.check(node, spec)
+        task = Task(spec, body, data, wcet_handler, deadline_handler)
+        self.tasks[name] = task
+        for ref in (wcet_handler, deadline_handler):
+            if isinstance(ref, str) and ref in self.handlers:
+                pass  # resolved now; unknown names are reported by validate() before the run
+        if period_ns is not None:
+            Wake(self._sim, offset_ns, NORMAL, self._on_periodic_release, task)
+        return task
+
+    def create_handler(self, name: str, body: Callable[[Job], Any], *, priority: int | float = 0, latency: int = 0,
+                       data: Any = None) -> Handler:
+        """Create an interrupt handler.
+
+        Parameters
+        ----------
+        name
+            Unique name on this node.
+        body
+            Generator function ``body(job)``, called once per invocation; ``job.data`` is the invocation
+            data (the message, the trigger data, the overrunning job) or ``data``.
+        priority
+            Among handlers (lower = more urgent); every handler beats every task.
+        latency
+            ISR entry latency: CPU time (ns) spent at each invocation before the code runs.
+        """
+        node = self.name
+        if not isinstance(name, str) or not name:
+            raise BuildError(f"node '{node}': handler name must be a non-empty string, got {name!r}")
+        if name in self.tasks or name in self.handlers:
+            raise task_error(node, name, "name", "is already used by another task or handler on this node")
+        check_body(node, name, body)
+        if isinstance(priority, bool) or not isinstance(priority, (int, float)):
+            raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
+        latency_ns = check_time(node, name, "latency", latency)
+        assert latency_ns is not None
+        handler = Handler(HandlerSpec(name, priority, latency_ns), body, data)
+        self.handlers[name] = handler
+        return handler
+
+    def create_timer(self, name: str, handler: str, *, period: int | None = None, start: int = 0,
+                     data: Any = None) -> Timer:
+        """A timer invoking ``handler`` at absolute time ``start``, then every ``period`` ns if given."""
+        node = self.name
+        if name in self.timers:
+            raise task_error(node, name, "name", "is already used by another timer on this node")
+        period_ns = check_time(node, name, "period", period, positive=True, allow_none=True)
+        start_ns = check_time(node, name, "start", start)
+        assert start_ns is not None
+        now = self._sim.now
+        if start_ns < now:
+            raise task_error(node, name, "start", f"{start_ns} ns is in the past (now {now} ns)")
+        if not isinstance(handler, str):
+            raise task_error(node, name, "handler", f"must be a handler name, got {handler!r}")
+        timer = Timer(name, handler, period_ns, start_ns, data)
+        self.timers[name] = timer
+        Wake(self._sim, start_ns - now, NORMAL, self._on_timer, timer)
+        return timer
+
+    def cancel_timer(self, name: str) -> None:
+        """Stop timer ``name`` (pending expiries are discarded)."""
+        self._get(self.timers, name, "timer").active = False
+
+    def create_trigger(self, name: str, handler: str, *, min_interarrival: int = 0) -> Trigger:
+        """An external interrupt input ``name`` invoking ``handler``; edges closer than ``min_interarrival``
+        ns to the last accepted one are ignored (counted in ``Trigger.ignored``)."""
+        node = self.name
+        if name in self.triggers:
+            raise task_error(node, name, "name", "is already used by another trigger on this node")
+        mia = check_time(node, name, "min_interarrival", min_interarrival)
+        assert mia is not None
+        if not isinstance(handler, str):
+            raise task_error(node, name, "handler", f"must be a handler name, got {handler!r}")
+        trig = Trigger(name, handler, mia)
+        self.triggers[name] = trig
+        return trig
+
+    def bind_receive(self, network: str, target: str) -> None:
+        """On each message arriving on ``network``: queue it in ``inbox(network)``, then invoke the handler
+        ``target`` or release a job of the task ``target`` (the message is also the job's ``data``)."""
+        if network in self._bindings:
+            raise BuildError(f"node '{self.name}': network '{network}' is already bound to "
+                             f"'{self._bindings[network]}'")
+        if not isinstance(target, str):
+            raise BuildError(f"node '{self.name}': bind_receive target must be a task or handler name, "
+                             f"got {target!r}")
+        self._bindings[network] = target
+        self._inboxes.setdefault(network, deque())
+
+    def attach_network(self, net: Any) -> None:
+        """Make ``net`` (with ``.name`` and ``.send(msg)``) available to ``job.send``."""
+        self.networks[net.name] = net
+        self._inboxes.setdefault(net.name, deque())
+
+    def attach_analog_in(self, channel: str, read: Callable[[int], Any]) -> None:
+        """Analog input ``channel``: ``read(t_ns)`` returns the value seen by ``job.analog_in``."""
+        self._ain[channel] = read
+
+    def attach_analog_out(self, channel: str, write: Callable[[int, Any], None]) -> None:
+        """Analog output ``channel``: ``job.analog_out`` calls ``write(t_ns, value)``."""
+        self._aout[channel] = write
+
+    def validate(self) -> None:
+        """Check every reference to a handler or task by name (called automatically at time 0).
+
+        Raises
+        ------
+        BuildError
+            Naming the referring timer, trigger, task or binding, with a suggestion.
+        """
+        handlers = self.handlers
+        for timer in self.timers.values():
+            if timer.handler not in handlers:
+                raise task_error(self.name, timer.name, "handler",
+                                 f"unknown handler '{timer.handler}'{did_you_mean(timer.handler, handlers)}")
+        for trig in self.triggers.values():
+            if trig.handler not in handlers:
+                raise task_error(self.name, trig.name, "handler",
+                                 f"unknown handler '{trig.handler}'{did_you_mean(trig.handler, handlers)}")
+        for task in self.tasks.values():
+            for field, ref in (("wcet_handler", task.wcet_handler), ("deadline_handler", task.deadline_handler)):
+                if isinstance(ref, str) and ref not in handlers:
+                    raise task_error(self.name, task.name, field,
+                                     f"unknown handler '{ref}'{did_you_mean(ref, handlers)}")
+        for network, target in self._bindings.items():
+            if target not in handlers and target not in self.tasks:
+                known = list(handlers) + list(self.tasks)
+                raise BuildError(f"node '{self.name}': bind_receive('{network}', '{target}'): no task or "
+                                 f"handler '{target}'{did_you_mean(target, known)}")
