@@ -78,9 +78,23 @@ def test_short_duration_override_runs(cases):
     assert _m(res, "N_TTS") == 50
 
 
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="our H-infinity DOB (eq 18 reading) is an unstable filter and degrades "
-                   "the loop; see reports/hdd/README.md, Case 6")
-def test_dob_case_performs_close_to_known_model_case(cases):
-    res6 = run(SCEN / "hdd_case6.yaml", write=False)
-    assert _m(res6, "NE") < 2 * _m(cases[5], "NE") + 0.05
+@pytest.fixture(scope="module")
+def case6():
+    return run(SCEN / "hdd_case6.yaml", write=False)
+
+
+def test_dob_case_performs_close_to_known_model_case(cases, case6):
+    # Section 5.6: with the DOB instead of the disturbance model "very similar performance to that achieved
+    # in the previous case" (paper NE 1 % vs 2 %), "a similar computation saving" (Uc 0.78 vs 0.73) "but
+    # sending around 15% more packets from controller to actuator" (Nca 315 vs 231).
+    assert case6.meta.get("status") == "ok", case6.meta.get("error")
+    assert _m(case6, "NE") < 1.5 * _m(cases[5], "NE")
+    assert abs(_m(case6, "Uc") - _m(cases[5], "Uc")) < 0.1
+    assert _m(case6, "Ua") > _m(cases[5], "Ua")
+
+
+def test_dob_improves_on_the_plant_only_estimator(case6):
+    # Without the DOB the plant-only NUMRE has no disturbance estimate at all (d_hat = 0).
+    res = run(SCEN / "hdd_case6.yaml", write=False,
+              overrides={"nodes.controller.tasks[0].params.design_params.dob": False})
+    assert _m(case6, "NE") < 0.5 * _m(res, "NE")
