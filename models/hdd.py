@@ -39,6 +39,17 @@ Reading the printed parameters (choices and evidence)
    ``-1.6375/(z^2-0.7218)`` and ``(1.0882 z + 1.8426)/(z-0.6137)``; eq (34) prints 0.04484, -1.6365 and
    1.84 -- the differences (0.3 %, 0.06 %) come from the four-digit rounding of eq (33)'s roots.
 
+7. **DOB, eq (18)** (Case 6). Rows 2-3 of the printed ``M`` imply ``u = -C y + q``, so ``M12 = -1`` makes
+   the residual ``d - q`` reward doubling the disturbance; the consistent sign is ``+1`` (``q = -d_hat``).
+   Even so, problem (17) on this closed-loop LFT only requires the loop through ``C(z)`` and ``G`` to be
+   stable, and its H-infinity solution for this plant is an *unstable* filter (poles up to |z| ~ 13,
+   cancelled only by that exact loop). Inside the NUMRE cascade (MRCI instead of ``C(z)``, restarts at
+   arrivals, packets held by eq (22)) it diverged (NE 4.5). We solve (17) in the estimator form (the DOB's
+   output kept out of its own design loop, i.e. the Youla parameter of eq (18) as a filter on ``u`` and
+   ``y``): ``D(z)`` is stable by construction and has ``D1 ~ -1``, ``D2 ~ G^-1`` in band, the structure
+   the text describes. Details and the weights in :mod:`netsim.control.dob`; ``dob_form: eq18`` keeps the
+   literal reading (refused at build time with a clear error).
+
 Units are those of the benchmark (output in track-ish units, unit-step reference).
 """
 
