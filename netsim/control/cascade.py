@@ -20,6 +20,13 @@ with a :class:`~netsim.control.numre.Numre` (Cases 3-6)
        controller are continued past the packet with the held last action, and the violation is counted
        in :attr:`horizon_violations` and logged.
 
+With a DOB (Case 6, :mod:`netsim.control.dob`) ``d_hat`` of each cascade step is ``D(z)`` applied to the
+previous action and ``y_hat`` (eq 16); the NUMRE then predicts with ``u`` only (eq 14, plant model). The
+DOB must be a *stable* filter: its states are carried through the cascade and restarted from snapshots at
+each arrival, and when eq (22) holds a packet back its inputs were the computed (not the applied)
+actions, so nothing cancels an unstable DOB mode (:class:`~netsim.control.dob.DisturbanceObserver`
+refuses one).
+
 The controller-side trigger compares ``u_k`` with the first value of the last *sent* packet (eq 21-22).
 The sign convention: ``u = C(e) - d_hat`` (``d`` enters the plant as ``u + d``).
 """
