@@ -277,7 +277,7 @@ class Kernel(KernelBuilder):
         job = Job(self, handler, handler.invocations, handler.data if data is None else data, now, None, True,
                   invoker)
         handler.invocations += 1
-        job._rank = (0, handler.spec.priority)
+        job._rank = job._base_rank = (0, handler.spec.priority)
         job._pre_left = handler.spec.latency
         if handler.active is None:
             handler.active = job

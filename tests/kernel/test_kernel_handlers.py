@@ -168,3 +168,25 @@ def test_handler_releases_aperiodic_task_job():
     assert log == [(1 * MS + 5 * US, "from-isr")]
     rec = k.job_records[0]
     assert rec.release == 1 * MS and rec.finish == 1 * MS + 105 * US and rec.deadline is None
+
+
+def test_handler_that_sleeps_still_ranks_above_tasks_when_it_wakes():
+    # The handler runs 0-10 us, sleeps until 100 us, then needs 50 us more; the task (1 ms from 0) is
+    # preempted at 100 us again, so it ends at 1000 + 10 + 50 us.
+    env = SimEnv()
+    k = Kernel(env, "n")
+    woke = []
+
+    def isr(job):
+        yield job.execute(10 * US)
+        yield job.sleep_until(100 * US)
+        woke.append(job.now)
+        yield job.execute(50 * US)
+
+    k.create_handler("isr", isr)
+    k.create_timer("once", "isr", start=0)
+    k.create_task("t", body_of(1 * MS), period=10 * MS, priority=1)
+    env.run(5 * MS)
+    assert woke == [100 * US]
+    assert k.job_records[0].finish == 1060 * US
+    assert ("isr", "blocked", 10 * US, 100 * US) in k.schedule
