@@ -185,7 +185,7 @@ def test_handler_that_sleeps_still_ranks_above_tasks_when_it_wakes():
 
     k.create_handler("isr", isr)
     k.create_timer("once", "isr", start=0)
-    k.create_task("t", body_of(1 * MS), period=10 * MS, priority=1)
+    k.create_task("t", body_of(1 * MS), period=10 * MS, priority=0)  # as urgent as a task can be
     env.run(5 * MS)
     assert woke == [100 * US]
     assert k.job_records[0].finish == 1060 * US
