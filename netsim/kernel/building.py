@@ -56,7 +56,10 @@ class KernelBuilder:
         body
             Generator function ``body(job)``, called once per job.
         period, offset, deadline
-            Period and first release (ns, periodic tasks); relative deadline (default: the period).
+            Period and first release (ns, periodic tasks; the first release is ``offset`` after the task is
+            created, normally at t = 0); relative deadline (default: the period; none for an aperiodic
+            task unless given). Handler names in ``wcet_handler``/``deadline_handler``, timers and
+            bindings are checked by :meth:`validate`, which runs automatically at the start of the run.
         priority
             Fixed priority (lower = more urgent), required by ``fp``.
         wcet
@@ -102,9 +105,6 @@ class KernelBuilder:
         self.policy.check(node, spec)
         task = Task(spec, body, data, wcet_handler, deadline_handler)
         self.tasks[name] = task
-        for ref in (wcet_handler, deadline_handler):
-            if isinstance(ref, str) and ref in self.handlers:
-                pass  # resolved now; unknown names are reported by validate() before the run
         if period_ns is not None:
             Wake(self._sim, offset_ns, NORMAL, self._on_periodic_release, task)
         return task

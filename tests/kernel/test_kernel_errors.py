@@ -188,3 +188,14 @@ def test_body_looping_on_zero_time_requests_raises_livelock():
     k.create_job("spin")
     with pytest.raises(LivelockError, match="'spin'"):
         env.run(1 * MS)
+
+
+def test_bind_receive_to_unknown_target_is_reported_before_the_run():
+    env = SimEnv()
+    k = Kernel(env, "n")
+    k.create_task("actuate", good, priority=1)
+    k.bind_receive("can", "actuat")
+    with pytest.raises(BuildError, match=r"bind_receive\('can', 'actuat'\).*did you mean 'actuate'"):
+        env.run(1 * MS)
+    with pytest.raises(BuildError, match="already bound"):
+        k.bind_receive("can", "actuate")
