@@ -34,6 +34,8 @@ noise enters as a jump at the step instant), a stochastic disturbance update. Ex
 
 from __future__ import annotations
 
+import abc
+
 import logging
 import math
 from typing import Any, Callable, Iterable, Sequence
@@ -285,7 +287,7 @@ def _classify(index: int, signal: Any) -> _Source:
 
 
 # ----------------------------------------------------------------------------------------------- base class
-class Plant:
+class Plant(abc.ABC):
     """Common interface and lazy-advance machinery of all plants.
 
     Subclasses implement :meth:`_step` (propagate over ``[self._t, t]`` with the effective input constant
@@ -532,15 +534,17 @@ class Plant:
             f"{format_time(self._t)} (time cannot go backwards)"
         )
 
-    def _step(self, t: int) -> bool:  # pragma: no cover - abstract
+    @abc.abstractmethod
+    def _step(self, t: int) -> bool:
         """Propagate from ``self._t`` to ``t`` (no jumps in between); True when noise was added."""
-        raise NotImplementedError
 
-    def _output_now(self) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _output_now(self) -> np.ndarray:
+        """The output at the plant's current time."""
 
-    def _state_now(self) -> np.ndarray:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _state_now(self) -> np.ndarray:
+        """The (physical) state at the plant's current time."""
 
     def _diverged(self, t: int, x: np.ndarray) -> None:
         norm = float(np.sqrt(np.dot(x, x))) if np.all(np.isfinite(x)) else float("nan")
@@ -610,5 +614,6 @@ class Plant:
         self._set_state_now(_vector(f"plant {self.name} state", x, self.n_states))
         self._notify(t)
 
-    def _set_state_now(self, x: np.ndarray) -> None:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _set_state_now(self, x: np.ndarray) -> None:
+        """Overwrite the physical state at the plant's current time."""

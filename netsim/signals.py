@@ -23,6 +23,8 @@ Examples
 
 from __future__ import annotations
 
+import abc
+
 import math
 from typing import Any, Callable, ClassVar, Literal
 
@@ -47,7 +49,7 @@ __all__ = [
 ]
 
 
-class Signal:
+class Signal(abc.ABC):
     """Base class of signals: call with ``t_ns`` to get the value.
 
     Attributes
@@ -59,8 +61,9 @@ class Signal:
     Params: ClassVar[type[StrictModel]]
     piecewise_constant: ClassVar[bool] = True
 
-    def __call__(self, t_ns: int) -> float:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def __call__(self, t_ns: int) -> float:
+        """The signal's value at ``t_ns``."""
 
     def breakpoints(self, t0_ns: int, t1_ns: int) -> list[int]:
         """Instants in ``(t0_ns, t1_ns]`` where the value jumps, ascending."""

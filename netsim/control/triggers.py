@@ -16,6 +16,8 @@ paper cites; ``norm="2"`` gives the plain 2-norm reading. The first evaluation a
 
 from __future__ import annotations
 
+import abc
+
 from typing import Literal, Protocol, runtime_checkable
 
 import numpy as np
@@ -69,7 +71,7 @@ class SensorTrigger(Protocol):
     def reset(self) -> None: ...
 
 
-class _Base:
+class _Base(abc.ABC):
     def __init__(self) -> None:
         self.last_y = None
         self.last_k: int | None = None
@@ -82,8 +84,9 @@ class _Base:
         self.last_y = np.array(y, dtype=float, copy=True)
         self.last_k = int(k)
 
-    def check(self, k: int, y, r: float | None = None) -> bool:  # pragma: no cover - overridden
-        raise NotImplementedError
+    @abc.abstractmethod
+    def check(self, k: int, y, r: float | None = None) -> bool:
+        """True when the sample ``y`` of period ``k`` is to be sent (each trigger's own condition)."""
 
     def should_send(self, k: int, y, r: float | None = None) -> bool:
         """Decide for sample ``y`` at instant ``k``; remember ``y`` when it is sent."""

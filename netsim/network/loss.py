@@ -12,6 +12,8 @@ loss_bad``; with ``loss_good = 0, loss_bad = 1`` a loss burst is a stay in the b
 
 from __future__ import annotations
 
+import abc
+
 from typing import Annotated, Literal, Union
 
 import numpy as np
@@ -53,11 +55,12 @@ class GilbertElliottLossSpec(StrictModel):
 LossSpec = Annotated[Union[BernoulliLossSpec, GilbertElliottLossSpec], Field(discriminator="model")]
 
 
-class LossModel:
+class LossModel(abc.ABC):
     """Interface: ``lost(pair) -> bool`` for one copy travelling on ``pair = (sender, receiver)``."""
 
-    def lost(self, pair: tuple[str, str]) -> bool:  # pragma: no cover - interface
-        raise NotImplementedError
+    @abc.abstractmethod
+    def lost(self, pair: tuple[str, str]) -> bool:
+        """Draw whether this copy is lost."""
 
 
 class BernoulliLoss(LossModel):

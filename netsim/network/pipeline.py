@@ -18,6 +18,8 @@ copy in :attr:`Network.records`, queue lengths per node, busy time per channel, 
 
 from __future__ import annotations
 
+import abc
+
 import logging
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar
@@ -81,7 +83,7 @@ class Frame:
     attempts: int = 0
 
 
-class Network:
+class Network(abc.ABC):
     """Base of every network model (see the module docstring for the pipeline).
 
     Parameters
@@ -311,9 +313,9 @@ class Network:
         """Transmission time of a frame of ``wire_bits`` sent by ``sender``."""
         return tx_time_ns(wire_bits, self.params.bitrate)
 
+    @abc.abstractmethod
     def _offer(self, frame: Frame) -> None:
         """The frame's pre-processing delay is over: queue it and let the medium act."""
-        raise NotImplementedError
 
     def _extra_metrics(self, t_end_ns: int) -> dict[str, float]:
         """Type-specific metrics added to :meth:`metrics`."""

@@ -200,8 +200,8 @@ class PluginSpec(SpecModel):
     _validated: Any = PrivateAttr(default=None)
 
     def plugin_name(self) -> str:
-        """The registered name (or ``module:attr``) of the plugin."""
-        raise NotImplementedError
+        """The registered name (or ``module:attr``) of the plugin: the spec's ``type`` unless overridden."""
+        return str(getattr(self, "type"))
 
     def raw_params(self) -> dict[str, Any]:
         """The parameters as written in the scenario (what the plugin's ``Params`` validates)."""
