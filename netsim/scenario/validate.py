@@ -303,6 +303,9 @@ class _Checker:
             self.error([*at, "period"], "a periodic task needs a period; add e.g. 'period: 10 ms', or set 'release: aperiodic' or 'release: on_message:<network>'")
         if rel is not None and rel != "periodic" and period is not None:
             self.error([*at, "period"], f"only periodic tasks have a period (this one is released '{rel}'); remove 'period' or set 'release: periodic'")
+        offset = _time_or_none(task.get("offset"))
+        if rel is not None and rel != "periodic" and offset:
+            self.error([*at, "offset"], f"only periodic tasks have an offset (this one is released '{rel}'); remove 'offset'")
         if rel is not None and rel.startswith("on_message:"):
             net = rel.split(":", 1)[1]
             if self.network_ref(node_name, net, [*at, "release"]):

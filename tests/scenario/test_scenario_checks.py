@@ -379,3 +379,17 @@ def test_overriding_a_loaded_scenario_keeps_derived_defaults_derived(base):
 def test_trigger_is_written_with_only_its_kind(base):
     data = load_scenario(base()).resolved_dict()
     assert data["nodes"]["actuator"]["handlers"][0]["trigger"] == {"on_message": "bus"}
+
+
+def test_offset_on_an_aperiodic_task_is_an_error(base):
+    raw = base()
+    node = next(iter(raw["nodes"].values()))
+    node.setdefault("tasks", []).append({"name": "late", "program": node["tasks"][0]["program"],
+                                         "params": node["tasks"][0].get("params", {}), "priority": 3,
+                                         "release": "aperiodic", "offset": "1 ms"})
+    index = len(node["tasks"]) - 1
+    node_name = next(iter(raw["nodes"]))
+    assert _problems(raw) == {
+        f"nodes.{node_name}.tasks[{index}].offset": "only periodic tasks have an offset (this one is released "
+        "'aperiodic'); remove 'offset'"
+    }
