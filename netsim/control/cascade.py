@@ -100,7 +100,8 @@ class ControlSide:
         self.N_max = 0
         n = 0 if estimator is None else estimator.n
         self._x0 = np.zeros(n) if x0 is None else np.asarray(x0, float)
-        self._traj_x: list[np.ndarray] = []
+        self._traj_x: list[np.ndarray] = []  # x(k_ls + l | k_ls), completed lazily by _traj_state
+        self._traj_k = 0
         self._traj_c: list[np.ndarray] = []
         self._traj_d: list = []
         self._u_prev = 0.0
@@ -134,19 +135,19 @@ class ControlSide:
                 x = est.predict_step(x, self.mirror.value(j))
             return x, 1
         N = k - self.k_ls
-        L = len(self._traj_x) - 1
+        L = len(self._traj_c) - 1
         if N <= L:
             self.ctrl.restore(self._traj_c[N])
             if self.dob is not None:
                 self.dob.restore(self._traj_d[N])
             self._u_prev = self._traj_u_prev[N]
-            return self._traj_x[N], N
+            return self._traj_state(N), N
         # past the packet: continue with the held action (h < N)
         self.ctrl.restore(self._traj_c[L])
         if self.dob is not None:
             self.dob.restore(self._traj_d[L])
         self._u_prev = self._traj_u_prev[L]
-        x = self._traj_x[L]
+        x = self._traj_state(L)
         for l in range(L, N):
             j = self.k_ls + l
             yh, dh = est.outputs(x)
@@ -154,6 +155,24 @@ class ControlSide:
             self._u_prev = self.ctrl.step(j, self.reference(j) - yh) - dh
             x = est.predict_step(x, self.mirror.value(j))
         return x, N
+
+    def _traj_state(self, i: int) -> np.ndarray:
+        """``x(k_ls + i | k_ls)`` of the last cascade, predicted with the actions the actuator applies.
+
+        After a packet was held back (eq 22) only ``x(k_ls|k_ls)`` is stored; the predictions with the
+        playing packet (``mirror``) are computed here up to the step the next arrival asks for, with the
+        same arithmetic as :meth:`Numre.predict_step`. The mirror cannot change in between: it changes only
+        after the next arrival has taken its prior.
+        """
+        xs = self._traj_x
+        if i >= len(xs):
+            est = self.est
+            A, b, value, k0 = est.A, est._b, self.mirror.value, self._traj_k
+            x = xs[-1]
+            for l in range(len(xs) - 1, i):
+                x = A @ x + b * value(k0 + l)
+                xs.append(x)
+        return xs[i]
 
     def _dob_step(self, u_prev: float, y_hat: float) -> float:
         if self.dob is None:
@@ -172,37 +191,43 @@ class ControlSide:
         x = est.correct(prior, y, min(N, 10**6))
         self.k_ls = k
         h = self.h
+        ctrl, dob, ref = self.ctrl, self.dob, self.reference
+        b = est._b
         xs = [x]
-        cs = [self.ctrl.snapshot()]
-        ds = [self.dob.snapshot() if self.dob is not None else None]
+        cs = [ctrl.snapshot()]
+        ds = [dob.snapshot() if dob is not None else None]
         ups = [self._u_prev]
         us = []
+        u = self._u_prev
         y_hat0 = d_hat0 = 0.0
+        # per step l: y_hat, d_hat (eq 15, or the DOB) and A x from one product (step_outputs), the MRCI on
+        # r - y_hat minus d_hat gives u_{k+l}, and x(k+l+1|k) = A x + B u (eq 14, = est.predict_step)
+        step_outputs = est.step_outputs
         for l in range(h + 1):
             j = k + l
-            yh, dh = est.outputs(x)
-            if self.dob is not None:
-                dh = self.dob.step(self._u_prev, yh)
+            ax, yh, dh = step_outputs(x)
+            if dob is not None:
+                dh = dob.step(u, yh)
             if l == 0:
                 y_hat0, d_hat0 = yh, dh
-            u = self.ctrl.step(j, self.reference(j) - yh) - dh
-            self._u_prev = u
+            u = ctrl.step(j, ref(j) - yh) - dh
             us.append(u)
-            x = est.predict_step(x, u)
+            x = ax + b * u
             xs.append(x)
-            cs.append(self.ctrl.snapshot())
-            ds.append(self.dob.snapshot() if self.dob is not None else None)
+            cs.append(ctrl.snapshot())
+            if dob is not None:
+                ds.append(dob.snapshot())
+            else:
+                ds.append(None)
             ups.append(u)
+        self._u_prev = u
         self.steps += h + 1
         pkt = ControlPacket(k, tuple(us))
         send = self.trigger.should_send(us[0])
         if send:
             self.mirror.receive(pkt)
-        else:  # the actuator keeps playing the older packet: predict with what it applies
-            x = xs[0]
-            xs = [x]
-            for l in range(h + 1):
-                x = est.predict_step(x, self.mirror.value(k + l))
-                xs.append(x)
+        else:  # the actuator keeps playing the older packet: predict with what it applies (lazily, as far
+            xs = [xs[0]]  # as the next arrival needs: see _traj_state)
         self._traj_x, self._traj_c, self._traj_d, self._traj_u_prev = xs, cs, ds, ups
+        self._traj_k = k
         return Decision(k, pkt, send, N, y_hat0, d_hat0)
