@@ -202,10 +202,17 @@ class ControlSide:
         y_hat0 = d_hat0 = 0.0
         # per step l: y_hat, d_hat (eq 15, or the DOB) and A x from one product (step_outputs), the MRCI on
         # r - y_hat minus d_hat gives u_{k+l}, and x(k+l+1|k) = A x + B u (eq 14, = est.predict_step)
-        step_outputs = est.step_outputs
+        M, n = est._fused, est.n
+        has_d = est.Cbar is not None
         for l in range(h + 1):
             j = k + l
-            ax, yh, dh = step_outputs(x)
+            if M is not None:  # est.step_outputs inlined
+                ax = M @ x
+                yh = float(ax[n])
+                dh = float(ax[n + 1]) if has_d else 0.0
+                ax = ax[:n]
+            else:
+                ax, yh, dh = est.step_outputs(x)
             if dob is not None:
                 dh = dob.step(u, yh)
             if l == 0:
