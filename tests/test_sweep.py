@@ -255,11 +255,11 @@ def test_hdd_gpi_grid_contains_the_paper_thresholds() -> None:
     assert len(s) == 21 and len(c) == 21 and len(sweep.points) == 441
     # section 5: delta_s = sigma_s = 100e-7, delta_c = sigma_c = 1.32e-2 (optimum); Case 5: 1e-7 and 1e-4
     assert math.isclose(s[10], 1e-5, rel_tol=1e-12) and math.isclose(c[10], 1.32e-2, rel_tol=1e-12)
-    assert math.isclose(s[0], 1e-7, rel_tol=1e-12) and math.isclose(c[0], 1e-4, rel_tol=1e-12)
-    raw = sweep.point_raw(sweep.points[0])
+    assert math.isclose(s[5], 1e-7, rel_tol=1e-12) and math.isclose(c[0], 1e-4, rel_tol=1e-12)
+    raw = sweep.point_raw(sweep.points[5 * 21])  # sigma_s index 5, sigma_c index 0
     sensor = raw["nodes"]["sensor"]["handlers"][0]["params"]
     ctrl = raw["nodes"]["controller"]["tasks"][0]["params"]
-    assert sensor["sigma_s"] == sensor["delta_s"] == 1e-7 and ctrl["sigma_c"] == ctrl["delta_c"] == 1e-4
+    assert sensor["sigma_s"] == sensor["delta_s"] == s[5] and ctrl["sigma_c"] == ctrl["delta_c"] == c[0]
     weights = raw["metrics"][0]["params"]["weights"]
     assert weights == [0.45, 0.45, 0.1]  # W1 = W2 = 0.45, W3 = 0.1 (section 5)
 
@@ -273,3 +273,16 @@ def test_overwrite_clears_previous_points(sweep_file: Path, tmp_path: Path) -> N
     run_sweep(sweep_file, out=out, workers=1, point_fn=fake_point, progress=False, overwrite=True)
     assert not stale.exists() and len(_calls) == 24
     shutil.rmtree(out)
+
+
+def test_chunk_planner_batches_tiny_runs_and_sends_slow_runs_one_by_one() -> None:
+    from netsim.sweep.run import ChunkPlanner
+
+    assert ChunkPlanner(2, fixed=5).next_size(3) == 3
+    tiny = ChunkPlanner(2)
+    assert tiny.next_size(400) == 1  # nothing timed yet
+    tiny.observe(0.004, 4)  # 1 ms per run: 0.25 s target -> 250, capped at 32, and 400 // (4 * 2) = 50
+    assert tiny.next_size(400) == 32 and tiny.next_size(40) == 5
+    slow = ChunkPlanner(2)
+    slow.observe(3.0, 2)  # 1.5 s per run (an HDD point)
+    assert slow.next_size(400) == 1

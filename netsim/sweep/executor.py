@@ -19,6 +19,7 @@ import json
 import logging
 import os
 import signal
+import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
@@ -229,16 +230,39 @@ def _run_hash(folder: Path, raw: Mapping[str, Any], seed: int) -> str:
     return point_hash(raw, seed)
 
 
+class _Collect(logging.Handler):
+    """Keeps the (distinct) warning messages logged while a point runs."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.messages: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            text = f"{record.name}: {record.getMessage()}"
+        except Exception:  # noqa: BLE001 - a broken log call must not fail the point
+            return
+        if text not in self.messages and len(self.messages) < 50:
+            self.messages.append(text)
+
+
 @contextlib.contextmanager
-def _quiet_scenario_warnings() -> Iterator[None]:
-    """Scenario warnings were shown once for the base; do not repeat them for every point."""
-    logger = logging.getLogger("netsim.scenario")
-    old = logger.level
-    logger.setLevel(logging.ERROR)
+def _captured_warnings() -> Iterator[_Collect]:
+    """Route netsim's warnings of a point into its record instead of the terminal (the progress bar).
+
+    Scenario warnings were shown once for the base scenario; run-time warnings (e.g. a horizon too short
+    for a wide threshold) end up in the point's ``point.json`` under ``warnings``.
+    """
+    logger = logging.getLogger("netsim")
+    handler = _Collect()
+    old = logger.propagate
+    logger.addHandler(handler)
+    logger.propagate = False
     try:
-        yield
+        yield handler
     finally:
-        logger.setLevel(old)
+        logger.removeHandler(handler)
+        logger.propagate = old
 
 
 def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -249,8 +273,9 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
     """
     os.environ.update(_SINGLE_THREAD_ENV)
     out = []
-    with _quiet_scenario_warnings():
+    with _captured_warnings() as caught:
         for task in tasks:
+            caught.messages.clear()
             folder = Path(task["folder"])
             folder.mkdir(parents=True, exist_ok=True)
             (folder / RECORD_NAME).unlink(missing_ok=True)
@@ -265,6 +290,7 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
                 "metrics": {},
             }
             (folder / "meta.json").unlink(missing_ok=True)
+            t0 = time.perf_counter()
             try:
                 metrics = point_fn(task["raw"], folder, task["seed"])
                 record["metrics"] = {str(k): float(v) for k, v in dict(metrics).items()}
@@ -273,6 +299,8 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
                 record["status"] = "error"
                 record["error"] = f"{type(exc).__name__}: {exc}".strip()
                 record["metrics"] = {}
+            record["elapsed_s"] = time.perf_counter() - t0  # in point.json only, never in summary.csv
+            record["warnings"] = list(caught.messages)
             _write_json(folder / RECORD_NAME, record)
             out.append(record)
     return out

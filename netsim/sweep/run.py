@@ -32,7 +32,7 @@ from netsim.sweep.executor import PointFn, default_point_fn, open_executor, poin
 from netsim.sweep.spec import Point, Sweep, load_sweep
 from netsim.sweep.summary import write_summary
 
-__all__ = ["SweepResult", "run_sweep", "plan_chunks", "SWEEP_MARKER"]
+__all__ = ["SweepResult", "run_sweep", "ChunkPlanner", "SWEEP_MARKER"]
 
 log = logging.getLogger(__name__)
 
@@ -101,18 +101,37 @@ class SweepResult:
         return text
 
 
-def plan_chunks(n: int, n_workers: int, max_chunk: int = 16) -> list[int]:
-    """Chunk sizes for ``n`` runs: guided scheduling, ``remaining / (4 workers)`` capped, shrinking to 1.
+class ChunkPlanner:
+    """Chunk sizes chosen as the sweep goes: one run per task until run times are known, then enough runs
+    per task to make a task last about ``target_s`` (at most ``max_chunk``, and at most a quarter of the
+    remaining runs per worker, so the tail stays balanced).
 
-    Big chunks first amortise the per-task overhead of the executor; small chunks last balance the tail.
+    Slow runs (simulations of a second or more) thus go one per task -- Ctrl-C waits for at most one run per
+    worker -- while tiny runs are batched so the executor's per-task overhead does not dominate.
     """
-    sizes = []
-    left = n
-    while left > 0:
-        size = max(1, min(max_chunk, left // (4 * max(1, n_workers))))
-        sizes.append(size)
-        left -= size
-    return sizes
+
+    def __init__(self, n_workers: int, fixed: int | None = None, target_s: float = 0.25, max_chunk: int = 32) -> None:
+        self.n_workers = max(1, n_workers)
+        self.fixed = fixed
+        self.target_s = target_s
+        self.max_chunk = max_chunk
+        self.total_s = 0.0
+        self.timed = 0
+
+    def observe(self, seconds: float, runs: int) -> None:
+        """Record that ``runs`` runs took ``seconds`` (worker-side time)."""
+        self.total_s += max(0.0, seconds)
+        self.timed += runs
+
+    def next_size(self, remaining: int) -> int:
+        """Size of the next chunk with ``remaining`` runs left."""
+        if self.fixed:
+            return max(1, min(self.fixed, remaining))
+        if self.timed == 0:
+            return 1
+        per_run = self.total_s / self.timed
+        want = int(self.target_s / per_run) if per_run > 0 else self.max_chunk
+        return max(1, min(want, self.max_chunk, remaining // (4 * self.n_workers)))
 
 
 def _prepare_out(out: Path, sweep: Sweep, overwrite: bool) -> None:
@@ -245,24 +264,19 @@ def _execute(
         connect_timeout=connect_timeout,
         cluster_kwargs=cluster_kwargs,
     ) as (executor, n_workers, desc):
-        sizes = [chunk_size] * -(-len(todo) // chunk_size) if chunk_size else plan_chunks(len(todo), n_workers)
-        chunks, start = [], 0
-        for size in sizes:
-            part = todo[start : start + size]
-            start += size
-            if part:
-                chunks.append([_task(sweep, p, out, raw) for p, raw in part])
-        log.info("sweep %s: %d runs in %d chunks on %s", sweep.name, len(todo), len(chunks), desc)
+        planner = ChunkPlanner(n_workers, chunk_size)
+        log.info("sweep %s: %d runs on %s", sweep.name, len(todo), desc)
         in_flight: dict[Future, list[dict[str, Any]]] = {}
         limit = 2 * n_workers
-        queue = iter(chunks)
+        pos = 0
         with _Progress(progress, len(todo), f"{sweep.name}") as bar:
             try:
                 while True:
-                    for chunk in queue:
+                    while pos < len(todo) and len(in_flight) < limit:
+                        size = planner.next_size(len(todo) - pos)
+                        chunk = [_task(sweep, p, out, raw) for p, raw in todo[pos : pos + size]]
+                        pos += size
                         in_flight[executor.submit(run_chunk, point_fn, chunk)] = chunk
-                        if len(in_flight) >= limit:
-                            break
                     if not in_flight:
                         break
                     done, _ = wait(list(in_flight), return_when=FIRST_COMPLETED)
@@ -274,6 +288,7 @@ def _execute(
                             raise
                         except BaseException as exc:  # noqa: BLE001 - a lost chunk fails its points, not the sweep
                             records = [_lost(task, exc) for task in chunk]
+                        planner.observe(sum(float(r.get("elapsed_s", 0.0)) for r in records), len(records))
                         bar.advance(records)
             except KeyboardInterrupt:
                 interrupted = True
@@ -340,7 +355,7 @@ def run_sweep(
         The function run for each point, ``fn(raw, out, seed) -> metrics`` (default
         :func:`netsim.runner.run_point`); must be a picklable module-level function for process backends.
     chunk_size
-        Runs per executor task (default: guided, from 16 down to 1).
+        Runs per executor task (default: adaptive, see :class:`ChunkPlanner`).
     connect_timeout
         Seconds to wait for the Dask scheduler.
     cluster_kwargs
@@ -408,6 +423,13 @@ def _collect(
     factors = list(sweep.spec.factors)
     summary_path = write_summary(folder / "summary.csv", factors, rows)
     summary = pd.read_csv(summary_path, keep_default_na=False, na_values=[""])
+    warned = [r for r in rows if r.get("warnings")]
+    if warned:
+        first = warned[0]
+        log.warning(
+            "%d of %d runs logged warnings (see points/*/point.json, key 'warnings'); first, run %d: %s",
+            len(warned), len(rows), first["index"], first["warnings"][0],
+        )
     n_ok = sum(r["status"] == "ok" for r in rows)
     n_pending = sum(r["status"] == "pending" for r in rows)
     files = {"summary": summary_path}
