@@ -15,14 +15,26 @@ Failures are recorded, never lost:
 
 A scenario with ``baseline: {overrides: {...}}`` first runs the baseline (the same scenario with those
 overrides, same seed, nothing written) and passes its result to every metric as ``baseline``.
+
+Baseline results are kept in a small in-process cache (least recently used first out), so that the points of
+a sweep, which share their baseline, run it once per worker process. The key is the hash of the resolved
+baseline scenario without ``output`` and ``seed``, after each program's ``canonical_params`` (if it has one)
+has reset the parameters its other settings make inert (e.g. the thresholds of a sensor in time-triggered
+mode). An entry is reused for any seed when the baseline run did not use its seed (no random stream drawn
+from, see :meth:`~netsim.scenario.builder.Simulation.used_seed`), else only for the same seed. Results are
+identical with and without the cache; :func:`clear_baseline_cache` empties it.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import logging
 import os
 import platform
 import time
+from collections import OrderedDict
+from functools import lru_cache
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -37,7 +49,7 @@ from netsim.errors import DivergenceError  # noqa: E402
 from netsim.results import RunResult, jobs_table, messages_table, schedule_table, signals_table  # noqa: E402
 from netsim.timebase import S  # noqa: E402
 
-__all__ = ["run", "run_point", "simulate", "default_out_dir", "package_versions"]
+__all__ = ["run", "run_point", "simulate", "default_out_dir", "package_versions", "clear_baseline_cache"]
 
 log = logging.getLogger(__name__)
 
@@ -46,6 +58,12 @@ _VERSION_PACKAGES = ("netsim", "simpy", "numpy", "scipy", "control", "pandas", "
 
 def package_versions() -> dict[str, str]:
     """Versions of Python and the packages a run depends on (without importing them)."""
+    return dict(_package_versions())
+
+
+@lru_cache(maxsize=1)
+def _package_versions() -> dict[str, str]:
+    # reading package metadata costs ~15 ms; the versions cannot change within a process
     out = {"python": platform.python_version()}
     for pkg in _VERSION_PACKAGES:
         try:
@@ -203,16 +221,8 @@ def run(
     scenario = load_scenario(source, overrides=ov or None)
     digest = scenario_hash(scenario)
 
-    baseline: RunResult | None = None
     base_sc = scenario.baseline_scenario()
-    if base_sc is not None:
-        baseline, base_sim, base_fail = simulate(base_sc)
-        if base_fail is not None and not isinstance(base_fail, DivergenceError):
-            raise base_fail
-        from netsim.runtime_metrics import generic_metrics
-
-        t_base = int(round(baseline.meta["t_end_s"] * S))
-        baseline.metrics = pd.Series(generic_metrics(baseline, base_sim, t_base), dtype=float, name="value")
+    baseline = _baseline(base_sc) if base_sc is not None else None
 
     result, sim, failure = simulate(scenario)
     result.scenario = scenario.resolved_dict()
@@ -250,6 +260,68 @@ def run(
     if not result.ok:
         log.warning("%s: %s", scenario.name, result.status)
     return result
+
+
+#: Baseline results kept per process: key -> {seed or None (any seed): RunResult}.
+_BASELINES: "OrderedDict[str, dict[int | None, RunResult]]" = OrderedDict()
+_BASELINE_CACHE_SIZE = 8
+
+
+def clear_baseline_cache() -> None:
+    """Forget the baseline results kept in this process."""
+    _BASELINES.clear()
+
+
+def _baseline_key(scenario: Any) -> str:
+    """Hash of the resolved scenario without ``output``/``seed``, inert program parameters reset."""
+    from netsim.registry import lookup
+
+    data = scenario.resolved_dict()
+    data.pop("output", None)
+    data.pop("seed", None)
+    for node in (data.get("nodes") or {}).values():
+        for kind in ("tasks", "handlers"):
+            for entry in node.get(kind) or []:
+                try:
+                    canon = getattr(lookup("program", entry["program"]), "canonical_params", None)
+                except Exception:  # noqa: BLE001 - no canonical form: the parameters stay as they are
+                    canon = None
+                if canon is not None and isinstance(entry.get("params"), dict):
+                    entry["params"] = canon(dict(entry["params"]))
+    text = json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=False, allow_nan=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _shared(result: RunResult) -> RunResult:
+    """A view of a cached result that a metric may modify without touching the cache (copy-on-write)."""
+    return RunResult(signals=result.signals.copy(deep=False), jobs=result.jobs.copy(deep=False),
+                     messages=result.messages.copy(deep=False), metrics=result.metrics.copy(deep=False),
+                     meta=dict(result.meta), scenario=result.scenario,
+                     schedule=result.schedule.copy(deep=False))
+
+
+def _baseline(base_sc: Any) -> RunResult:
+    """The baseline run of a scenario (with its generic metrics), from the cache when possible."""
+    key = _baseline_key(base_sc)
+    entries = _BASELINES.get(key)
+    if entries is not None:
+        hit = entries.get(None) or entries.get(int(base_sc.seed))
+        if hit is not None:
+            _BASELINES.move_to_end(key)
+            return _shared(hit)
+    baseline, base_sim, base_fail = simulate(base_sc)
+    if base_fail is not None and not isinstance(base_fail, DivergenceError):
+        raise base_fail
+    from netsim.runtime_metrics import generic_metrics
+
+    t_base = int(round(baseline.meta["t_end_s"] * S))
+    baseline.metrics = pd.Series(generic_metrics(baseline, base_sim, t_base), dtype=float, name="value")
+    slot = None if not base_sim.used_seed() else int(base_sc.seed)
+    _BASELINES.setdefault(key, {})[slot] = baseline
+    _BASELINES.move_to_end(key)
+    while len(_BASELINES) > _BASELINE_CACHE_SIZE:
+        _BASELINES.popitem(last=False)
+    return _shared(baseline)
 
 
 def run_point(raw: Mapping[str, Any], out: str | Path, seed: int) -> dict[str, float]:

@@ -65,6 +65,21 @@ class EtSensor:
         tag: str = "y"
         record_as: str | None = "y_meas"
 
+    @staticmethod
+    def canonical_params(params: dict) -> dict:
+        """``params`` (resolved YAML form) with the parameters the trigger mode ignores set to their defaults.
+
+        ``trigger: time`` uses none of ``sigma_s``, ``delta_s``, ``norm``; ``send_on_delta`` uses ``delta_s``
+        only. Runs whose parameters differ only there behave identically (the runner's baseline cache).
+        """
+        mode = params.get("trigger", "pet")
+        inert = {"time": ("sigma_s", "delta_s", "norm"), "send_on_delta": ("sigma_s", "norm")}.get(mode, ())
+        defaults = {"sigma_s": 0.0, "delta_s": 0.0, "norm": "squared"}
+        for key in inert:
+            if key in params:
+                params[key] = defaults[key]
+        return params
+
     def __init__(self, ctx: Any, params: "EtSensor.Params") -> None:
         self.ctx = ctx
         self.p = p = params
@@ -119,6 +134,22 @@ class EtController:
         priority: int = 0
         tag: str = "u"
         record: bool = True
+
+    @staticmethod
+    def canonical_params(params: dict) -> dict:
+        """``params`` with eq (22)'s thresholds and norm set to defaults when ``controller_et`` is off.
+
+        A disabled :class:`ControllerTrigger` sends every packet whatever its thresholds (they are only checked
+        to be finite numbers >= 0, so only such values are reset). Used by the runner's baseline cache.
+        """
+        if params.get("controller_et", True) is False:
+            for key, default in (("sigma_c", 0.0), ("delta_c", 0.0)):
+                v = params.get(key)
+                if isinstance(v, (int, float)) and not isinstance(v, bool) and 0 <= v < float("inf"):
+                    params[key] = default
+            if params.get("norm") in ("squared", "2"):
+                params["norm"] = "squared"
+        return params
 
     def __init__(self, ctx: Any, params: "EtController.Params") -> None:
         self.ctx = ctx

@@ -85,6 +85,14 @@ class Simulation:
         self.finish(t_end)
         return t_end
 
+    def used_seed(self) -> bool:
+        """True if the run so far depended on the scenario seed (read it, or drew from a random stream).
+
+        False means the same scenario gives the same results with any seed (results caches use this).
+        """
+        used = getattr(self.env, "used_seed", None)
+        return True if used is None else bool(used())
+
     def finish(self, t_ns: int) -> None:
         """Run the env's end-of-run finalizers at ``t_ns`` after an aborted run (each at most once)."""
         if self.finished_at is not None:
@@ -383,6 +391,48 @@ def _record_signals(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> None
 
 
 # --------------------------------------------------------------------------------------------- build
+class _SeedWatchEnv(SimEnv):
+    """A :class:`SimEnv` that notes whether the run used its seed (for :meth:`Simulation.used_seed`).
+
+    The seed counts as used when code read ``env.seed`` itself (instead of asking for a named stream) or when
+    any named stream produced a number. A run that used neither gives the same results for every seed.
+    """
+
+    def __init__(self, seed: int = 0, record: set[str] | None = None) -> None:
+        self.seed_read = False
+        self._initial: dict[str, Any] = {}
+        self._in_rng = False
+        super().__init__(seed, record)
+        self.seed_read = False  # SimEnv.__init__ itself does not count
+
+    @property  # type: ignore[override]
+    def seed(self) -> int:
+        if not self._in_rng:
+            self.seed_read = True
+        return self._seed
+
+    @seed.setter
+    def seed(self, value: int) -> None:
+        self._seed = value
+
+    def rng(self, name: str) -> np.random.Generator:
+        gen = self._streams.get(name)
+        if gen is None:
+            self._in_rng = True
+            try:
+                gen = super().rng(name)
+            finally:
+                self._in_rng = False
+            self._initial[name] = gen.bit_generator.state
+        return gen
+
+    def used_seed(self) -> bool:
+        """True if the seed was read directly or a named stream was drawn from."""
+        if self.seed_read:
+            return True
+        return any(gen.bit_generator.state != self._initial.get(name) for name, gen in self._streams.items())
+
+
 def build(scenario: Any) -> Simulation:
     """Create and connect every runtime object of ``scenario`` (a validated Scenario, a path or a dict).
 
@@ -399,7 +449,7 @@ def build(scenario: Any) -> Simulation:
         from netsim.scenario.loader import load_scenario
 
         scenario = load_scenario(scenario)
-    env = SimEnv(seed=scenario.seed, record=_record_filter(scenario))
+    env = _SeedWatchEnv(seed=scenario.seed, record=_record_filter(scenario))
     signals = _make_signals(scenario)
     plant = _build_plant(scenario, env, signals)
     if plant is not None:
