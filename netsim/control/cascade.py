@@ -28,12 +28,20 @@ actions, so nothing cancels an unstable DOB mode (:class:`~netsim.control.dob.Di
 refuses one).
 
 The controller-side trigger compares ``u_k`` with the first value of the last *sent* packet (eq 21-22).
+
+Lazy evaluation: the cascade of an arrival is computed step by step only as far as something asks for it
+(the packet's ``values`` are a :class:`CascadeActions` sequence; the next arrival asks for the states at its
+``N``). The actuator plays a packet only until the next one arrives, so with frequent arrivals most of the
+``h + 1`` steps are never needed. Every step that is computed is computed with the same arithmetic, from the
+same states, as the eager cascade: results are identical, only cheaper. This requires ``reference`` to be a
+pure function of ``k`` (it is called when a step is computed).
 The sign convention: ``u = C(e) - d_hat`` (``d`` enters the plant as ``u + d``).
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterator, Sequence
 from typing import Callable
 
 import numpy as np
@@ -43,7 +51,7 @@ from netsim.control.mrci import MrciController
 from netsim.control.numre import Numre
 from netsim.control.packets import ControlPacket, PlayoutBuffer
 
-__all__ = ["ControlSide", "Decision"]
+__all__ = ["ControlSide", "Decision", "CascadeActions"]
 
 log = logging.getLogger(__name__)
 
@@ -60,6 +68,123 @@ class Decision:
         self.N = N
         self.y_hat = y_hat
         self.d_hat = d_hat
+
+
+class _Cascade:
+    """The h-step cascade (eq 14) of one arrival at ``k``, computed on demand (see the module docstring).
+
+    Step ``l`` gives ``u_{k+l}`` (``us[l]``) and the states after it: ``xs[l+1]`` (model prediction with the
+    computed action), the controller snapshot ``cs[l+1]``, the DOB snapshot ``ds[l+1]`` and ``ups[l+1]``
+    (the action, the DOB's next ``u_prev``). Index 0 holds the states the cascade starts from.
+    The controller and DOB objects are shared with the control side: every computation restores this
+    cascade's own last state first, and leaves them in an undefined state.
+    """
+
+    __slots__ = ("side", "k", "h", "xs", "cs", "ds", "ups", "us", "y_hat0", "d_hat0")
+
+    def __init__(self, side: "ControlSide", k: int, x: np.ndarray, c, d, u_prev: float) -> None:
+        self.side = side
+        self.k = k
+        self.h = side.h
+        self.xs = [x]
+        self.cs = [c]
+        self.ds = [d]
+        self.ups = [u_prev]
+        self.us: list[float] = []
+        self.y_hat0 = self.d_hat0 = 0.0
+
+    def compute(self, n_steps: int) -> None:
+        """Make sure steps ``0 .. n_steps - 1`` are computed (at most ``h + 1``)."""
+        us = self.us
+        start = len(us)
+        stop = min(n_steps, self.h + 1)
+        if start >= stop:
+            return
+        side = self.side
+        est, ctrl, dob, ref = side.est, side.ctrl, side.dob, side.reference
+        xs, cs, ds, ups = self.xs, self.cs, self.ds, self.ups
+        ctrl.restore(cs[-1])
+        if dob is not None:
+            dob.restore(ds[-1])
+        x = xs[-1]
+        u = ups[-1]
+        b = est._b
+        M, n = est._fused, est.n
+        has_d = est.Cbar is not None
+        k = self.k
+        # per step l: y_hat, d_hat (eq 15, or the DOB) and A x from one product (Numre.step_outputs), the MRCI
+        # on r - y_hat minus d_hat gives u_{k+l}, and x(k+l+1|k) = A x + B u (eq 14, = Numre.predict_step)
+        for l in range(start, stop):
+            j = k + l
+            if M is not None:  # est.step_outputs inlined
+                ax = M @ x
+                yh = float(ax[n])
+                dh = float(ax[n + 1]) if has_d else 0.0
+                ax = ax[:n]
+            else:
+                ax, yh, dh = est.step_outputs(x)
+            if dob is not None:
+                dh = dob.step(u, yh)
+            if l == 0:
+                self.y_hat0, self.d_hat0 = yh, dh
+            u = ctrl.step(j, ref(j) - yh) - dh
+            us.append(u)
+            x = ax + b * u
+            xs.append(x)
+            cs.append(ctrl.snapshot())
+            ds.append(dob.snapshot() if dob is not None else None)
+            ups.append(u)
+
+    def state(self, i: int) -> tuple:
+        """``(x, controller snapshot, DOB snapshot, u_prev)`` after ``i`` steps (``0 <= i <= h + 1``)."""
+        if i >= len(self.xs):
+            self.compute(i)
+        return self.xs[i], self.cs[i], self.ds[i], self.ups[i]
+
+
+class CascadeActions(Sequence):
+    """The actions ``u_k .. u_{k+h}`` of a cascade as a read-only sequence, each computed when first read.
+
+    Behaves like the tuple of the eagerly computed values (indexing, slices, ``len``, iteration, equality
+    and hash with tuples).
+    """
+
+    __slots__ = ("_c",)
+
+    def __init__(self, cascade: _Cascade) -> None:
+        self._c = cascade
+
+    def __len__(self) -> int:
+        return self._c.h + 1
+
+    def __getitem__(self, index):
+        c = self._c
+        n = c.h + 1
+        if isinstance(index, slice):
+            return tuple(self[i] for i in range(*index.indices(n)))
+        i = int(index)
+        if i < 0:
+            i += n
+        if not 0 <= i < n:
+            raise IndexError(f"cascade action index {index} out of range (h + 1 = {n} values)")
+        if i >= len(c.us):
+            c.compute(i + 1)
+        return c.us[i]
+
+    def __iter__(self) -> Iterator[float]:
+        for i in range(len(self)):
+            yield self[i]
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, (CascadeActions, tuple, list)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(tuple(self))
+
+    def __repr__(self) -> str:
+        return f"CascadeActions(k={self._c.k}, {len(self._c.us)} of {len(self)} computed)"
 
 
 class ControlSide:
@@ -100,12 +225,9 @@ class ControlSide:
         self.N_max = 0
         n = 0 if estimator is None else estimator.n
         self._x0 = np.zeros(n) if x0 is None else np.asarray(x0, float)
-        self._traj_x: list[np.ndarray] = []  # x(k_ls + l | k_ls), completed lazily by _traj_state
-        self._traj_k = 0
-        self._traj_c: list[np.ndarray] = []
-        self._traj_d: list = []
+        self._casc: _Cascade | None = None  # the cascade of the last arrival
+        self._traj_x: list[np.ndarray] | None = None  # held-back packet: x(k_ls + l | k_ls), see _traj_state
         self._u_prev = 0.0
-        self._traj_u_prev: list[float] = []
         self.steps = 0  # controller steps computed (cost accounting)
 
     # ------------------------------------------------------------------------------------------
@@ -135,29 +257,31 @@ class ControlSide:
                 x = est.predict_step(x, self.mirror.value(j))
             return x, 1
         N = k - self.k_ls
-        L = len(self._traj_c) - 1
-        if N <= L:
-            self.ctrl.restore(self._traj_c[N])
-            if self.dob is not None:
-                self.dob.restore(self._traj_d[N])
-            self._u_prev = self._traj_u_prev[N]
-            return self._traj_state(N), N
-        # past the packet: continue with the held action (h < N)
-        self.ctrl.restore(self._traj_c[L])
+        casc = self._casc
+        L = casc.h + 1
+        i = min(N, L)
+        # everything that may compute (older) cascades first: they use the shared controller and DOB
+        x = self._traj_state(i)
+        _, c, d, up = casc.state(i)
+        held = [self.mirror.value(self.k_ls + l) for l in range(L, N)]
+        self.ctrl.restore(c)
         if self.dob is not None:
-            self.dob.restore(self._traj_d[L])
-        self._u_prev = self._traj_u_prev[L]
-        x = self._traj_state(L)
+            self.dob.restore(d)
+        self._u_prev = up
+        if N <= L:
+            return x, N
+        # past the packet: continue with the held action (h < N)
         for l in range(L, N):
             j = self.k_ls + l
             yh, dh = est.outputs(x)
             dh = self._dob_step(self._u_prev, yh) if self.dob is not None else dh
             self._u_prev = self.ctrl.step(j, self.reference(j) - yh) - dh
-            x = est.predict_step(x, self.mirror.value(j))
+            x = est.predict_step(x, held[l - L])
         return x, N
 
     def _traj_state(self, i: int) -> np.ndarray:
-        """``x(k_ls + i | k_ls)`` of the last cascade, predicted with the actions the actuator applies.
+        """``x(k_ls + i | k_ls)``: the cascade's prediction, or with a held-back packet the prediction with
+        the actions the actuator applies.
 
         After a packet was held back (eq 22) only ``x(k_ls|k_ls)`` is stored; the predictions with the
         playing packet (``mirror``) are computed here up to the step the next arrival asks for, with the
@@ -165,9 +289,11 @@ class ControlSide:
         after the next arrival has taken its prior.
         """
         xs = self._traj_x
+        if xs is None:
+            return self._casc.state(i)[0]
         if i >= len(xs):
             est = self.est
-            A, b, value, k0 = est.A, est._b, self.mirror.value, self._traj_k
+            A, b, value, k0 = est.A, est._b, self.mirror.value, self._casc.k
             x = xs[-1]
             for l in range(len(xs) - 1, i):
                 x = A @ x + b * value(k0 + l)
@@ -190,51 +316,17 @@ class ControlSide:
         self.N_max = max(self.N_max, N)
         x = est.correct(prior, y, min(N, 10**6))
         self.k_ls = k
-        h = self.h
-        ctrl, dob, ref = self.ctrl, self.dob, self.reference
-        b = est._b
-        xs = [x]
-        cs = [ctrl.snapshot()]
-        ds = [dob.snapshot() if dob is not None else None]
-        ups = [self._u_prev]
-        us = []
-        u = self._u_prev
-        y_hat0 = d_hat0 = 0.0
-        # per step l: y_hat, d_hat (eq 15, or the DOB) and A x from one product (step_outputs), the MRCI on
-        # r - y_hat minus d_hat gives u_{k+l}, and x(k+l+1|k) = A x + B u (eq 14, = est.predict_step)
-        M, n = est._fused, est.n
-        has_d = est.Cbar is not None
-        for l in range(h + 1):
-            j = k + l
-            if M is not None:  # est.step_outputs inlined
-                ax = M @ x
-                yh = float(ax[n])
-                dh = float(ax[n + 1]) if has_d else 0.0
-                ax = ax[:n]
-            else:
-                ax, yh, dh = est.step_outputs(x)
-            if dob is not None:
-                dh = dob.step(u, yh)
-            if l == 0:
-                y_hat0, d_hat0 = yh, dh
-            u = ctrl.step(j, ref(j) - yh) - dh
-            us.append(u)
-            x = ax + b * u
-            xs.append(x)
-            cs.append(ctrl.snapshot())
-            if dob is not None:
-                ds.append(dob.snapshot())
-            else:
-                ds.append(None)
-            ups.append(u)
-        self._u_prev = u
-        self.steps += h + 1
-        pkt = ControlPacket(k, tuple(us))
-        send = self.trigger.should_send(us[0])
+        casc = _Cascade(self, k, x, self.ctrl.snapshot(), self.dob.snapshot() if self.dob is not None else None,
+                        self._u_prev)
+        casc.compute(1)
+        self.steps += self.h + 1
+        values = CascadeActions(casc)
+        pkt = ControlPacket(k, values)
+        send = self.trigger.should_send(casc.us[0])
         if send:
             self.mirror.receive(pkt)
-        else:  # the actuator keeps playing the older packet: predict with what it applies (lazily, as far
-            xs = [xs[0]]  # as the next arrival needs: see _traj_state)
-        self._traj_x, self._traj_c, self._traj_d, self._traj_u_prev = xs, cs, ds, ups
-        self._traj_k = k
+        self._casc = casc
+        # with a held-back packet the actuator keeps playing the older one: predict with what it applies
+        self._traj_x = None if send else [x]
+        y_hat0, d_hat0 = casc.y_hat0, casc.d_hat0
         return Decision(k, pkt, send, N, y_hat0, d_hat0)

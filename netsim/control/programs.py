@@ -25,6 +25,7 @@ from typing import Any, Generator, Literal
 
 from pydantic import Field
 
+from netsim.control.cascade import CascadeActions
 from netsim.control.controller_trigger import ControllerTrigger
 from netsim.control.packets import ControlPacket, PlayoutBuffer
 from netsim.control.triggers import AnyOf, MaxIntervalTrigger, MixedTrigger, ReferenceChangeTrigger, SendOnDelta, TimeTriggered
@@ -225,7 +226,10 @@ class PlayoutActuator:
                 if msg is None:
                     break
                 pl = msg.payload
-                got = self.buf.receive(ControlPacket(int(pl["k"]), tuple(pl["values"]))) or got
+                values = pl["values"]
+                if not isinstance(values, (tuple, CascadeActions)):
+                    values = tuple(values)  # a lazy cascade stays lazy: only the values played are computed
+                got = self.buf.receive(ControlPacket(int(pl["k"]), values)) or got
             if not got:
                 return
         if self.ctx.execution is not None:
