@@ -225,13 +225,24 @@ def _overrides(items: Sequence[str]) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------------------------- commands
+def _is_sweep(file: str) -> bool:
+    from netsim.sweep.check import is_sweep_file
+
+    return is_sweep_file(file)
+
+
 def _cmd_validate(args: argparse.Namespace) -> int:
     from netsim.scenario import check_scenario
 
     overrides = _overrides(args.overrides)
     n_errors = 0
     for file in args.files:
-        problems = check_scenario(file, overrides or None)
+        if _is_sweep(file):
+            from netsim.sweep.check import check_sweep
+
+            problems = check_sweep(file)
+        else:
+            problems = check_scenario(file, overrides or None)
         errors = [p for p in problems if p.is_error]
         n_errors += len(errors)
         _print_problems(problems, sys.stdout)
@@ -343,14 +354,12 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         overwrite=args.overwrite,
         progress=not args.no_progress,
     )
-    for attr in ("out_dir", "out", "path"):
-        where = getattr(result, attr, None)
-        if where:
-            print(f"wrote {where}")
-            break
-    n_failed = getattr(result, "n_failed", 0) or 0
-    if n_failed:
-        _err(f"{n_failed} sweep point{'s' if n_failed != 1 else ''} failed (see summary.csv)")
+    print(result.describe())
+    if result.interrupted:
+        _err("interrupted: finished runs are kept; run the same command again to resume")
+        return EXIT_INTERRUPTED
+    if result.n_failed:
+        _err(f"{result.n_failed} sweep run{'s' if result.n_failed != 1 else ''} failed (see summary.csv)")
         return EXIT_FAILED
     return EXIT_OK
 

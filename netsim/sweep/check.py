@@ -1,0 +1,65 @@
+"""Checking a sweep file before anything runs (``netsim validate`` on a sweep).
+
+A sweep is valid when its own schema holds, its base scenario is valid and every value of every factor
+gives a valid scenario. Each factor level is checked once (with the other factors at their first level), so
+a 21 x 21 grid costs 42 scenario checks, not 441.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+from netsim.errors import ConfigError
+from netsim.scenario.problems import Problem
+
+__all__ = ["is_sweep_file", "check_sweep"]
+
+_SWEEP_KEY = re.compile(r"^sweep\s*:", re.MULTILINE)
+
+
+def is_sweep_file(path: str | Path) -> bool:
+    """True when the YAML file at ``path`` is a sweep (it has a top-level ``sweep:`` key)."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    return _SWEEP_KEY.search(text) is not None
+
+
+def _describe(values: dict[str, Any]) -> str:
+    return ", ".join(f"{k}={v!r}" for k, v in values.items())
+
+
+def check_sweep(path: str | Path) -> list[Problem]:
+    """Every problem of the sweep file at ``path`` (never raises for user mistakes).
+
+    Problems of the sweep file itself carry its path; problems of a point name the point's factor values,
+    e.g. ``point (sigma_s=1e-05, sigma_c=0.0132): nodes.sensor...: must not be negative``.
+    """
+    from netsim.scenario import check_scenario
+    from netsim.sweep.spec import load_sweep
+
+    file = str(path)
+    try:
+        sweep = load_sweep(path)
+    except ConfigError as exc:
+        message = exc.message.removeprefix(f"{file}: ")  # the problem line names the file already
+        return [Problem(exc.path or "", message, file=file)]
+    base_problems = check_scenario(sweep.base_path or sweep.base)
+    problems = list(base_problems)
+    if any(p.is_error for p in base_problems):
+        return problems  # points inherit the base's errors; reporting them per point would only repeat them
+    seen: set[tuple[str, str]] = set()
+    for point in sweep.points:
+        fresh = [(name, repr(value)) for name, value in point.values.items() if (name, repr(value)) not in seen]
+        if not fresh:
+            continue
+        seen.update(fresh)
+        label = f"point ({_describe(point.values)})"
+        for problem in check_scenario(sweep.point_raw(point)):
+            if problem.is_error:
+                path_text = f"{label}: {problem.path}" if problem.path else label
+                problems.append(Problem(path_text, problem.message, file=file))
+    return problems
