@@ -133,14 +133,30 @@ def test_batch_of_a_missing_path_exits_2(tmp_path, capsys):
     assert "file not found" in capsys.readouterr().err
 
 
-def test_sweep_passes_its_options(tmp_path, monkeypatch):
-    rec = _fake_module(monkeypatch, "sweep", "run_sweep", types.SimpleNamespace(out_dir="x", n_failed=0))
+def _sweep_result(n_failed=0, interrupted=False):
+    return types.SimpleNamespace(n_failed=n_failed, interrupted=interrupted,
+                                 describe=lambda: "sweep s: summary and optimum")
+
+
+def test_sweep_passes_its_options_and_prints_the_description(tmp_path, monkeypatch, capsys):
+    rec = _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result())
     path = write(tmp_path, "sw.yaml", "sweep: s\n")
     assert main(["sweep", str(path), "--workers", "3", "--scheduler", "tcp://h:8786", "--overwrite"]) == 0
     (args, kwargs), = rec.calls
     assert args == (str(path),)
     assert kwargs == {"out": None, "workers": 3, "scheduler": "tcp://h:8786", "local_dask": False,
                       "overwrite": True, "progress": True}
+    assert capsys.readouterr().out == "sweep s: summary and optimum\n"
+
+
+def test_sweep_exit_codes_for_failures_and_interruption(tmp_path, monkeypatch, capsys):
+    path = write(tmp_path, "sw.yaml", "sweep: s\n")
+    _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(n_failed=2))
+    assert main(["sweep", str(path)]) == 1
+    assert "2 sweep runs failed" in capsys.readouterr().err
+    _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(interrupted=True))
+    assert main(["sweep", str(path)]) == 130
+    assert "run the same command again to resume" in capsys.readouterr().err
 
 
 def test_sweep_rejects_scheduler_with_local_dask(tmp_path, capsys):
