@@ -19,10 +19,9 @@ Importing this package also imports :mod:`netsim.control.programs` so that the t
 
 from __future__ import annotations
 
-import importlib
-
 from netsim.control.cascade import ControlSide, Decision
 from netsim.control.controller_trigger import ControllerTrigger
+from netsim.control.dob import DisturbanceObserver, DobDesign, design_dob
 from netsim.control.mrci import MrciController, MrciDesign, Section, computation_saving, decompose
 from netsim.control.numre import Numre, lifted_noise_cov
 from netsim.control.packets import ControlPacket, PlayoutBuffer
@@ -43,6 +42,8 @@ __all__ = [
     "ControlSide",
     "ControllerTrigger",
     "Decision",
+    "DisturbanceObserver",
+    "DobDesign",
     "LoopTrace",
     "MaxIntervalTrigger",
     "MixedTrigger",
@@ -56,14 +57,11 @@ __all__ = [
     "TimeTriggered",
     "computation_saving",
     "decompose",
+    "design_dob",
     "lifted_noise_cov",
     "mtm_fires",
     "simulate_loop",
 ]
 
-for _mod in ("netsim.control.programs", "netsim.metrics"):
-    try:
-        importlib.import_module(_mod)
-    except ModuleNotFoundError as _exc:  # programs need the kernel/runtime; skip while they are absent
-        if _exc.name != _mod:
-            raise
+# the task/handler programs register themselves (kind "program") when imported
+from netsim.control import programs as _programs  # noqa: E402,F401
