@@ -38,9 +38,11 @@ import abc
 
 import logging
 import math
+from heapq import heappush
 from typing import Any, Callable, Iterable, Sequence
 
 import numpy as np
+from simpy.events import Event
 
 from netsim.errors import BuildError, ConfigError, DivergenceError, SimulationError
 from netsim.timebase import format_time, to_seconds
@@ -399,21 +401,27 @@ class Plant(abc.ABC):
             grid = int(record_grid_ns)
             if grid <= 0:
                 raise ConfigError(f"plant {self.name}: record_grid must be positive, got {record_grid_ns}")
-            env.process(self._grid_process(grid, grid_prefix))
+            _GridTick(env.sim, 0, _URGENT, self, grid, [grid_prefix + n for n in self.output_names])
         env.at_end(self._finish)
         return self
 
     def _bind_streams(self, env: Any) -> None:
         """Subclasses fetch their noise streams here."""
 
-    def _grid_process(self, grid: int, prefix: str) -> Any:
+    def _record_grid(self, names: list[str]) -> None:
+        """Record the outputs now (one sample of the ``record_grid``)."""
         env = self.env
-        names = [prefix + n for n in self.output_names]
-        while True:
-            y = self.output(env.now)
-            for name, v in zip(names, y):
+        now = env.sim._now
+        y = self.output(now)
+        rec = env.recorder
+        times, values = rec.times, rec.values
+        for name, v in zip(names, y):
+            ts = times.get(name)
+            if ts is not None and (rec.enabled is None or name in rec.enabled):  # Recorder.record's fast case
+                ts.append(now)
+                values[name].append(float(v))
+            else:
                 env.record(name, float(v))
-            yield env.timeout(grid)
 
     def _finish(self, t_end: int) -> None:
         if t_end > self._t:
@@ -617,3 +625,37 @@ class Plant(abc.ABC):
     @abc.abstractmethod
     def _set_state_now(self, x: np.ndarray) -> None:
         """Overwrite the physical state at the plant's current time."""
+
+
+_URGENT, _NORMAL = 0, 1  # simpy event priorities
+
+
+class _GridTick(Event):
+    """The ``record_grid`` sampler as a chain of self-scheduling events (what a simpy process with a timeout
+    per period did, with the same event ids and priorities: URGENT at bind time, NORMAL after).
+
+    An exception while sampling (e.g. :class:`~netsim.errors.DivergenceError`) fails an event scheduled now,
+    as a failing process would, so the run stops at the same point.
+    """
+
+    __slots__ = ()
+
+    def __init__(self, sim: Any, delay: int, priority: int, plant: "Plant", grid: int, names: list[str]) -> None:
+        self.env = sim
+        self.callbacks = [self._fire]
+        self._value = (plant, grid, names)
+        self._ok = True
+        heappush(sim._queue, (sim._now + delay, priority, next(sim._eid), self))
+
+    @staticmethod
+    def _fire(ev: "_GridTick") -> None:
+        plant, grid, names = ev._value
+        try:
+            plant._record_grid(names)
+        except BaseException as exc:  # noqa: BLE001 - handed to the event loop like a failed process
+            failed = Event(ev.env)
+            failed._ok = False
+            failed._value = exc
+            ev.env.schedule(failed)
+            return
+        _GridTick(ev.env, grid, _NORMAL, plant, grid, names)

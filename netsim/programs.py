@@ -84,6 +84,16 @@ class ProgramContext:
 
     def record(self, name: str, value: Any, t_ns: int | None = None) -> None:
         """Record a signal sample (see :meth:`netsim.env.SimEnv.record`)."""
+        if type(value) is float:  # the common case, without the array conversion of Recorder.record
+            rec = self.env.recorder
+            if rec.enabled is None or name in rec.enabled or rec.wants(name):
+                times = rec.times.get(name)
+                if times is not None:
+                    times.append(int(self.env.sim._now if t_ns is None else t_ns))
+                    rec.values[name].append(value)
+                    return
+            else:
+                return
         self.env.record(name, value, t_ns)
 
     def signal(self, name: str) -> Callable[[int], float]:

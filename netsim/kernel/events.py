@@ -9,6 +9,7 @@ a job finishing exactly at its deadline meets it.
 
 from __future__ import annotations
 
+from heapq import heappush
 from typing import Any, Callable
 
 import simpy
@@ -35,4 +36,5 @@ class Wake(Event):
         self.callbacks = [callback]
         self._value = value
         self._ok = True
-        env.schedule(self, priority, delay)  # type: ignore[arg-type]
+        # env.schedule(self, priority, delay), inlined (same heap entry, same event id)
+        heappush(env._queue, (env._now + delay, priority, next(env._eid), self))  # type: ignore[attr-defined]

@@ -10,6 +10,7 @@ part (CAN priority arbitration, CSMA/CD collisions of simultaneous starts, TDMA 
 from __future__ import annotations
 
 import math
+from heapq import heappush
 from typing import Any, Callable, Final
 
 import simpy
@@ -40,7 +41,8 @@ class Call(Event):
         self.fn = fn
         self.arg = arg
         self.live = True
-        sim.schedule(self, priority, delay)
+        # sim.schedule(self, priority, delay), inlined (same heap entry, same event id)
+        heappush(sim._queue, (sim._now + delay, priority, next(sim._eid), self))  # type: ignore[attr-defined]
 
     def cancel(self) -> None:
         """Do not call ``fn`` after all (the event stays in the heap and is ignored)."""
