@@ -288,11 +288,17 @@ class Kernel(KernelBuilder):
 
     def _make_ready(self, job: Job, now: int) -> None:
         job._state = READY
-        self._seq += 1
-        job._seq = self._seq
-        heappush(self._ready, (job._rank, job._seq, job))
-        if self.trace and job._task.trace_state != "ready":
-            self._trace(job._task, "ready", now)
+        self._seq = seq = self._seq + 1
+        job._seq = seq
+        heappush(self._ready, (job._rank, seq, job))
+        if self.trace:
+            ent = job._task
+            old = ent.trace_state
+            if old != "ready":  # self._trace(ent, "ready", now), inlined
+                if old is not None and now > ent.trace_since:
+                    self.schedule.append((ent.name, old, ent.trace_since, now))
+                ent.trace_state = "ready"
+                ent.trace_since = now
 
     def _unblock(self, job: Job, value: Any) -> None:
         """Wake a blocked job with ``value`` as the result of its request (used by sync objects)."""
@@ -470,8 +476,14 @@ class Kernel(KernelBuilder):
             self.switches += 1
             if self.context_switch:
                 job._pre_left = self.context_switch
-        if self.trace and job._task.trace_state != "running":
-            self._trace(job._task, "running", now)
+        if self.trace:
+            ent = job._task
+            old = ent.trace_state
+            if old != "running":  # self._trace(ent, "running", now), inlined
+                if old is not None and now > ent.trace_since:
+                    self.schedule.append((ent.name, old, ent.trace_since, now))
+                ent.trace_state = "running"
+                ent.trace_since = now
 
     def _start_segment(self, job: Job, length: int, now: int) -> None:
         job._seg_start = now
@@ -717,12 +729,19 @@ class Kernel(KernelBuilder):
             self.job_records.append(JobRecord(
                 task.name, self.name, job.job_id, job.release, job.start, now, now - job.release, deadline,
                 True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, killed))
-        nxt = task.queue.popleft() if task.queue else None
-        task.active = nxt
-        if nxt is not None:
+        if task.queue:
+            nxt = task.queue.popleft()
+            task.active = nxt
             self._make_ready(nxt, now)
-        elif self.trace:
-            self._trace(task, None, now)
+        else:
+            task.active = None
+            if self.trace:
+                old = task.trace_state
+                if old is not None:  # self._trace(task, None, now), inlined
+                    if now > task.trace_since:
+                        self.schedule.append((task.name, old, task.trace_since, now))
+                    task.trace_state = None
+                    task.trace_since = now
 
     def _kill(self, job: Job) -> None:
         now = self._sim.now

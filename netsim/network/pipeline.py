@@ -19,10 +19,11 @@ copy in :attr:`Network.records`, queue lengths per node, busy time per channel, 
 from __future__ import annotations
 
 import abc
-
 import logging
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar
+
+from simpy.events import NORMAL
 
 from netsim.env import SimEnv
 from netsim.errors import ConfigError
@@ -38,7 +39,7 @@ from netsim.network.records import (
     MessageRecord,
 )
 from netsim.network.stats import BusyMeter
-from netsim.network.timing import call_later, tx_time_ns
+from netsim.network.timing import Call, call_later, tx_time_ns
 from netsim.timebase import S
 
 __all__ = ["Frame", "Network", "Transmitter"]
@@ -436,7 +437,19 @@ class Transmitter:
 
     def offer(self, frame: Frame, *, front: bool = False) -> bool:
         """Queue ``frame`` (dropped as ``queue_full`` if the queue is full) and start sending if idle."""
-        if not self.net._push(self.queue, frame, front=front):
+        q = self.queue
+        if not (self.busy or self._pending or q._len or q.priority) and (q.limit is None or q.limit > 0):
+            # idle output, empty FIFO queue: what push + pop would do, without the queue round trip (the
+            # frame counts as queued for an instant, as it did, so max_len becomes at least 1)
+            now = self.sim._now
+            q._last_t = now  # the length-time integral gains nothing: the queue was empty
+            if q.max_len < 1:
+                q.max_len = 1
+            self.busy = True
+            self.meter.open_since = now  # meter.start(now)
+            Call(self.sim, tx_time_ns(frame.wire_bits, self.rate), self._done, (frame, now), NORMAL)
+            return True
+        if not self.net._push(q, frame, front=front):
             return False
         self._kick()
         return True
