@@ -476,6 +476,7 @@ class DiscretePlant(_LTIBase):
             self._L = _psd_factor("process_noise", Q) if np.any(Q != 0) else None
         self._rng: np.random.Generator | None = None
         self._ueff = np.zeros(self.n_inputs)
+        self._sines: tuple | None = None  # sine disturbance sources (cached once started)
 
     def set_process_noise(self, process_noise: Any) -> None:
         """Set the covariance of the additive state noise per step (n x n, or a vector) before the run."""
@@ -516,11 +517,15 @@ class DiscretePlant(_LTIBase):
 
     def _input_now(self, t: int) -> np.ndarray:
         u = self._ueff
-        if any(s.kind == "sine" for s in self._sources):
+        sines = self._sines
+        if sines is None:  # sources are fixed once the plant has started
+            sines = tuple(s for s in self._sources if s.kind == "sine")
+            if self._started:
+                self._sines = sines
+        if sines:
             u = u.copy()
-            for s in self._sources:
-                if s.kind == "sine":
-                    u[s.index] += float(s.signal(t))
+            for s in sines:
+                u[s.index] += float(s.signal(t))
         return u
 
     def _update_times(self, t0: int, t1: int) -> range:
@@ -532,13 +537,18 @@ class DiscretePlant(_LTIBase):
     def _step(self, t: int) -> bool:
         noisy = False
         x = self._x
-        for tk in self._update_times(self._t, t):
-            x = self.Ad @ x + self.Bd @ self._input_now(tk)
-            if self._L is not None:
-                x = x + self._L @ self._rng.standard_normal(self.n_states)  # type: ignore[union-attr]
-                noisy = True
-            if not (x @ x <= self._bound2):
-                self._diverged(tk, x)
+        dt, off = self.dt_ns, self.offset_ns
+        tk = off + ((self._t - off) // dt + 1) * dt  # first update instant in (self._t, t] (_update_times)
+        if tk <= t:
+            Ad, Bd, L, bound2 = self.Ad, self.Bd, self._L, self._bound2
+            while tk <= t:
+                x = Ad @ x + Bd @ self._input_now(tk)
+                if L is not None:
+                    x = x + L @ self._rng.standard_normal(self.n_states)  # type: ignore[union-attr]
+                    noisy = True
+                if not (x @ x <= bound2):
+                    self._diverged(tk, x)
+                tk += dt
         self._x = x
         self._t = t
         return noisy
