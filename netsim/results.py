@@ -232,7 +232,30 @@ def schedule_table(node: str, intervals: Iterable[Any]) -> pd.DataFrame:
 
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
     """Write ``frame`` with the run folder's fixed float format and ``\\n`` line ends."""
+    text = _float_csv(frame)
+    if text is not None:
+        Path(path).write_text(text, encoding="utf-8", newline="")
+        return
     frame.to_csv(path, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+
+
+def _float_csv(frame: pd.DataFrame) -> str | None:
+    """The CSV text pandas writes for an all-float64 frame with plain column names, or None otherwise.
+
+    The signals table (thousands of rows) is all floats; formatting it here is ~10x faster than
+    ``DataFrame.to_csv`` and gives the same bytes: every value through ``FLOAT_FORMAT``, NaN as an empty
+    field, no quoting (names with a comma, quote or line break go through pandas).
+    """
+    names = [str(c) for c in frame.columns]
+    if not names or any(t != np.float64 for t in frame.dtypes):
+        return None
+    if any(ch in n for n in names for ch in (",", '"', "\n", "\r")) or any(not n for n in names):
+        return None
+    fmt = FLOAT_FORMAT
+    lines = [",".join(names)]
+    for row in frame.to_numpy(dtype=np.float64).tolist():
+        lines.append(",".join("" if v != v else fmt % v for v in row))
+    return "\n".join(lines) + "\n"
 
 
 def _json_default(obj: Any) -> Any:
@@ -285,8 +308,9 @@ class RunResult:
         if self.scenario is not None:
             import yaml
 
+            dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter: ~4x faster
             (out / "scenario.yaml").write_text(
-                yaml.safe_dump(self.scenario, sort_keys=False, allow_unicode=True), encoding="utf-8"
+                yaml.dump(self.scenario, Dumper=dumper, sort_keys=False, allow_unicode=True), encoding="utf-8"
             )
         write_csv(self.signals, out / "signals.csv")
         write_csv(self.jobs, out / "jobs.csv")
