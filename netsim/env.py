@@ -50,6 +50,9 @@ class Recorder:
         """Append one sample of ``name`` at ``t_ns`` (no-op for signals that were not asked for)."""
         if not self.wants(name):
             return
+        if type(value) is float or type(value) is int:  # the common case, without a numpy round trip
+            self._append(name, t_ns, float(value))
+            return
         arr = np.asarray(value, dtype=float)
         if arr.ndim == 0:
             self._append(name, t_ns, float(arr))

@@ -66,3 +66,13 @@ def test_next_id_counts_per_kind_and_per_run():
     env = SimEnv()
     assert [env.next_id("msg"), env.next_id("msg"), env.next_id("job")] == [0, 1, 0]
     assert SimEnv().next_id("msg") == 0
+
+
+def test_recorder_stores_plain_numbers_and_numpy_scalars_alike():
+    env = SimEnv()
+    env.record("a", 1.5, t_ns=1)
+    env.record("a", 2, t_ns=2)
+    env.record("a", np.float64(2.5), t_ns=3)
+    env.record("a", np.array(3.0), t_ns=4)
+    assert env.recorder.values["a"] == [1.5, 2.0, 2.5, 3.0]
+    assert all(type(v) is float for v in env.recorder.values["a"])
