@@ -542,7 +542,8 @@ class DiscretePlant(_LTIBase):
         if tk <= t:
             Ad, Bd, L, bound2 = self.Ad, self.Bd, self._L, self._bound2
             while tk <= t:
-                x = Ad @ x + Bd @ self._input_now(tk)
+                # the update at tk integrates the input held over (tk - dt, tk]: a sine is sampled at its start
+                x = Ad @ x + Bd @ self._input_now(tk - dt)
                 if L is not None:
                     x = x + L @ self._rng.standard_normal(self.n_states)  # type: ignore[union-attr]
                     noisy = True
@@ -583,11 +584,14 @@ class DiscretePlant(_LTIBase):
         x = self._x.copy()
         c, d = self.Cd[output], self.Dd[output]
 
-        def u_at(t: int) -> np.ndarray:
+        def u_at(t: int, t_sine: int | None = None) -> np.ndarray:
+            """Input with piecewise sources at ``t`` and sines at ``t_sine`` (default ``t``)."""
             u = self._u.copy()
             for s in self._sources:
-                if s.kind in ("piecewise", "sine"):
+                if s.kind == "piecewise":
                     u[s.index] += float(s.signal(t))
+                elif s.kind == "sine":
+                    u[s.index] += float(s.signal(t if t_sine is None else t_sine))
                 elif s.kind in ("held", "lti_d"):
                     u[s.index] += s.value
             return u
@@ -606,7 +610,8 @@ class DiscretePlant(_LTIBase):
             if k >= max_ticks:
                 break
             if tc in self._update_times(t, tc):
-                x = self.Ad @ x + self.Bd @ (u_at(tc) if has_sine else u)
+                # as in _step: the input held over the step, sines sampled at the step's start
+                x = self.Ad @ x + self.Bd @ (u_at(t, tc - self.dt_ns) if has_sine else u)
             u = u_at(tc)
             t = tc
         last = t_first + (max_ticks - 1) * tick

@@ -90,3 +90,15 @@ def test_process_noise_draws_from_the_named_stream():
     for _ in range(5):
         x = np.array([[1.0, 0.1], [0.0, 1.0]]) @ x + L @ ref_rng.standard_normal(2)
     np.testing.assert_allclose(a, x, rtol=1e-12, atol=1e-15)
+
+
+def test_sine_disturbance_on_a_discrete_plant_is_held_over_each_step_from_its_start():
+    # x+ = x + u with u = sin(2 pi 250 t) sampled at the start of each 1 ms step (as a held input would be):
+    # u(0) = 0, u(1 ms) = 1, u(2 ms) = 0, u(3 ms) = -1, u(4 ms) = 0, so x at k ms = 0, 0, 1, 1, 0, 0 (by hand)
+    from netsim.signals import make_signal
+    from netsim.timebase import MS
+
+    plant = DiscretePlant([[1.0]], [[1.0]], [[1.0]], [[0.0]], 1 * MS)
+    plant.add_disturbance(0, make_signal({"type": "sine", "amplitude": 1.0, "frequency": 250.0}))
+    ys = [float(plant.output(k * MS)[0]) for k in range(6)]
+    np.testing.assert_allclose(ys, [0, 0, 1, 1, 0, 0], atol=1e-12)
