@@ -48,27 +48,23 @@ class SendQueue:
 
     def push(self, frame: Any, now: int) -> bool:
         """Queue ``frame`` (needs ``.priority`` and ``.order``); False if the queue is full."""
-        if self.limit is not None and self._len >= self.limit:
-            return False
-        self._account(now)
-        if self.priority:
-            heapq.heappush(self._heap, (frame.priority, frame.order, frame))
-        else:
-            self._fifo.append(frame)
-        self._len += 1
-        if self._len > self.max_len:
-            self.max_len = self._len
-        return True
+        return self._insert(frame, now, front=False)
 
     def push_front(self, frame: Any, now: int) -> bool:
         """Put a frame back to be sent next among its equals (retransmission); False if full."""
+        return self._insert(frame, now, front=True)
+
+    def _insert(self, frame: Any, now: int, *, front: bool) -> bool:
         if self.limit is not None and self._len >= self.limit:
             return False
         self._account(now)
         if self.priority:
+            # a retransmitted frame keeps its original order key, so it goes back ahead of later equals
             heapq.heappush(self._heap, (frame.priority, frame.order, frame))
-        else:
+        elif front:
             self._fifo.appendleft(frame)
+        else:
+            self._fifo.append(frame)
         self._len += 1
         if self._len > self.max_len:
             self.max_len = self._len
