@@ -42,6 +42,7 @@ __all__ = [
     "control_error",
     "latency",
     "chain_latencies",
+    "chain_latencies_ns",
     "compute_metrics",
     "held_integrals",
     "ControlErrorParams",
@@ -201,67 +202,90 @@ def _split_task(ref: str) -> tuple[str, str]:
     return node, task
 
 
-def chain_latencies(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[str]) -> list[float]:
-    """Sample-to-actuation latencies (s) along ``chain`` (see the module docstring), one per complete chain.
+_NO_TIME = np.iinfo(np.int64).max  #: stands for "no time" (unfinished job, undelivered message) in ns arrays
 
-    Vectorised: each backward step is two ``searchsorted`` calls over the sorted messages and jobs.
+
+def _ns(column: pd.Series) -> np.ndarray:
+    """A ``*_s`` column of a result table as exact int64 nanoseconds (NaN -> ``_NO_TIME``).
+
+    The tables hold ``ns / 1e9`` rounded to the nearest float (or the ``%.12g`` text of it, for a run folder
+    read back); rounding ``s * 1e9`` recovers the integer for every time below ~52 days.
     """
+    values = column.to_numpy(dtype=float)
+    missing = np.isnan(values)
+    out = np.rint(np.where(missing, 0.0, values) * S).astype(np.int64)
+    out[missing] = _NO_TIME
+    return out
+
+
+def chain_latencies_ns(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[str]) -> np.ndarray:
+    """Sample-to-actuation latencies in integer ns along ``chain`` (see the module docstring).
+
+    One value per complete chain (int64 array). Every comparison and the final subtraction work on exact
+    integer nanoseconds, so a 3.5 ms latency is exactly 3 500 000 ns. Vectorised: each backward step is two
+    ``searchsorted`` calls over the sorted messages and jobs.
+    """
+    empty = np.zeros(0, dtype=np.int64)
     if len(chain) < 1 or jobs is None or jobs.empty:
-        return []
+        return empty
     steps = [_split_task(c) for c in chain]
-    eps = 1e-12
 
     def task_arrays(node: str, task: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        sel = jobs[(jobs["node"] == node) & (jobs["task"] == task)].sort_values("start_s", kind="stable")
-        start = sel["start_s"].to_numpy(dtype=float)
-        finish = sel["finish_s"].to_numpy(dtype=float)
-        release = sel["release_s"].to_numpy(dtype=float)
-        return release, start, finish
+        sel = jobs[(jobs["node"] == node) & (jobs["task"] == task)]
+        start = _ns(sel["start_s"])
+        order = np.argsort(start, kind="stable")
+        return _ns(sel["release_s"])[order], start[order], _ns(sel["finish_s"])[order]
 
-    rel, _start, fin = task_arrays(*steps[-1])
-    keep = ~np.isnan(fin)
-    end = fin[keep]
-    cur_release = rel[keep]
-    first_start = _start[keep]
+    rel, first_start, fin = task_arrays(*steps[-1])
+    keep = fin != _NO_TIME
+    end, cur_release, first_start = fin[keep], rel[keep], first_start[keep]
     ok = np.ones(len(end), dtype=bool)
-    msgs = messages if messages is not None else pd.DataFrame()
     if len(steps) > 1:
-        if msgs.empty:
-            return []
-        delivered = msgs[(msgs["dropped"].astype(str).str.lower() != "true") & msgs["delivered_s"].notna()]
+        if messages is None or messages.empty:
+            return empty
+        delivered = messages[
+            (messages["dropped"].astype(str).str.lower() != "true") & messages["delivered_s"].notna()
+        ]
     for i in range(len(steps) - 1, 0, -1):
         node, prev_node = steps[i][0], steps[i - 1][0]
         pair = delivered[(delivered["receiver"] == node) & (delivered["sender"] == prev_node)]
-        pair = pair.sort_values("delivered_s", kind="stable")
-        deliv = pair["delivered_s"].to_numpy(dtype=float)
-        sent = pair["sent_s"].to_numpy(dtype=float)
-        k = np.searchsorted(deliv, cur_release + eps, side="right") - 1
-        ok &= k >= 0
-        sent_at = np.where(k >= 0, sent[np.clip(k, 0, None)] if len(sent) else np.nan, np.nan)
+        deliv = _ns(pair["delivered_s"])
+        order = np.argsort(deliv, kind="stable")
+        deliv, sent = deliv[order], _ns(pair["sent_s"])[order]
         p_rel, p_start, p_fin = task_arrays(*steps[i - 1])
-        j = np.searchsorted(p_start, sent_at + eps, side="right") - 1
+        if len(sent) == 0 or len(p_start) == 0:
+            return empty
+        # the message delivered last at or before the job's release ...
+        k = np.searchsorted(deliv, cur_release, side="right") - 1
+        ok &= k >= 0
+        sent_at = sent[np.clip(k, 0, None)]
+        # ... sent by the previous task during one of its jobs (started at or before, not finished before)
+        j = np.searchsorted(p_start, sent_at, side="right") - 1
         jj = np.clip(j, 0, None)
-        if len(p_start) == 0:
-            return []
-        p_fin_filled = np.where(np.isnan(p_fin), np.inf, p_fin)
-        ok &= (j >= 0) & (p_fin_filled[jj] >= sent_at - eps)
+        ok &= (j >= 0) & (p_fin[jj] >= sent_at)
         cur_release = p_rel[jj]
         first_start = p_start[jj]
-    return [float(v) for v in (end - first_start)[ok]]
+    return (end - first_start)[ok]
+
+
+def chain_latencies(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[str]) -> list[float]:
+    """Sample-to-actuation latencies in seconds along ``chain``: :func:`chain_latencies_ns` converted once."""
+    return [int(v) / S for v in chain_latencies_ns(jobs, messages, chain)]
 
 
 @register("metric", "latency", "sample-to-actuation latency along a task chain, from the jobs/messages tables")
 def latency(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
     """Mean/max/min latency and the number of complete chains."""
     p = _validate(LatencyParams, params, "latency")
-    values = np.asarray(chain_latencies(result.jobs, result.messages, p.chain), dtype=float)
+    values = chain_latencies_ns(result.jobs, result.messages, p.chain)
     n = p.name
     if values.size == 0:
         return {f"{n}.mean_s": math.nan, f"{n}.max_s": math.nan, f"{n}.min_s": math.nan, f"{n}.count": 0.0}
+    total = sum(int(v) for v in values)  # exact integer sum; one division for the mean
     return {
-        f"{n}.mean_s": float(values.mean()),
-        f"{n}.max_s": float(values.max()),
-        f"{n}.min_s": float(values.min()),
+        f"{n}.mean_s": total / (values.size * S),
+        f"{n}.max_s": int(values.max()) / S,
+        f"{n}.min_s": int(values.min()) / S,
         f"{n}.count": float(values.size),
     }
 

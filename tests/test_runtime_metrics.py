@@ -64,3 +64,20 @@ def test_chain_latency_follows_messages_back_to_the_sampling_job():
     m = latency(RunResult(jobs=jobs, messages=msgs), {"chain": ["s.sample", "c.ctl", "a.act"]})
     assert m["latency.count"] == 1 and m["latency.max_s"] == pytest.approx(0.0035)
     assert generic_metrics(RunResult(jobs=jobs, messages=msgs), None, 20 * MS)["net.can.mean_delay_s"] == pytest.approx(0.001)
+
+
+def test_chain_latency_is_exact_in_nanoseconds_away_from_time_zero():
+    # the same chain as above shifted to t = 1 s: in float seconds 1.0035 - 1.0 = 0.0035000000000000586, in
+    # integer ns it is 3_500_000 ns -> 0.0035 exactly (the float nearest to 3.5 ms, i.e. 3_500_000 / 1e9)
+    us, t0 = 1000, 1_000_000_000
+    jobs = jobs_table([
+        _job("s", "sample", 0, t0, t0, t0 + 900 * us, t0 + 10 * MS),
+        _job("c", "ctl", 0, t0 + 1500 * us, t0 + 1500 * us, t0 + 2000 * us, t0 + 10 * MS),
+        _job("a", "act", 0, t0 + 3000 * us, t0 + 3000 * us, t0 + 3500 * us, t0 + 10 * MS),
+    ])
+    msgs = messages_table([_msg(0, "s", "c", t0 + 500 * us, t0 + 1500 * us),
+                           _msg(1, "c", "a", t0 + 2000 * us, t0 + 3000 * us)])
+    chain = ["s.sample", "c.ctl", "a.act"]
+    assert chain_latencies(jobs, msgs, chain) == [0.0035]
+    m = latency(RunResult(jobs=jobs, messages=msgs), {"chain": chain})
+    assert m["latency.min_s"] == 0.0035 and m["latency.max_s"] == 0.0035 and m["latency.mean_s"] == 0.0035
