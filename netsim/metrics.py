@@ -22,9 +22,12 @@ import math
 from typing import Any
 
 import numpy as np
+from pydantic import Field, field_validator
 
 from netsim.errors import ConfigError
 from netsim.registry import register
+from netsim.timebase import S
+from netsim.units import Duration, StrictModel
 
 __all__ = [
     "ise",
@@ -37,6 +40,7 @@ __all__ = [
     "sample_signal",
     "count_messages",
     "et_control",
+    "EtControlParams",
 ]
 
 
@@ -113,36 +117,82 @@ def count_messages(messages, tag: str, *, delivered: bool = False, before_s: flo
     return int(sel.sum())
 
 
-@register("metric", "et_control", "Uc, Ua, Cc, CS, ISE, ISEP, NE, GPI of Cuenca et al. eqs (20)-(29)")
-def et_control(result: Any, params: dict, baseline: Any | None = None) -> dict[str, float]:
-    """Metrics of an event-triggered run (``params``: see below) against an optional TTS baseline.
+class EtControlParams(StrictModel):
+    """Parameters of the ``et_control`` metric (validated with the scenario, before anything runs).
 
-    ``params``: ``period`` (fast period T in s, required), ``reference`` (signal, default ``r``),
-    ``output`` (noise-free output signal, default ``y``), ``sensor_tag`` (``y``), ``actuator_tag`` (``u``),
-    ``m`` (2), ``n`` (1), ``weights`` ([0.45, 0.45, 0.1]), ``n_tts`` (default: periods in the run).
+    Attributes
+    ----------
+    period
+        The fast sampling period T (``"20 us"`` or seconds); required.
+    reference, output
+        Recorded signals read at ``k T``: the reference and the noise-free plant output.
+    sensor_tag, actuator_tag
+        Message tags of sensor-to-controller and controller-to-actuator transmissions.
+    m, n
+        The MRCI decomposition sizes of eq (20).
+    weights
+        ``W1, W2, W3`` of eq (29): three numbers >= 0 summing to 1.
+    n_tts
+        Number of periods compared (default: the periods in the run).
     """
-    known = {"period", "reference", "output", "sensor_tag", "actuator_tag", "m", "n", "weights", "n_tts"}
-    unknown = set(params) - known
-    if unknown:
-        raise ConfigError(f"et_control: unknown parameter(s) {sorted(unknown)}; known: {sorted(known)}")
-    if "period" not in params:
-        raise ConfigError("et_control: give `period` (the fast sampling period T in seconds)")
-    T = float(params["period"])
-    ref, out = params.get("reference", "r"), params.get("output", "y")
-    m, n = int(params.get("m", 2)), int(params.get("n", 1))
-    weights = params.get("weights", (0.45, 0.45, 0.1))
-    duration = float(result.meta.get("duration_s") or 0.0) if hasattr(result, "meta") else 0.0
+
+    period: Duration
+    reference: str = "r"
+    output: str = "y"
+    sensor_tag: str = "y"
+    actuator_tag: str = "u"
+    m: int = Field(default=2, ge=1)
+    n: int = Field(default=1, ge=0)
+    weights: tuple[float, float, float] = (0.45, 0.45, 0.1)
+    n_tts: int | None = Field(default=None, gt=0)
+
+    @field_validator("weights")
+    @classmethod
+    def _weights_sum_to_one(cls, value: tuple[float, float, float]) -> tuple[float, float, float]:
+        if any(w < 0 for w in value):
+            raise ValueError(f"GPI weights must not be negative, got {list(value)}")
+        if not math.isclose(sum(value), 1.0, abs_tol=1e-9):
+            raise ValueError(f"GPI weights must sum to 1, got {list(value)} (sum {sum(value):g})")
+        return value
+
+
+def _et_params(params: Any) -> EtControlParams:
+    if isinstance(params, EtControlParams):
+        return params
+    from pydantic import ValidationError
+
+    try:
+        return EtControlParams.model_validate(dict(params or {}))
+    except ValidationError as exc:
+        from netsim.scenario.messages import problems_from_validation_error
+
+        problems = problems_from_validation_error(exc, model=EtControlParams)
+        raise ConfigError("et_control: " + "; ".join(f"{p.path}: {p.message}" if p.path else p.message
+                                                     for p in problems)) from None
+
+
+@register("metric", "et_control", "Uc, Ua, Cc, CS, ISE, ISEP, NE, GPI of Cuenca et al. eqs (20)-(29)")
+def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[str, float]:
+    """Metrics of an event-triggered run (``params``: :class:`EtControlParams`) against an optional TTS baseline.
+
+    ``N_TTS`` (default) is the number of whole periods in the run, counted in integer nanoseconds.
+    """
+    p = _et_params(params)
     sig = result.signals
-    if not duration:
-        duration = float(sig["time_s"].max()) if len(sig) else 0.0
-    n_tts = int(params.get("n_tts") or int(math.floor(duration / T + 1e-9)))
-    t_k = np.arange(n_tts) * T
+    duration_s = float(result.meta.get("duration_s") or 0.0) if hasattr(result, "meta") else 0.0
+    if not duration_s:
+        duration_s = float(sig["time_s"].max()) if len(sig) else 0.0
+    duration_ns = int(round(duration_s * S))
+    n_tts = p.n_tts or duration_ns // p.period
+    t_k = np.arange(n_tts, dtype=np.int64) * p.period / S
+    ref, out, m, n = p.reference, p.output, p.m, p.n
     r_k = sample_signal(sig, ref, t_k)
     y_k = sample_signal(sig, out, t_k)
     # transmissions of the N_TTS periods [0, N_TTS T) (a run that also executes the instant N_TTS T must
     # not count that extra sample)
-    n_sc = count_messages(result.messages, params.get("sensor_tag", "y"), before_s=n_tts * T)
-    n_ca = count_messages(result.messages, params.get("actuator_tag", "u"), before_s=n_tts * T)
+    window_s = n_tts * p.period / S
+    n_sc = count_messages(result.messages, p.sensor_tag, before_s=window_s)
+    n_ca = count_messages(result.messages, p.actuator_tag, before_s=window_s)
     uc = utilization(n_sc, n_tts)
     ua = utilization(n_ca, n_tts)
     own_ise = ise(r_k, y_k)
@@ -159,5 +209,8 @@ def et_control(result: Any, params: dict, baseline: Any | None = None) -> dict[s
         res["ISE"] = own_ise
         res["ISEP"] = 0.0
     res["NE"] = sampling_efficiency(res["ISEP"], res["ISE"])
-    res["GPI"] = gpi(uc, ua, res["NE"], weights)
+    res["GPI"] = gpi(uc, ua, res["NE"], p.weights)
     return res
+
+
+et_control.Params = EtControlParams  # type: ignore[attr-defined]

@@ -1,11 +1,13 @@
 """Cost functions of Cuenca et al. eqs (20)-(29) and the et_control metric on hand-made run tables."""
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from netsim import registry
 from netsim.errors import ConfigError
 from netsim.metrics import (
     computation_saving_pct,
@@ -61,7 +63,54 @@ def test_et_control_counts_messages_by_tag_and_compares_with_baseline():
 
 def test_et_control_reports_unknown_parameters_and_missing_signals():
     run = _result([0.0, 1.0], [])
-    with pytest.raises(ConfigError, match="unknown parameter"):
+    with pytest.raises(ConfigError, match="unknown key 'sigma'"):
         et_control(run, {"period": 1.0, "sigma": 1}, None)
     with pytest.raises(ConfigError, match="not recorded"):
         et_control(run, {"period": 1.0, "output": "zz"}, None)
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _errors(path, overrides):
+    from netsim.scenario import check_scenario
+
+    return {p.path: p.message for p in check_scenario(path, overrides) if p.is_error}
+
+
+def test_misspelt_et_control_parameter_is_found_by_validation_before_any_run():
+    errors = _errors(ROOT / "scenarios" / "hdd_case2.yaml", {"metrics[0].params.perio": 2e-5})
+    assert "metrics[0].params.perio" in errors and "unknown key 'perio'" in errors["metrics[0].params.perio"]
+
+
+@pytest.mark.parametrize(
+    ("weights", "needle"),
+    [([0.5, 0.5, 0.5], "sum to 1"), ([1.2, -0.2, 0.0], "must not be negative"), ([0.5, 0.5], "")],
+)
+def test_et_control_weights_must_be_three_non_negative_numbers_summing_to_one(weights, needle):
+    errors = _errors(ROOT / "scenarios" / "hdd_case2.yaml", {"metrics[0].params.weights": weights})
+    assert [k for k in errors if k.startswith("metrics[0].params.weights")], errors
+    assert needle in " ".join(errors.values())
+
+
+def test_et_control_period_is_a_time_with_units():
+    from netsim.metrics import EtControlParams
+    from netsim.timebase import US
+
+    assert EtControlParams.model_validate({"period": "20 us"}).period == 20 * US
+    assert EtControlParams.model_validate({"period": 2e-5}).period == 20 * US  # bare numbers are seconds
+    with pytest.raises(ValueError):
+        EtControlParams.model_validate({"period": "-1 ms"})
+
+
+def test_every_registered_metric_has_a_params_model():
+    from pydantic import BaseModel
+
+    registry.load_plugins()
+    # the project's own metrics (tests may register throw-away metrics of their own)
+    names = {e.name for e in registry.entries("metric")
+             if registry.lookup("metric", e.name).__module__.split(".")[0] in ("netsim", "models")}
+    assert {"control_error", "latency", "et_control", "cart"} <= names
+    missing = [n for n in sorted(names) if not (isinstance(getattr(registry.lookup("metric", n), "Params", None), type)
+                                                and issubclass(registry.lookup("metric", n).Params, BaseModel))]
+    assert missing == []
