@@ -21,6 +21,9 @@ What is checked
   (``ports(params) -> (input_names, output_names)``, or attributes ``input_names``/``output_names`` or
   ``n_inputs``/``n_outputs``); plant ``disturbances`` name plant inputs and scenario signals.
 - ``record`` entries are names; the runner warns (in ``meta.json``) about names nothing recorded.
+- Metric parameters that name recorded signals (``reference``, ``output``, ``signal``, ``*_signal`` and the
+  plurals ``signals``, ``outputs``, ``*_signals``) must be in the ``record:`` list when one is given (the
+  metric reads them from the signals table after the run).
 - ``baseline.overrides`` paths can be applied and give a valid scenario.
 """
 
@@ -384,7 +387,34 @@ class _Checker:
                 continue
             plugin = self.lookup("metric", metric.get("type"), ["metrics", i, "type"])
             raw = metric.get("params", {})
-            self.params(plugin, {} if raw is None else raw, ["metrics", i, "params"], f"metrics[{i}]")
+            raw = {} if raw is None else raw
+            model = self.params(plugin, raw, ["metrics", i, "params"], f"metrics[{i}]")
+            if plugin is not None:
+                values = _values(model) if model is not None else _d(raw)
+                self.metric_signals(str(metric.get("type")), values, ["metrics", i, "params"])
+
+    def metric_signals(self, metric: str, values: dict[str, Any], at: list[PathPart]) -> None:
+        """A metric reads recorded signals after the run: with a ``record:`` list, each signal its parameters
+        name (fields ``reference``, ``output``, ``signal``, ``*_signal`` and their plurals) must be in it."""
+        record = self.raw.get("record")
+        if not isinstance(record, list):
+            return  # omitted or null: everything is recorded
+        kept = {r for r in record if isinstance(r, str)}
+        for key, value in values.items():
+            if not isinstance(key, str):
+                continue
+            if key in ("reference", "output", "signal") or key.endswith("_signal"):
+                refs = [([*at, key], value)]
+            elif key in ("signals", "outputs") or key.endswith("_signals"):
+                refs = [([*at, key, j], v) for j, v in enumerate(_l(value))]
+            else:
+                continue
+            for where, name in refs:
+                if not isinstance(name, str) or not name or name in kept or name.split("[", 1)[0] in kept:
+                    continue
+                listed = ", ".join(r for r in record if isinstance(r, str)) or "nothing"
+                self.error(where, f"metric '{metric}' reads signal '{name}', which 'record:' leaves out "
+                                  f"(record: [{listed}]); add '{name}' to 'record:'")
 
     def record(self, outputs: list[Any] | None) -> None:
         """``record`` entries must be names (text); whether each is ever recorded is known only after the run

@@ -238,10 +238,10 @@ def test_disturbances_name_plant_inputs_and_signals(base):
 
 def test_record_names_must_be_text_and_are_not_guessed_statically(base):
     raw = base()
-    raw["record"] = ["y", "y[0]", "ctl_state", 3]
+    raw["record"] = ["y", "y[0]", "ctl_state", "r", 3]  # r: the zzt_error metric reads it
     # 'ctl_state' may be recorded by a program: no warning before the run; a number is an error
     assert _problems(raw, "warning") == {}
-    assert _problems(raw) == {"record[3]": "expected a signal name, got 3"}
+    assert _problems(raw) == {"record[4]": "expected a signal name, got 3"}
 
 
 def test_invalid_names_are_rejected(base):
@@ -393,3 +393,44 @@ def test_offset_on_an_aperiodic_task_is_an_error(base):
         f"nodes.{node_name}.tasks[{index}].offset": "only periodic tasks have an offset (this one is released "
         "'aperiodic'); remove 'offset'"
     }
+
+
+def test_metric_signal_left_out_of_record_is_an_error_naming_the_metric(base):
+    raw = base()
+    raw["record"] = ["y", "u"]  # the zzt_error metric reads 'r'
+    assert _problems(raw) == {
+        "metrics[0].params.reference": "metric 'zzt_error' reads signal 'r', which 'record:' leaves out "
+        "(record: [y, u]); add 'r' to 'record:'"
+    }
+
+
+def test_metric_signals_are_not_checked_when_everything_is_recorded(base):
+    raw = base()
+    del raw["record"]
+    raw["metrics"][0]["params"]["reference"] = "anything"  # omitted record: every signal is recorded
+    assert _problems(raw) == {}
+
+
+def test_metric_signal_conventions_cover_output_signal_and_suffixed_fields(base):
+    from netsim.registry import register
+    from netsim.units import StrictModel
+
+    @register("metric", "zzt_multi", "test metric reading several signals")
+    def zzt_multi(result, params, baseline=None):
+        return {}
+
+    class Params(StrictModel):
+        output: str = "y"            # a default counts too: the metric reads it
+        signal: str | None = None
+        error_signal: str
+        signals: list[str] = []
+
+    zzt_multi.Params = Params
+    raw = base()
+    raw["record"] = ["y", "u", "r", "x[0]"]
+    raw["metrics"].append({"type": "zzt_multi", "params": {"error_signal": "e", "signal": "x[0]",
+                                                           "signals": ["u", "v"]}})
+    assert set(_problems(raw)) == {"metrics[1].params.error_signal", "metrics[1].params.signals[1]"}
+    raw["metrics"][1]["params"]["signal"] = "z[1]"   # an element of a vector needs the vector or itself
+    raw["record"] = ["y", "u", "r", "z", "e", "v"]
+    assert _problems(raw) == {}
