@@ -23,7 +23,8 @@ What is checked
 - ``record`` entries are names; the runner warns (in ``meta.json``) about names nothing recorded.
 - Metric parameters that name recorded signals (``reference``, ``output``, ``signal``, ``*_signal`` and the
   plurals ``signals``, ``outputs``, ``*_signals``) must be in the ``record:`` list when one is given (the
-  metric reads them from the signals table after the run).
+  metric reads them from the signals table after the run). A metric's ``chain`` (or ``*_chain``) lists
+  ``node.task`` names of existing tasks or handlers.
 - ``baseline.overrides`` paths can be applied and give a valid scenario.
 """
 
@@ -392,6 +393,10 @@ class _Checker:
             if plugin is not None:
                 values = _values(model) if model is not None else _d(raw)
                 self.metric_signals(str(metric.get("type")), values, ["metrics", i, "params"])
+                for key, value in values.items():
+                    if isinstance(key, str) and (key == "chain" or key.endswith("_chain")):
+                        for j, ref in enumerate(_l(value)):
+                            self.task_ref(ref, ["metrics", i, "params", key, j])
 
     def metric_signals(self, metric: str, values: dict[str, Any], at: list[PathPart]) -> None:
         """A metric reads recorded signals after the run: with a ``record:`` list, each signal its parameters
@@ -415,6 +420,24 @@ class _Checker:
                 listed = ", ".join(r for r in record if isinstance(r, str)) or "nothing"
                 self.error(where, f"metric '{metric}' reads signal '{name}', which 'record:' leaves out "
                                   f"(record: [{listed}]); add '{name}' to 'record:'")
+
+    def task_ref(self, ref: Any, at: list[PathPart]) -> None:
+        """``ref`` is ``node.task`` naming an existing task or handler of that node."""
+        if not isinstance(ref, str):
+            return  # the Params model reports the type
+        node, sep, task = ref.partition(".")
+        if not sep or not node or not task:
+            self.error(at, f"expected 'node.task', got '{ref}'")
+            return
+        if node not in self.nodes:
+            self.error(at, f"unknown node '{node}'{did_you_mean(node, self.nodes, what='nodes')}")
+            return
+        spec = _d(_d(self.raw.get("nodes")).get(node))
+        names = [item.get("name") for kind in ("tasks", "handlers") for item in _l(spec.get(kind))
+                 if isinstance(item, dict) and isinstance(item.get("name"), str)]
+        if task not in names:
+            hint = did_you_mean(task, names, what="tasks and handlers")
+            self.error(at, f"node '{node}' has no task or handler '{task}'{hint}")
 
     def record(self, outputs: list[Any] | None) -> None:
         """``record`` entries must be names (text); whether each is ever recorded is known only after the run

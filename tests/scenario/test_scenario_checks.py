@@ -434,3 +434,16 @@ def test_metric_signal_conventions_cover_output_signal_and_suffixed_fields(base)
     raw["metrics"][1]["params"]["signal"] = "z[1]"   # an element of a vector needs the vector or itself
     raw["record"] = ["y", "u", "r", "z", "e", "v"]
     assert _problems(raw) == {}
+
+
+def test_latency_chain_entries_must_name_existing_tasks_or_handlers(base):
+    raw = base()
+    raw["metrics"].append({"type": "latency", "params": {
+        "chain": ["sensor.sample", "controller.ctl", "actuator.act",      # a task, a task, a handler: fine
+                  "sensor.nope", "sensr.sample", "controller.cl", "oops"]}})
+    assert _problems(raw) == {
+        "metrics[1].params.chain[3]": "node 'sensor' has no task or handler 'nope' (known tasks and handlers: sample)",
+        "metrics[1].params.chain[4]": "unknown node 'sensr'; did you mean 'sensor'?",
+        "metrics[1].params.chain[5]": "node 'controller' has no task or handler 'cl'; did you mean 'ctl'?",
+        "metrics[1].params.chain[6]": "expected 'node.task', got 'oops'",
+    }
