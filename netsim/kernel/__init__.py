@@ -17,6 +17,7 @@ Importing this package registers the scheduling policies under registry kind ``"
 from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
 from netsim.kernel.kernel import Kernel
+from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.policies import (DeadlineMonotonic, EarliestDeadlineFirst, FixedPriority,
                                     NonPreemptiveEDF, NonPreemptiveFixedPriority, Policy, RateMonotonic)
 from netsim.kernel.records import JobRecord
@@ -46,5 +47,6 @@ __all__ = [
     "HandlerSpec",
     "Timer",
     "Trigger",
+    "PeriodicLoad",
     "Request",
 ]

@@ -78,6 +78,7 @@ class Job:
     _seg_end = 0
     _ev: Any = None  # pending segment wake-up of this job
     _ev_time = 0
+    _win_end = 0  # a periodic load's real invocation at a tick: the end of its window
     _blocked_on: Any = None
     _wake: Any = None
     _np = False

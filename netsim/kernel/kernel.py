@@ -28,6 +28,9 @@ Semantics
 - **Budgets and deadlines.** ``wcet`` is a budget of execution time (context switches excluded) per job;
   the instant it is exhausted with work left, ``wcet_handler`` fires. ``deadline_handler`` fires at the
   absolute deadline if the job has not finished. Neither kills the job; a handler can (``kill_job``).
+- **Periodic loads** (:meth:`create_periodic_load`): a fast periodic ISR accounted in closed form; tasks
+  and other handlers get the CPU only outside its windows, with the same results as an explicit top-priority
+  handler and timer (see that method for the exact rules).
 - **Livelock.** More than ``livelock_limit`` zero-time activities (requests and job resumptions) at one
   instant raise :class:`~netsim.errors.LivelockError` naming the tasks and handlers involved.
 """
@@ -47,6 +50,7 @@ from netsim.kernel.building import KernelBuilder
 from netsim.kernel.events import DEADLINE, DISPATCH, NORMAL, URGENT, Wake
 from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
+from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.policies import Policy, resolve_policy
 from netsim.kernel.records import JobRecord, busy_time
 from netsim.kernel.requests import Request
@@ -62,6 +66,8 @@ log = logging.getLogger(__name__)
 _EXECUTE, _SLEEP_UNTIL, _SLEEP = rq.EXECUTE, rq.SLEEP_UNTIL, rq.SLEEP
 #: Rank of a started non-preemptible task job: below every handler (level 0), above every task (level 1).
 _NP_RANK = (0.5, 0)
+#: Rank of a periodic load's real invocation at a tick: above every handler.
+_WINDOW_RANK = (-1, 0)
 
 
 class Kernel(KernelBuilder):
@@ -95,6 +101,8 @@ class Kernel(KernelBuilder):
         Number of context switches and CPU time spent in them.
     segments : int
         Number of CPU segments dispatched (execution pieces, context switches, ISR latencies).
+    loads : dict[str, PeriodicLoad]
+        Periodic interrupt loads accounted in closed form (:meth:`create_periodic_load`).
     """
 
     def __init__(self, env: SimEnv, name: str, policy: "str | Policy" = "fp", context_switch: int = 0, *,
@@ -115,6 +123,9 @@ class Kernel(KernelBuilder):
         self.handlers: dict[str, Handler] = {}
         self.timers: dict[str, Timer] = {}
         self.triggers: dict[str, Trigger] = {}
+        self.loads: dict[str, PeriodicLoad] = {}
+        self._load: PeriodicLoad | None = None
+        self._win_wake = -1  # end of the window for which a dispatch is scheduled
         self.networks: dict[str, Any] = {}
         self._inboxes: dict[str, deque[Message]] = {}
         self._bindings: dict[str, str] = {}
@@ -212,8 +223,14 @@ class Kernel(KernelBuilder):
         out = {t.name: t.cpu for t in self.tasks.values()}
         out.update({h.name: h.cpu for h in self.handlers.values()})
         job = self._running
+        load = self._load
         if job is not None and self._seg_job is job:
-            out[job.task_name] += max(0, self._clock() - job._seg_start)
+            if load is None:
+                out[job.task_name] += max(0, self._clock() - job._seg_start)
+            else:
+                out[job.task_name] += max(0, self._load_progress(job, self._clock())[1])
+        if load is not None:
+            out[load.name] = out.get(load.name, 0) + load.stolen_until(self._clock())
         return out
 
     def _clock(self) -> int:
@@ -233,12 +250,19 @@ class Kernel(KernelBuilder):
             if t0 != 0 or t1 != now:
                 raise SimulationError(f"node '{self.name}': utilization over a window needs trace=True")
             return min(1.0, sum(self.cpu_time.values()) / t1)
-        busy = busy_time(self.schedule, t0, t1)
+        load = self._load
+        if load is None:
+            busy = busy_time(self.schedule, t0, t1)
+        else:  # running intervals span the windows that interrupted them: count those as the load's
+            busy = load.stolen(t0, t1)
+            for _, state, a, b in self.schedule:
+                if state == "running" and b > t0 and a < t1:
+                    busy += load.free(max(a, t0), min(b, t1))
         for ent in list(self.tasks.values()) + list(self.handlers.values()):
             if ent.trace_state == "running":
                 lo, hi = max(ent.trace_since, t0), min(now, t1)  # open interval of the running entity
                 if hi > lo:
-                    busy += hi - lo
+                    busy += hi - lo if load is None else load.free(lo, hi)
         return busy / (t1 - t0)
 
     # ================================================================= releases and invocations
@@ -279,6 +303,12 @@ class Kernel(KernelBuilder):
         handler.invocations += 1
         job._rank = job._base_rank = (0, handler.spec.priority)
         job._pre_left = handler.spec.latency
+        load = self._load
+        if load is not None and load.handler == handler.name and load.claimed != now and load.is_tick(now):
+            load.claimed = now  # this invocation is the tick's window: the most urgent job of the node
+            load.real_invocations += 1
+            job._win_end = now + load.execution
+            job._rank = job._base_rank = _WINDOW_RANK
         if handler.active is None:
             handler.active = job
             self._make_ready(job, now)
@@ -371,7 +401,9 @@ class Kernel(KernelBuilder):
             job._ev_time = end
             return
         self._seg_job = None
-        if job._pre_left or job._budget is not None:
+        if self._load is not None:
+            self._charge_load(job, now)
+        elif job._pre_left or job._budget is not None:
             self._charge(job, now - job._seg_start)
         else:  # the common case, inlined: an execute segment without budget ran to its end
             elapsed = now - job._seg_start
@@ -429,10 +461,15 @@ class Kernel(KernelBuilder):
         try:
             now = self._sim._now
             ready = self._ready
+            load = self._load
             while True:
                 while ready and ready[0][2]._state != READY:
                     heappop(ready)  # killed while ready
                 cur = self._running
+                if load is not None:
+                    we = load.window_end(now)
+                    if we and self._held_by_window(cur, now, we):
+                        return
                 if cur is not None:
                     if ready and ready[0][0] < cur._rank:
                         self._preempt(cur, now)
@@ -464,6 +501,30 @@ class Kernel(KernelBuilder):
         finally:
             self._busy = False
 
+    def _held_by_window(self, cur: Job | None, now: int, we: int) -> bool:
+        """Inside a load window ending at ``we``: True if the CPU stays with the window until then.
+
+        Only the tick's real invocation may take or keep the CPU; a job that holds it without a segment, or
+        that a ready job beats, is preempted now (the window's interrupt), and a dispatch is scheduled at
+        the window's end. A job in a segment keeps it (the segment's end already accounts for the window).
+        """
+        ready = self._ready
+        if (cur is not None and cur._win_end > now) or (ready and ready[0][2]._win_end > now):
+            return False
+        if cur is not None:
+            if self._seg_job is cur and not (ready and ready[0][0] < cur._rank):
+                return True
+            self._preempt(cur, now)
+        if self._win_wake != we:
+            self._win_wake = we
+            Wake(self._sim, we - now, DISPATCH, self._on_window_end)
+        return True
+
+    def _on_window_end(self, _ev: Any) -> None:
+        self._win_wake = -1
+        if not self._busy:
+            self._dispatch()
+
     def _switch_in(self, job: Job, now: int) -> None:
         job._state = RUNNING
         self._running = job
@@ -487,7 +548,16 @@ class Kernel(KernelBuilder):
 
     def _start_segment(self, job: Job, length: int, now: int) -> None:
         job._seg_start = now
-        end = now + length
+        load = self._load
+        if load is None:
+            end = now + length
+        else:
+            we = job._win_end
+            if we > now:  # the tick's real invocation: the window is its own time
+                end = now + length if now + length <= we else load.finish(we, length - (we - now))
+            else:
+                end = load.finish(now, length)
+            length = end - now
         job._seg_end = end
         self._seg_job = job
         self.segments += 1
@@ -509,11 +579,41 @@ class Kernel(KernelBuilder):
         job.cpu_time += elapsed
         job._task.cpu += elapsed
 
+    def _load_progress(self, job: Job, now: int) -> tuple[int, int]:
+        """``(progress, charged)`` of ``job``'s current segment up to ``now`` under the periodic load."""
+        load = self._load
+        assert load is not None
+        a = job._seg_start
+        we = job._win_end
+        if we > a:  # the tick's real invocation: its time inside the window is the window's CPU time
+            if now <= we:
+                return now - a, 0
+            beyond = load.free(we, now)
+            return (we - a) + beyond, beyond
+        progress = load.free(a, now)
+        return progress, progress
+
+    def _charge_load(self, job: Job, now: int) -> None:
+        """Charge ``job``'s segment up to ``now`` under the load; each window inside it preempted the job."""
+        progress, charged = self._load_progress(job, now)
+        self._charge(job, progress)
+        if charged != progress:
+            job.cpu_time -= progress - charged
+            job._task.cpu -= progress - charged
+        if job._win_end <= job._seg_start:
+            job.preemptions += self._load.ticks_in(job._seg_start, now)  # type: ignore[union-attr]
+
     def _preempt(self, job: Job, now: int) -> None:
+        same = False
         if self._seg_job is job:
             self._seg_job = None
-            self._charge(job, now - job._seg_start)
-        job.preemptions += 1
+            if self._load is None:
+                self._charge(job, now - job._seg_start)
+            else:  # at the end of a window that already preempted the job: one preemption, not two
+                same = job._win_end <= job._seg_start and self._load.preempted_until(job._seg_start, now)
+                self._charge_load(job, now)
+        if not same:
+            job.preemptions += 1
         job._state = READY
         heappush(self._ready, (job._rank, job._seq, job))  # keeps its place among equals
         self._running = None
@@ -748,7 +848,10 @@ class Kernel(KernelBuilder):
         if job is self._running:
             if self._seg_job is job:
                 self._seg_job = None
-                self._charge(job, now - job._seg_start)
+                if self._load is None:
+                    self._charge(job, now - job._seg_start)
+                else:
+                    self._charge_load(job, now)
             self._running = None
         elif job._state == NEW:
             job._task.queue.remove(job)
@@ -779,16 +882,22 @@ class Kernel(KernelBuilder):
             stale = {id(r) for r in self._unfinished}
             self.job_records[:] = [r for r in self.job_records if id(r) not in stale]
         self._unfinished = []
-        running, partial = self._running, 0
+        running, partial, windows = self._running, 0, 0
         if running is not None and self._seg_job is running:
-            partial = self._sim.now - running._seg_start
+            if self._load is None:
+                partial = self._sim.now - running._seg_start
+            else:
+                partial = self._load_progress(running, self._sim.now)[1]
+                if running._win_end <= running._seg_start:
+                    windows = self._load.ticks_in(running._seg_start, self._sim.now)
         for task in self.tasks.values():
             jobs = ([task.active] if task.active is not None else []) + list(task.queue)
             for job in jobs:
                 cpu = job.cpu_time + (partial if job is running else 0)
                 missed = job.deadline is not None and job.deadline <= t_end
                 rec = JobRecord(task.name, self.name, job.job_id, job.release, job.start, None, None, job.deadline,
-                                False if missed else None, job.preemptions, cpu, False)
+                                False if missed else None, job.preemptions + (windows if job is running else 0),
+                                cpu, False)
                 self._unfinished.append(rec)
         self.job_records.extend(self._unfinished)
         if self.trace:
