@@ -259,6 +259,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from netsim.scenario import ScenarioError, load_scenario
 
     overrides = _overrides(args.overrides)
+    if args.out is not None:
+        from netsim.results import check_out_dir
+
+        check_out_dir(args.out)  # a bad --out is refused before anything runs
     try:
         scenario = load_scenario(args.file, overrides or None)
     except ScenarioError as exc:
@@ -458,7 +462,23 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INVALID
     except NetsimError as exc:
         _err(str(exc))
+        _partial_folder(exc)
         return EXIT_FAILED
+    except OSError as exc:  # a file or folder that cannot be written (disk full, permissions, a file in the way)
+        where = exc.filename or getattr(exc, "run_folder", None) or "output"
+        _err(f"cannot write {where}: {exc.strerror or exc}")
+        _partial_folder(exc)
+        return EXIT_FAILED
+    except Exception as exc:  # a bug: the traceback is wanted, and where the partial results are
+        _partial_folder(exc)
+        raise
+
+
+def _partial_folder(exc: BaseException) -> None:
+    """Tell where a failed run left its partial run folder (``exc.run_folder``, set by the runner)."""
+    folder = getattr(exc, "run_folder", None)
+    if folder is not None:
+        print(f"netsim: the partial results are in {folder}", file=sys.stderr)
 
 
 if __name__ == "__main__":  # pragma: no cover

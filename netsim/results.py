@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
@@ -36,6 +37,7 @@ from typing import Any, Iterable
 import numpy as np
 import pandas as pd
 
+from netsim.errors import ConfigError
 from netsim.timebase import S
 
 __all__ = [
@@ -49,6 +51,7 @@ __all__ = [
     "messages_table",
     "schedule_table",
     "write_csv",
+    "check_out_dir",
 ]
 
 #: printf format of every float in the run folder's CSVs (12 significant digits: ns resolution up to 1000 s).
@@ -85,6 +88,29 @@ MESSAGE_COLUMNS = [
     "tx_end_s",
 ]
 SCHEDULE_COLUMNS = ["node", "task", "state", "start_s", "end_s"]
+
+
+def check_out_dir(path: str | Path) -> Path:
+    """Check that a run folder can be written at ``path`` (before anything runs); returns it as a Path.
+
+    Raises
+    ------
+    ConfigError
+        When ``path`` is an existing file, lies under a file, or its nearest existing folder is not writable.
+    """
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"output '{out}' is a file, not a folder; give a folder path with --out "
+                          "(a new or an existing folder), or remove the file")
+    anchor = out
+    while not anchor.exists() and anchor != anchor.parent:
+        anchor = anchor.parent
+    if anchor.exists() and not anchor.is_dir():
+        raise ConfigError(f"cannot create run folder '{out}': '{anchor}' is a file; give another --out")
+    if anchor.exists() and not os.access(anchor, os.W_OK | os.X_OK):
+        raise ConfigError(f"cannot create run folder '{out}': no permission to write in '{anchor}'; "
+                          "give another --out")
+    return out
 
 
 def _sec(ns: Any) -> float:

@@ -46,10 +46,25 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import pandas as pd  # noqa: E402
 
 from netsim.errors import DivergenceError  # noqa: E402
-from netsim.results import RunResult, jobs_table, messages_table, schedule_table, signals_table  # noqa: E402
+from netsim.results import (  # noqa: E402
+    RunResult,
+    check_out_dir,
+    jobs_table,
+    messages_table,
+    schedule_table,
+    signals_table,
+)
 from netsim.timebase import S  # noqa: E402
 
-__all__ = ["run", "run_point", "simulate", "default_out_dir", "package_versions", "clear_baseline_cache"]
+__all__ = [
+    "run",
+    "run_point",
+    "simulate",
+    "default_out_dir",
+    "check_out_dir",
+    "package_versions",
+    "clear_baseline_cache",
+]
 
 log = logging.getLogger(__name__)
 
@@ -85,6 +100,14 @@ def default_out_dir(name: str, scenario_hash: str, root: str | Path = "reports")
         k += 1
         out = base.with_name(f"{base.name}-{k}")
     return out
+
+
+def _mark_folder(exc: BaseException, folder: Path) -> None:
+    """Attach the (partial) run folder to an exception as ``exc.run_folder`` for the caller to report."""
+    try:
+        exc.run_folder = folder  # type: ignore[attr-defined]
+    except (AttributeError, TypeError):  # an exception type that refuses attributes
+        pass
 
 
 def _collect(sim: Any, t_end_ns: int) -> RunResult:
@@ -209,8 +232,11 @@ def run(
     ------
     ScenarioError
         The scenario does not validate (every problem listed).
+    ConfigError
+        The run folder cannot be written (``out`` is a file ...); checked before anything runs.
     NetsimError
-        Another user-caused failure (after the partial run folder was written).
+        Another user-caused failure (after the partial run folder was written; its path is the exception's
+        ``run_folder`` attribute). An ``OSError`` while writing the folder also carries ``run_folder``.
     """
     from netsim.scenario.loader import load_scenario, scenario_hash
 
@@ -220,6 +246,10 @@ def run(
         ov["seed"] = int(seed)
     scenario = load_scenario(source, overrides=ov or None)
     digest = scenario_hash(scenario)
+    folder: Path | None = None
+    if write:
+        folder = check_out_dir(out if out is not None else (
+            scenario.output.dir if scenario.output.dir else default_out_dir(scenario.name, digest)))
 
     base_sc = scenario.baseline_scenario()
     baseline = _baseline(base_sc) if base_sc is not None else None
@@ -245,17 +275,20 @@ def run(
         }
     )
     result.meta["wall_time_s"] = time.perf_counter() - wall0
-    if write:
-        folder = Path(out) if out is not None else (
-            Path(scenario.output.dir) if scenario.output.dir else default_out_dir(scenario.name, digest)
-        )
-        result.to_csv(folder)
+    if folder is not None:
+        try:
+            result.to_csv(folder)
+        except OSError as exc:
+            _mark_folder(exc, folder)
+            raise
         if plot or scenario.output.plot:
             try:
                 result.plot(folder)
             except Exception:  # noqa: BLE001 - figures are a convenience; the tables are written
                 log.exception("plotting failed for %s", folder)
     if failure is not None and not isinstance(failure, DivergenceError):
+        if folder is not None:
+            _mark_folder(failure, folder)
         raise failure
     if not result.ok:
         log.warning("%s: %s", scenario.name, result.status)

@@ -106,3 +106,36 @@ def test_record_names_nothing_recorded_are_reported_in_meta(tmp_path):
     assert result.meta["warnings"] == ["record: nothing recorded 'yy' (recorded signals: r, y)"]
     assert json.loads((tmp_path / "run" / "meta.json").read_text())["warnings"] == result.meta["warnings"]
     assert list(result.signals.columns) == ["time_s", "y", "r"]
+
+
+def test_out_that_is_a_file_is_refused_before_anything_runs(tmp_path, monkeypatch):
+    from netsim import runner
+    from netsim.errors import ConfigError
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("simulated although the run folder cannot be written")
+
+    monkeypatch.setattr(runner, "simulate", must_not_run)
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    with pytest.raises(ConfigError, match=r"output '.*afile' is a file, not a folder"):
+        run(_unstable("10 ms"), out=afile)
+    with pytest.raises(ConfigError, match=r"cannot create run folder '.*afile/sub': '.*afile' is a file"):
+        run(_unstable("10 ms"), out=afile / "sub")
+    assert afile.read_text() == ""
+
+
+def test_a_run_that_fails_after_writing_names_its_partial_folder(tmp_path):
+    from netsim.errors import SimulationError
+    from netsim.registry import register
+
+    @register("metric", "test_runner_broken", "test helper: a metric that fails")
+    def broken(result, params, baseline):
+        raise SimulationError("broken metric")
+
+    sc = {**_unstable("10 ms"), "metrics": [{"type": "test_runner_broken"}]}
+    with pytest.raises(SimulationError) as info:
+        run(sc, out=tmp_path / "partial")
+    assert info.value.run_folder == tmp_path / "partial"
+    meta = json.loads((tmp_path / "partial" / "meta.json").read_text())
+    assert meta["status"] == "error" and "broken metric" in meta["error"]

@@ -1,0 +1,69 @@
+"""``netsim run`` and its output folder: a bad ``--out`` is refused before anything runs, write errors and
+failed runs are reported without a traceback, naming the path (and the partial run folder)."""
+
+from __future__ import annotations
+
+import sys
+import types
+from pathlib import Path
+
+from netsim.cli import main
+from netsim.errors import SimulationError
+
+
+def _fake_run(monkeypatch, error: BaseException | None = None) -> list:
+    calls: list = []
+
+    def run(*args, **kwargs):
+        calls.append((args, kwargs))
+        if error is not None:
+            raise error
+        return types.SimpleNamespace(meta={"status": "ok"}, metrics={}, out_dir="/tmp/x")
+
+    module = types.ModuleType("netsim.runner")
+    module.run = run
+    monkeypatch.setitem(sys.modules, "netsim.runner", module)
+    return calls
+
+
+def _scenario(tmp_path: Path, good: str) -> Path:
+    path = tmp_path / "good.yaml"
+    path.write_text(good)
+    return path
+
+
+def test_out_naming_a_file_is_refused_before_the_run(tmp_path, monkeypatch, capsys, good):
+    calls = _fake_run(monkeypatch)
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    assert main(["run", str(_scenario(tmp_path, good)), "--out", str(afile)]) == 2
+    err = capsys.readouterr().err
+    assert calls == []
+    assert err == (f"netsim: error: output '{afile}' is a file, not a folder; give a folder path with --out "
+                   "(a new or an existing folder), or remove the file\n")
+
+
+def test_os_error_while_writing_is_one_line_with_the_path_and_exit_1(tmp_path, monkeypatch, capsys, good):
+    _fake_run(monkeypatch, PermissionError(13, "Permission denied", "/data/run/signals.csv"))
+    assert main(["run", str(_scenario(tmp_path, good))]) == 1
+    err = capsys.readouterr().err
+    assert err == "netsim: error: cannot write /data/run/signals.csv: Permission denied\n"
+
+
+def test_a_failed_run_says_where_its_partial_folder_is(tmp_path, monkeypatch, capsys, good):
+    error = SimulationError("integrator failed at t = 0.5 s")
+    error.run_folder = tmp_path / "partial"
+    _fake_run(monkeypatch, error)
+    assert main(["run", str(_scenario(tmp_path, good))]) == 1
+    err = capsys.readouterr().err
+    assert err.splitlines() == ["netsim: error: integrator failed at t = 0.5 s",
+                                f"netsim: the partial results are in {tmp_path / 'partial'}"]
+
+
+def test_shipped_scenario_with_out_naming_a_file_prints_no_traceback(tmp_path, capsys):
+    root = Path(__file__).resolve().parents[2]
+    afile = tmp_path / "afile"
+    afile.touch()
+    assert main(["run", str(root / "scenarios" / "dc_servo_can.yaml"), "--out", str(afile)]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and f"output '{afile}' is a file" in err
