@@ -457,6 +457,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         problems = getattr(exc, "problems", None)
         if problems:
             _print_problems(problems, sys.stderr)
+            _err(str(exc).splitlines()[0].rstrip(":"))  # the summary line, e.g. "...: 2 problems; nothing was run"
         else:
             _err(str(exc))
         return EXIT_INVALID

@@ -286,3 +286,18 @@ def test_chunk_planner_batches_tiny_runs_and_sends_slow_runs_one_by_one() -> Non
     slow = ChunkPlanner(2)
     slow.observe(3.0, 2)  # 1.5 s per run (an HDD point)
     assert slow.next_size(400) == 1
+
+
+def test_invalid_factor_levels_are_refused_before_any_run(sweep_file: Path, tmp_path: Path) -> None:
+    text = sweep_file.read_text().replace(
+        "replicates:", "  period:\n    paths: [nodes.computer.tasks[0].period]\n"
+        "    values: [6 ms, -1 ms, fast]\nreplicates:")
+    sweep_file.write_text(text)
+    with pytest.raises(ConfigError) as err:
+        run_sweep(sweep_file, out=tmp_path / "out", workers=2, point_fn=fake_point, progress=False)
+    problems = [str(p) for p in err.value.problems]
+    # both bad levels are listed (each once), nothing ran, no output folder was made
+    assert len(problems) == 2, problems
+    assert any("period='-1 ms'" in p for p in problems) and any("period='fast'" in p for p in problems)
+    assert "nothing was run" in str(err.value)
+    assert _calls == [] and not (tmp_path / "out").exists()

@@ -319,6 +319,24 @@ def _lost(task: dict[str, Any], exc: BaseException) -> dict[str, Any]:
     return rec
 
 
+def _refuse_invalid(path: str | Path) -> None:
+    """Check the sweep file, its base scenario and every factor level once (:func:`check_sweep`) before
+    anything runs; log the warnings, raise one :class:`ConfigError` listing every error (``.problems``)."""
+    from netsim.sweep.check import check_sweep
+
+    problems = check_sweep(path)
+    for problem in problems:
+        if not problem.is_error:
+            log.warning("%s", problem.describe(tag=False))
+    errors = [p for p in problems if p.is_error]
+    if errors:
+        n = len(errors)
+        lines = "\n".join(f"  {p}" for p in errors)
+        exc = ConfigError(f"sweep {path}: {n} problem{'s' if n != 1 else ''}; nothing was run:\n{lines}")
+        exc.problems = errors  # type: ignore[attr-defined]  # the CLI prints these one per line
+        raise exc
+
+
 def run_sweep(
     path: str | Path,
     *,
@@ -364,18 +382,18 @@ def run_sweep(
     Raises
     ------
     ConfigError
-        For a bad sweep file (unknown factor path with a "did you mean", empty factors ...), an invalid
-        base scenario, an output folder that holds another sweep, or a scheduler that does not answer.
+        Before any run, listing every problem (``.problems``) of a bad sweep file (unknown factor path with a
+        "did you mean", empty factors ...), an invalid base scenario, or a factor level that gives an invalid
+        scenario (each level is checked once); also for an output folder that holds another sweep, or a
+        scheduler that does not answer.
     """
     t0 = time.perf_counter()
     if scheduler and local_dask:
         raise ConfigError("give either a scheduler address or local_dask=True, not both")
+    _refuse_invalid(path)
     sweep = load_sweep(path)
     folder = Path(out) if out is not None else Path("reports") / sweep.name
     raws = [sweep.point_raw(p) for p in sweep.points]
-    from netsim.scenario import load_scenario
-
-    load_scenario(raws[0])  # the base (with the first point's values) must be valid; warnings shown once
     _prepare_out(folder, sweep, overwrite)
 
     todo: list[tuple[Point, dict[str, Any]]] = []
