@@ -241,6 +241,14 @@ def run(
     from netsim.scenario.loader import load_scenario, scenario_hash
 
     wall0 = time.perf_counter()
+    if isinstance(source, (str, Path)):
+        from netsim.sweep.check import is_sweep_file
+
+        if is_sweep_file(source):
+            from netsim.errors import ConfigError
+
+            raise ConfigError(f"{source}: this is a sweep file; run it with netsim.sweep.run_sweep "
+                              f"(`netsim sweep {source}`)")
     ov = dict(overrides or {})
     if seed is not None:
         ov["seed"] = int(seed)

@@ -139,3 +139,11 @@ def test_a_run_that_fails_after_writing_names_its_partial_folder(tmp_path):
     assert info.value.run_folder == tmp_path / "partial"
     meta = json.loads((tmp_path / "partial" / "meta.json").read_text())
     assert meta["status"] == "error" and "broken metric" in meta["error"]
+
+
+def test_running_a_sweep_file_is_refused_naming_run_sweep(tmp_path):
+    from netsim.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="this is a sweep file"):
+        run("scenarios/hdd_gpi_sweep.yaml", out=tmp_path / "x")
+    assert not (tmp_path / "x").exists()

@@ -332,6 +332,10 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
     where = str(path) if path else "sweep"
     if not isinstance(data, dict):
         raise ConfigError(f"{where}: a sweep file is a mapping with keys sweep, base, factors, ...")
+    if "sweep" not in data and ("name" in data or "duration" in data):
+        run_it = f"`netsim run {path}`" if path else "`netsim run FILE`"
+        raise ConfigError(f"{where}: this is a scenario file (it has 'name:'/'duration:' and no 'sweep:'); "
+                          f"run it with {run_it}, or give a sweep file (sweep:, base:, factors:)")
     if "factors" in data and not data["factors"]:
         raise ConfigError(f"{where}: 'factors' is empty; name at least one factor with its paths and values", "factors")
     try:
