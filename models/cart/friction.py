@@ -62,7 +62,12 @@ class Friction:
     def draw(cls, params: FrictionParams, seed: int = 0) -> "Friction":
         """Draw a realization from the stream ``plant.cart.friction`` of ``seed`` (or ``params.realization``)."""
         s = params.realization if params.realization is not None else seed
-        rng = np.random.Generator(np.random.PCG64(stream_seed(int(s), FRICTION_STREAM)))
+        return cls.from_rng(params, np.random.Generator(np.random.PCG64(stream_seed(int(s), FRICTION_STREAM))))
+
+    @classmethod
+    def from_rng(cls, params: FrictionParams, rng: np.random.Generator) -> "Friction":
+        """Draw a realization from ``rng`` (in a simulation: ``env.rng("plant.cart.friction")``, which gives the
+        same realization as :meth:`draw` with the scenario seed)."""
         n = params.modes
         freqs = rng.uniform(0.5, 1.5, n)
         amps = rng.uniform(0.5, 1.0, n)

@@ -71,7 +71,7 @@ class CartPlant(Plant):
     # -------------------------------------------------------------- hooks of Plant
     def _bind_streams(self, env: Any) -> None:
         if self.params.friction.realization is None:
-            self.friction = Friction.draw(self.params.friction, seed=env.seed)  # stream plant.cart.friction
+            self.friction = Friction.from_rng(self.params.friction, env.rng(FRICTION_STREAM))
         env.components[FRICTION_STREAM] = self.friction
 
     def _check_source(self, src: Any) -> None:

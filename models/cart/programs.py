@@ -6,7 +6,13 @@
     and time stamp of the last edge. With the channel in ``mode: polling`` the handler needs a timer
     trigger at the ISR period and runs every tick (the real CPU load of a 100 kHz ISR); with ``mode: exact``
     it has no trigger and is invoked only at the ticks that see an edge (identical stored values, a small
-    fraction of the jobs -- the CPU utilization then counts only the edge-handling ISR runs).
+    fraction of the jobs). In exact mode the CPU time of the runs at every other tick is accounted in closed
+    form (``isr_load: true``, the default): the program registers a periodic load on its node
+    (:meth:`netsim.kernel.Kernel.create_periodic_load`) with the encoder's tick and the handler's
+    ``latency + execution``, whose windows are the ISR runs; its invocations at edge ticks are those windows.
+    The controller's response times, the CPU utilization and ``cpu_time`` of the ISR are then those of the
+    polling ISR (same job records). ``isr_load: false`` leaves out the every-tick load (only the edge runs
+    take CPU time), as the model did before.
 ``cart_controller`` (a periodic task)
     At each release: read the ISR's values (zero time, at the start of the job), step the controller
     (time update to the event, measurement update, time update for the rest of the step, control law),
@@ -49,6 +55,8 @@ class CartEncoderIsr:
         q: int = Field(0, description="low bits dropped in software (0..16; the paper mostly uses 6)")
         key: str = "enc"
         record: bool = True
+        isr_load: bool = Field(True, description="exact mode: account the ISR's CPU time at every tick (periodic "
+                               "load of latency + execution per tick); false: only the edge runs take CPU")
 
     def __init__(self, ctx: Any, params: "CartEncoderIsr.Params") -> None:
         from netsim.io import Encoder
@@ -78,7 +86,26 @@ class CartEncoderIsr:
             self.encoder = Encoder(self.plant, self.output, step=base.delta, q=q, tick_ns=base.tick_ns,
                                    mode="exact", offset_ns=base.offset_ns, name=f"{ctx.node}.{ctx.task}")
             kernel, task = ctx.kernel, ctx.task
+            if params.isr_load:
+                self._register_load(ctx, base)
             self.encoder.start(ctx.env, lambda c, d, s: kernel.invoke_handler(task, data=(c, d, s)))
+
+    @staticmethod
+    def _register_load(ctx: Any, base: Any) -> None:
+        """The ISR's runs at every tick as a periodic load of ``latency + execution`` (exact mode)."""
+        ex = ctx.execution
+        if ex is not None and ex.kind != "constant":
+            raise BuildError(f"handler '{ctx.task}': isr_load needs a constant execution time (got {ex!r}); give "
+                             "a constant, or use mode: polling with a timer trigger, or isr_load: false")
+        latency = int(getattr(ctx.spec, "latency", 0) or 0)
+        per_tick = latency + (0 if ex is None else int(ex.upper_bound))
+        if per_tick <= 0:
+            return  # an ISR that takes no time: nothing to account
+        if per_tick >= base.tick_ns:
+            raise BuildError(f"handler '{ctx.task}': latency + execution ({per_tick} ns) must be less than the "
+                             f"encoder tick ({base.tick_ns} ns)")
+        ctx.kernel.create_periodic_load(ctx.task, period=base.tick_ns, execution=per_tick, start=base.offset_ns,
+                                        handler=ctx.task)
 
     def _store(self, count: int, direction: int, stamp: int) -> None:
         st = self.state

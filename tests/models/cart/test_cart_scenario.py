@@ -44,11 +44,13 @@ def test_full_event_sigma_u_well_below_pure_pi_at_wc40_q6(wc40):
 
 def test_scenario_matches_numpy_reference_loop(wc40):
     # Same plant, friction realization (scenario seed 1), encoder and controller, the numpy loop with the
-    # controller's 100 us execution as actuation delay and the netsim (floor) encoder convention: the
+    # controller's response time as actuation delay and the netsim (floor) encoder convention: the
     # two simulations differ only in floating-point detail, so sigma_u and Ev agree to a few percent.
+    # Response time: 100 us of execution after the 2 us ISR run at the release tick, interrupted by the ISR
+    # (2 us every 10 us, the exact encoder's periodic load): RTA w = 100 + ceil(w / 10) * 2 = 126 us.
     fr = Friction.draw(FrictionParams(), seed=1)
     ctrl = make_controller("full_event", 40.0, Quantizer.from_bits(6, rounding="floor"))
-    ref = simulate(ctrl, fr, vref=0.8, q=6, duration=1.6, delay_ns=100_000, rounding="floor")
+    ref = simulate(ctrl, fr, vref=0.8, q=6, duration=1.6, delay_ns=126_000, rounding="floor")
     m = cart_metrics(ref.t, ref.p, ref.v, ref.u, 0.8, jmap=False)
     got = wc40["full_event"].metrics
     assert got["cart.sigma_u"] == pytest.approx(m["sigma_u"], rel=0.05)
