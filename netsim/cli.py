@@ -151,6 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
                    help="override a value, e.g. networks.can.bitrate='1 Mbit/s' (repeatable)")
     p.add_argument("--plot", action="store_true", help="also write PNG figures")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar (none either when stderr is not a terminal)")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("batch", help="run many scenarios in parallel, write summary.csv", epilog=_BATCH_EPILOG,
@@ -276,7 +277,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return EXIT_INVALID
     from netsim.runner import run
 
-    result = run(scenario, out=args.out, seed=args.seed, plot=args.plot)
+    show = not (args.no_progress or args.quiet) and sys.stderr.isatty()
+    with _RunProgress(scenario.name, enabled=show) as progress:
+        result = run(scenario, out=args.out, seed=args.seed, plot=args.plot, progress=progress.callback)
     meta = getattr(result, "meta", {}) or {}
     status = str(meta.get("status", "ok"))
     out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
@@ -289,6 +292,51 @@ def _cmd_run(args: argparse.Namespace) -> int:
             _err(str(error))
         return EXIT_FAILED
     return EXIT_OK
+
+
+class _RunProgress:
+    """A rich progress bar on stderr for one run: simulated time, wall time and ETA (or nothing).
+
+    ``callback`` is the ``progress(t_ns, t_end_ns)`` function for :func:`netsim.runner.run` (None when
+    disabled, so the run takes its unsliced path).
+    """
+
+    def __init__(self, label: str, *, enabled: bool) -> None:
+        self.bar: Any = None
+        self.callback: Callable[[int, int], None] | None = None
+        if not enabled:
+            return
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+        self.bar = Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            TextColumn("{task.fields[sim]} simulated"),
+            TextColumn("wall"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            transient=True,
+        )
+        self.task = self.bar.add_task(label, total=None, sim="building")
+        self.callback = self._update
+
+    def _update(self, t_ns: int, t_end_ns: int) -> None:
+        from netsim.timebase import format_time
+
+        self.bar.update(self.task, completed=t_ns, total=max(t_end_ns, 1),
+                        sim=f"{format_time(t_ns)} / {format_time(t_end_ns)}")
+
+    def __enter__(self) -> "_RunProgress":
+        if self.bar is not None:
+            self.bar.start()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.bar is not None:
+            self.bar.stop()
 
 
 def _print_metrics(metrics: Any, limit: int = 30) -> None:

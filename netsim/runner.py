@@ -38,7 +38,7 @@ from functools import lru_cache
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
@@ -135,10 +135,13 @@ def _event_count(env: Any) -> int | None:
         return None
 
 
-def simulate(scenario: Any) -> tuple[RunResult, Any, BaseException | None]:
+def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
+             ) -> tuple[RunResult, Any, BaseException | None]:
     """Build and run ``scenario`` (validated); returns (result without metrics, simulation, exception or None).
 
-    The result's ``meta`` has ``status``, ``error``, ``t_end_s``, ``wall_time_s`` and ``events``.
+    ``progress(t_ns, t_end_ns)``, when given, is called about every 1 % of simulated time
+    (:meth:`~netsim.scenario.builder.Simulation.run`). The result's ``meta`` has ``status``, ``error``,
+    ``t_end_s``, ``wall_time_s`` and ``events``.
     """
     from netsim.scenario.builder import build
 
@@ -147,7 +150,7 @@ def simulate(scenario: Any) -> tuple[RunResult, Any, BaseException | None]:
     failure: BaseException | None = None
     status, error = "ok", ""
     try:
-        t_end = sim.run()
+        t_end = sim.run(progress=progress)
     except DivergenceError as exc:
         t_end = int(getattr(exc, "time_ns", sim.env.now))
         status = f"diverged at t = {t_end / S:.9g} s"
@@ -205,6 +208,7 @@ def run(
     overrides: Mapping[str, Any] | None = None,
     plot: bool = False,
     write: bool = True,
+    progress: Callable[[int, int], None] | None = None,
 ) -> RunResult:
     """Run one scenario and (by default) write its run folder.
 
@@ -222,6 +226,9 @@ def run(
         Also write PNG figures (as does ``output.plot: true`` in the scenario).
     write
         False: write nothing (the result is still complete in memory).
+    progress
+        Optional ``progress(t_ns, t_end_ns)`` called about every 1 % of the run's simulated time (not during a
+        baseline run); results are identical with and without it.
 
     Returns
     -------
@@ -262,7 +269,7 @@ def run(
     base_sc = scenario.baseline_scenario()
     baseline = _baseline(base_sc) if base_sc is not None else None
 
-    result, sim, failure = simulate(scenario)
+    result, sim, failure = simulate(scenario, progress)
     result.scenario = scenario.resolved_dict()
     try:
         result.metrics = pd.Series(_metrics(result, sim, scenario, baseline), dtype=float, name="value")

@@ -147,3 +147,19 @@ def test_running_a_sweep_file_is_refused_naming_run_sweep(tmp_path):
     with pytest.raises(ConfigError, match="this is a sweep file"):
         run("scenarios/hdd_gpi_sweep.yaml", out=tmp_path / "x")
     assert not (tmp_path / "x").exists()
+
+
+def test_progress_callback_sees_simulated_time_and_changes_no_result(tmp_path):
+    from netsim.timebase import MS
+
+    scenario = "scenarios/dc_servo_can.yaml"
+    overrides = {"duration": "0.3 s", "nodes.interference.tasks[0].params.share": 0.5}  # random traffic too
+    calls = []
+    plain = run(scenario, out=tmp_path / "plain", overrides=overrides)
+    watched = run(scenario, out=tmp_path / "watched", overrides=overrides,
+                  progress=lambda t, total: calls.append((t, total)))
+    for name in ("scenario.yaml", "signals.csv", "jobs.csv", "messages.csv", "metrics.csv"):
+        assert (tmp_path / "watched" / name).read_bytes() == (tmp_path / "plain" / name).read_bytes(), name
+    assert watched.meta["events"] == plain.meta["events"]  # no extra event was scheduled
+    # a report at the start and after every 1 % of the 300 ms: 0, 3 ms, 6 ms, ..., 300 ms
+    assert calls == [(k * 3 * MS, 300 * MS) for k in range(101)]

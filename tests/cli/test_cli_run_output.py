@@ -67,3 +67,53 @@ def test_shipped_scenario_with_out_naming_a_file_prints_no_traceback(tmp_path, c
     assert main(["run", str(root / "scenarios" / "dc_servo_can.yaml"), "--out", str(afile)]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and f"output '{afile}' is a file" in err
+
+
+class _Terminal:
+    """A stand-in for a terminal on stderr (collects what is written)."""
+
+    def __init__(self) -> None:
+        self.parts: list[str] = []
+
+    def write(self, text: str) -> int:
+        self.parts.append(text)
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return True
+
+    def fileno(self) -> int:
+        raise OSError("no file descriptor")
+
+
+def _progress_seen(monkeypatch, tmp_path, good, *extra, before=()) -> tuple[object, str]:
+    seen = {}
+
+    def run(*args, progress=None, **kwargs):
+        seen["progress"] = progress
+        if progress is not None:
+            for k in range(11):
+                progress(k * 100_000_000, 1_000_000_000)
+        return types.SimpleNamespace(meta={"status": "ok"}, metrics={"m": 1.0}, out_dir="/tmp/x")
+
+    module = types.ModuleType("netsim.runner")
+    module.run = run
+    monkeypatch.setitem(sys.modules, "netsim.runner", module)
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    assert main([*before, "run", str(_scenario(tmp_path, good)), *extra]) == 0
+    return seen["progress"], "".join(terminal.parts)
+
+
+def test_run_on_a_terminal_shows_a_progress_bar_of_simulated_time(tmp_path, monkeypatch, good):
+    progress, err = _progress_seen(monkeypatch, tmp_path, good)
+    assert callable(progress)
+    assert "zzc_good" in err and "1 s / 1 s simulated" in err and "ETA" in err
+
+
+def test_no_progress_and_quiet_turn_the_bar_off(tmp_path, monkeypatch, good):
+    assert _progress_seen(monkeypatch, tmp_path, good, "--no-progress")[0] is None
+    assert _progress_seen(monkeypatch, tmp_path, good, before=["-q"])[0] is None
