@@ -141,9 +141,15 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=_version())
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)")
     parser.add_argument("-q", "--quiet", action="store_true", help="only errors")
+    # the same options after the command (`netsim run x.yaml -q`); SUPPRESS keeps the values given before it
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                        help="more log output (-vv: debug)")
+    common.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help="only errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    p = sub.add_parser("run", help="run one scenario and write its run folder", epilog=_RUN_EPILOG,
+    p = sub.add_parser("run", parents=[common], help="run one scenario and write its run folder",
+                       epilog=_RUN_EPILOG,
                        formatter_class=_Formatter, description="Validate and run one scenario.")
     p.add_argument("file", metavar="FILE", help="scenario YAML file")
     p.add_argument("--out", metavar="DIR", help="run folder (default: reports/<scenario>/<run-id>/)")
@@ -151,10 +157,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
                    help="override a value, e.g. networks.can.bitrate='1 Mbit/s' (repeatable)")
     p.add_argument("--plot", action="store_true", help="also write PNG figures")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar (none either when stderr is not a terminal)")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar (there is none either when stderr is not a terminal)")
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("batch", help="run many scenarios in parallel, write summary.csv", epilog=_BATCH_EPILOG,
+    p = sub.add_parser("batch", parents=[common], help="run many scenarios in parallel, write summary.csv",
+                       epilog=_BATCH_EPILOG,
                        formatter_class=_Formatter, description="Run many scenarios (parallel processes).")
     p.add_argument("paths", nargs="+", metavar="FILE|DIR", help="scenario files or folders of them")
     p.add_argument("--out", metavar="DIR", help="output folder (default: reports/batch-<time>/)")
@@ -162,7 +170,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_batch)
 
-    p = sub.add_parser("sweep", help="run a parameter sweep (locally or on a dask cluster)", epilog=_SWEEP_EPILOG,
+    p = sub.add_parser("sweep", parents=[common], help="run a parameter sweep (locally or on a dask cluster)",
+                       epilog=_SWEEP_EPILOG,
                        formatter_class=_Formatter, description="Run a sweep file: factors over scenario fields.")
     p.add_argument("file", metavar="FILE", help="sweep YAML file")
     p.add_argument("--out", metavar="DIR", help="output folder (default: reports/<sweep>/)")
@@ -173,7 +182,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_sweep)
 
-    p = sub.add_parser("report", help="tables and figures from a run/sweep folder or a case study",
+    p = sub.add_parser("report", parents=[common], help="tables and figures from a run/sweep folder or a case study",
                        epilog=_REPORT_EPILOG, formatter_class=_Formatter,
                        description="Build report tables (CSV) and figures.")
     p.add_argument("target", metavar="DIR|NAME", help="a run or sweep folder, or a registered report name")
@@ -181,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-plots", action="store_true", help="tables only")
     p.set_defaults(func=_cmd_report)
 
-    p = sub.add_parser("validate", help="check scenario files; exit code = number of problems",
+    p = sub.add_parser("validate", parents=[common], help="check scenario files; exit code = number of problems",
                        epilog=_VALIDATE_EPILOG, formatter_class=_Formatter,
                        description="Check scenario files completely without running them.")
     p.add_argument("files", nargs="+", metavar="FILE", help="scenario YAML files")
@@ -189,7 +198,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="apply an override before checking (repeatable)")
     p.set_defaults(func=_cmd_validate)
 
-    p = sub.add_parser("list", help="list registered plants, programs, networks, ...", epilog=_LIST_EPILOG,
+    p = sub.add_parser("list", parents=[common], help="list registered plants, programs, networks, ...",
+                       epilog=_LIST_EPILOG,
                        formatter_class=_Formatter, description="List registered building blocks.")
     p.add_argument("kind", nargs="?", metavar="KIND", help="one kind (plural or singular), e.g. plants")
     p.set_defaults(func=_cmd_list)
@@ -284,8 +294,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     status = str(meta.get("status", "ok"))
     out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
     where = f"; wrote {out_dir}" if out_dir else ""
-    print(f"{scenario.name}: {status}{where}")
-    _print_metrics(getattr(result, "metrics", None))
+    if not args.quiet or status != "ok":  # quiet: nothing on stdout unless the run failed
+        print(f"{scenario.name}: {status}{where}")
+    if not args.quiet:
+        _print_metrics(getattr(result, "metrics", None))
     if status != "ok":
         error = meta.get("error")
         if error:
@@ -383,7 +395,8 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     files = _expand_batch(args.paths)
     from netsim.batch import run_batch
 
-    summary, n_failed = run_batch(files, out=args.out, workers=args.workers, progress=not args.no_progress)
+    summary, n_failed = run_batch(files, out=args.out, workers=args.workers,
+                                  progress=not (args.no_progress or args.quiet))
     n = len(files)
     print(f"{n - n_failed} of {n} scenario{'s' if n != 1 else ''} ok" + (f", {n_failed} failed" if n_failed else ""))
     out = getattr(summary, "attrs", {}).get("path") if summary is not None else None
@@ -408,7 +421,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         local_dask=args.dask_local,
         overwrite=args.overwrite,
-        progress=not args.no_progress,
+        progress=not (args.no_progress or args.quiet),
     )
     print(result.describe())
     if result.interrupted:

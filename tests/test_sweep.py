@@ -301,3 +301,19 @@ def test_invalid_factor_levels_are_refused_before_any_run(sweep_file: Path, tmp_
     assert any("period='-1 ms'" in p for p in problems) and any("period='fast'" in p for p in problems)
     assert "nothing was run" in str(err.value)
     assert _calls == [] and not (tmp_path / "out").exists()
+
+
+def multiline_failure(raw, out, seed):
+    """Fails every point with a two-problem, multi-line message (like a ScenarioError)."""
+    raise ValueError("scenario has 2 problems:\n  a.b: first\n\n  c.d: second")
+
+
+def test_summary_error_is_one_line_and_point_json_keeps_the_full_text(sweep_file: Path, tmp_path: Path) -> None:
+    import json
+
+    result = run_sweep(sweep_file, out=tmp_path / "o", workers=1, point_fn=multiline_failure, progress=False)
+    lines = (tmp_path / "o" / "summary.csv").read_text().splitlines()
+    assert len(lines) == 1 + result.n_runs  # the header and one line per run
+    assert set(result.summary["error"]) == {"ValueError: scenario has 2 problems: a.b: first | c.d: second"}
+    point = json.loads(next((tmp_path / "o" / "points").glob("*/point.json")).read_text())
+    assert point["error"] == "ValueError: scenario has 2 problems:\n  a.b: first\n\n  c.d: second"

@@ -4,7 +4,8 @@ Columns: ``index, replicate``, then one column per factor (in the sweep file's o
 (in order of first appearance, scanning rows by index), then ``status, seed, error, folder``. Rows are
 sorted by ``index``. Floats are written with Python's shortest round-trip ``repr`` (exact and stable across
 processes and machines); a metric a run did not produce is an empty cell; non-scalar factor values are
-written as compact JSON.
+written as compact JSON. ``error`` is the one-line form of the run's error (:func:`one_line`: one row is one
+line of the file); the full text is in the run's ``point.json``.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from netsim.sweep.spec import canonical_json
 
-__all__ = ["format_value", "summary_text", "write_summary", "TRAILING_COLUMNS"]
+__all__ = ["format_value", "one_line", "summary_text", "write_summary", "TRAILING_COLUMNS"]
 
 #: Columns after the metrics.
 TRAILING_COLUMNS = ("status", "seed", "error", "folder")
@@ -43,6 +44,16 @@ def format_value(value: Any) -> str:
     return canonical_json(value)
 
 
+def one_line(text: str) -> str:
+    """``text`` on one line: its lines stripped and joined with `` | `` (with a space after a line ending in
+    ``:``), empty lines dropped. ``"2 problems:\n  a\n  b"`` becomes ``"2 problems: a | b"``."""
+    lines = [line.strip() for line in str(text).splitlines()]
+    out = ""
+    for line in (x for x in lines if x):
+        out += line if not out else (" " if out.endswith(":") else " | ") + line
+    return out
+
+
 def summary_text(factors: Sequence[str], rows: Iterable[Mapping[str, Any]]) -> str:
     """The CSV text of the summary for ``rows`` (records with index, replicate, values, metrics, ...)."""
     ordered = sorted(rows, key=lambda r: int(r["index"]))
@@ -59,7 +70,7 @@ def summary_text(factors: Sequence[str], rows: Iterable[Mapping[str, Any]]) -> s
         got = r.get("metrics") or {}
         cells = [r["index"], r["replicate"], *(values.get(f) for f in factors)]
         cells += [got.get(m) for m in metrics]
-        cells += [r.get("status", ""), r.get("seed"), r.get("error", ""), r.get("folder", "")]
+        cells += [r.get("status", ""), r.get("seed"), one_line(r.get("error") or ""), r.get("folder", "")]
         writer.writerow([format_value(c) for c in cells])
     return buf.getvalue()
 

@@ -7,8 +7,20 @@ import sys
 import types
 from pathlib import Path
 
+import logging
+
+import pytest
+
 from netsim.cli import main
 from netsim.errors import SimulationError
+
+
+@pytest.fixture(autouse=True)
+def _keep_root_log_level():
+    """main() sets the root logger's level from -v/-q; put it back for the tests that follow."""
+    level = logging.getLogger().level
+    yield
+    logging.getLogger().setLevel(level)
 
 
 def _fake_run(monkeypatch, error: BaseException | None = None) -> list:
@@ -117,3 +129,24 @@ def test_run_on_a_terminal_shows_a_progress_bar_of_simulated_time(tmp_path, monk
 def test_no_progress_and_quiet_turn_the_bar_off(tmp_path, monkeypatch, good):
     assert _progress_seen(monkeypatch, tmp_path, good, "--no-progress")[0] is None
     assert _progress_seen(monkeypatch, tmp_path, good, before=["-q"])[0] is None
+
+
+def test_quiet_after_the_command_silences_the_status_and_metrics(tmp_path, monkeypatch, capsys, good):
+    _fake_run(monkeypatch)
+    path = str(_scenario(tmp_path, good))
+    for argv in (["run", path, "-q"], ["-q", "run", path], ["run", "--quiet", path]):
+        assert main(argv) == 0, argv
+        assert capsys.readouterr().out == "", argv
+    assert main(["run", path]) == 0  # not quiet: the status line
+    assert capsys.readouterr().out.startswith("zzc_good: ok")
+
+
+def test_verbose_after_the_command_raises_the_log_level(tmp_path, monkeypatch, good):
+    _fake_run(monkeypatch)
+    path = str(_scenario(tmp_path, good))
+    assert main(["run", path, "-vv"]) == 0
+    assert logging.getLogger().level == logging.DEBUG
+    assert main(["-v", "validate", path]) == 0
+    assert logging.getLogger().level == logging.INFO
+    assert main(["validate", path]) == 0
+    assert logging.getLogger().level == logging.WARNING
