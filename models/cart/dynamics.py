@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-__all__ = ["segment", "stop_time", "propagate"]
+__all__ = ["segment", "stop_time", "propagate", "propagate1"]
 
 
 def segment(p0: float, v0: float, a: float, tau: np.ndarray, td: float | None) -> tuple[np.ndarray, np.ndarray]:
@@ -74,3 +74,31 @@ def propagate(
     else:
         p[after], v[after] = segment(p_stop, 0.0, u - math.copysign(f, u), tau[after] - ts, td)
     return p, v
+
+
+def propagate1(p0: float, v0: float, u: float, f: float, fs: float, tau: float,
+               td: float | None = None) -> tuple[float, float]:
+    """:func:`propagate` at one time ``tau`` (s), in plain floats (no numpy round trip).
+
+    Without ``Td`` the arithmetic is the same sequence of IEEE operations as :func:`propagate`, so the result
+    is bit-identical to ``propagate(..., np.array([tau]))``; with ``Td`` it calls :func:`propagate` (whose
+    ``np.exp`` may differ from ``math.exp`` in the last bit).
+    """
+    if td is not None:
+        p, v = propagate(p0, v0, u, f, fs, np.array([tau]), td)
+        return float(p[0]), float(v[0])
+    if v0 == 0.0:
+        if abs(u) <= fs:
+            return p0, 0.0
+        a = u - math.copysign(f, u)
+        return p0 + 0.0 * tau + 0.5 * a * tau * tau, 0.0 + a * tau
+    a = u - math.copysign(f, v0)
+    ts = stop_time(v0, a, td)
+    if ts >= tau:
+        return p0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau
+    p_stop = p0 + v0 * ts + 0.5 * a * ts * ts
+    if abs(u) <= fs:
+        return p_stop, 0.0
+    a2 = u - math.copysign(f, u)
+    dt = tau - ts
+    return p_stop + 0.0 * dt + 0.5 * a2 * dt * dt, 0.0 + a2 * dt

@@ -32,7 +32,7 @@ import numpy as np
 from pydantic import Field
 
 from models.cart.controllers import KU
-from models.cart.dynamics import propagate, stop_time
+from models.cart.dynamics import propagate, propagate1, stop_time
 from models.cart.friction import FRICTION_STREAM, Friction, FrictionParams
 from netsim.errors import BuildError
 from netsim.plant import Plant
@@ -96,9 +96,9 @@ class CartPlant(Plant):
         td = self.params.td
         while self._t < t:
             end = min(t, self._f_next)
-            p, v = propagate(float(self._x[0]), float(self._x[1]), self._u_acc, self._f, self._fs,
-                             np.array([(end - self._t) * 1e-9]), td)
-            self._x[0], self._x[1] = float(p[0]), float(v[0])
+            p, v = propagate1(float(self._x[0]), float(self._x[1]), self._u_acc, self._f, self._fs,
+                              (end - self._t) * 1e-9, td)
+            self._x[0], self._x[1] = p, v
             if not (abs(self._x[0]) < self.divergence_bound and abs(self._x[1]) < self.divergence_bound):
                 self._diverged(end, self._x)
             self._t = end
@@ -151,10 +151,13 @@ class CartPlant(Plant):
             # cheap test first: the position range over the segment (at most two monotone pieces)
             dt_seg = (f_next - t0) * 1e-9
             ts = stop_time(v0, u - math.copysign(f, v0), td) if v0 != 0.0 else math.inf
-            probe = np.array([ts, dt_seg]) if ts < dt_seg else np.array([dt_seg])
-            pe, ve = propagate(p0, v0, u, f, fs, probe, td)
+            pe, ve = propagate1(p0, v0, u, f, fs, dt_seg, td)  # state at the segment's end
+            lo_p, hi_p = min(p0, pe), max(p0, pe)
+            if ts < dt_seg:  # the motion reverses or stops inside: the turning point bounds the range too
+                p_ts = propagate1(p0, v0, u, f, fs, ts, td)[0]
+                lo_p, hi_p = min(lo_p, p_ts), max(hi_p, p_ts)
             if output == 0:
-                leaves = min(p0, float(pe.min())) < lo_band or max(p0, float(pe.max())) >= hi_band
+                leaves = lo_p < lo_band or hi_p >= hi_band
             else:
                 leaves = True
             if leaves and seg_end >= tk:
@@ -170,7 +173,7 @@ class CartPlant(Plant):
                 tk += ((seg_end - tk) // tick + 1) * tick
             if f_next > t_end:
                 break
-            t0, p0, v0 = f_next, float(pe[-1]), float(ve[-1])
+            t0, p0, v0 = f_next, pe, ve
             f = self.friction.level(p0)
             fs = self.friction.params.stiction * f
             f_next += self._grid

@@ -1,8 +1,12 @@
 """Cart benchmarks (opt-in: pytest -m benchmark -s tests/benchmarks/test_bench_cart.py).
 
-1. One 1 m run at q = 6 with the 100 kHz encoder ISR modelled, through netsim (exact and polling encoder
-   modes), against a plain numpy loop of the same cart and controller written here: wall time, simulated
-   control periods per second, and the ratio (target <= 10x the plain loop).
+1. One 1 m run at q = 6 with the 100 kHz encoder ISR modelled, through netsim, against a plain numpy loop of
+   the same cart and controller written here: wall time, simulated control periods per second, and the
+   ratio (target <= 10x the plain loop). "ISR modelled" means its CPU time at every tick shows in the
+   controller's response time and the utilization: the exact encoder with the ISR's periodic load
+   (``isr_load: true``, the scenario's default) and the polling ISR (a handler run every 10 us) both do;
+   the exact encoder without the load (edge runs only, utilization 0.1 instead of 0.3) is printed for
+   reference. The exact+load and polling runs must give the same controller job records.
 2. The whole Fig. 2 sweep (75 runs) through netsim.runner in parallel processes (target < 2 min).
 """
 
@@ -49,10 +53,20 @@ def test_bench_one_run_vs_plain_loop():
 
     load_plugins()
     fr = Friction.draw(FrictionParams(), seed=1)
-    t0 = time.perf_counter()
-    periods = _plain_loop(fr)
-    plain = time.perf_counter() - t0
-    print(f"\nplain numpy loop: {periods} control periods (1 m), {plain:.3f} s, {periods / plain:,.0f} periods/s")
+    # Times are CPU times of this process (time.process_time: less sensitive than wall time to other
+    # processes on a busy machine), best of several repetitions; the plain loop is re-timed between the
+    # netsim runs (interleaved) and its best time is the baseline.
+    plain = math.inf
+
+    def time_plain() -> int:
+        nonlocal plain
+        t0 = time.process_time()
+        n = _plain_loop(fr)
+        plain = min(plain, time.process_time() - t0)
+        return n
+
+    periods = time_plain()
+    print(f"\nplain numpy loop: {periods} control periods (1 m)")
     from models.cart.sim import simulate
 
     t0 = time.perf_counter()
@@ -60,18 +74,38 @@ def test_bench_one_run_vs_plain_loop():
                    duration=3.0, rounding="floor")
     vec = time.perf_counter() - t0
     print(f"vectorized reference sim (models.cart.sim): {len(ref.t)} periods, {vec:.3f} s")
-    for mode in ("exact", "polling"):
+    jobs = {}
+    ratios = {}
+    cases = (("exact encoder + ISR load (100 kHz ISR modelled)", "exact", True),
+             ("polling ISR (100 kHz ISR modelled)", "polling", True),
+             ("exact encoder, edge runs only (ISR load NOT modelled)", "exact", False))
+    for label, mode, load in cases:
         # the JMAP metric (two QPs, ~0.2 s) is evaluation, not simulation: off here
         ov = {"duration": f"{periods / 1000:.3f} s", "io.enc.mode": mode, "metrics[0].params.jmap": False}
         if mode == "polling":
             ov["nodes.cart.handlers[0].trigger"] = {"timer": {"period": "10 us"}}
-        t0 = time.perf_counter()
-        res = run("scenarios/cart.yaml", write=False, overrides=ov)
-        wall = time.perf_counter() - t0
-        assert res.ok, res.meta
-        print(f"netsim ({mode} encoder): {wall:.3f} s, {periods / wall:,.0f} periods/s, ratio {wall / plain:.1f}x "
-              f"the plain loop; CPU utilization {res.metrics.get('cpu.cart.utilization', float('nan')):.3f}")
+        else:
+            ov["nodes.cart.handlers[0].params.isr_load"] = load
+        best = math.inf
+        for _ in range(1 if mode == "polling" else 5):  # best of 5 for the fast ones (machine noise)
+            time_plain()
+            t0 = time.process_time()
+            res = run("scenarios/cart.yaml", write=False, overrides=ov)
+            best = min(best, time.process_time() - t0)
+            assert res.ok, res.meta
+        wall = best
+        ratios[(mode, load)] = wall
+        jobs[(mode, load)] = res.jobs
+        print(f"netsim, {label}: {wall:.3f} s CPU, {periods / wall:,.0f} periods/s; simulated CPU utilization "
+              f"{res.metrics.get('cpu.cart.utilization', float('nan')):.3f}")
+    print(f"plain numpy loop (best): {plain:.3f} s CPU, {periods / plain:,.0f} periods/s")
+    print("ratios to the plain numpy loop: " + ", ".join(f"{label.split(' (')[0]} {ratios[(m, ld)] / plain:.1f}x"
+                                                          for label, m, ld in cases))
+    print(f"100 kHz ISR modelled: exact+load {ratios[('exact', True)] / plain:.1f}x, polling "
+          f"{ratios[('polling', True)] / plain:.1f}x the plain numpy loop (target <= 10x)")
     assert periods > 1000
+    # the fast model is the faithful one: identical controller job records
+    assert jobs[("exact", True)].equals(jobs[("polling", True)])
 
 
 def test_bench_fig2_sweep_wall_time():
