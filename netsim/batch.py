@@ -22,23 +22,13 @@ from typing import Any, Iterable
 import pandas as pd
 
 from netsim.results import write_csv
+from netsim.sweep.check import is_sweep_file
 
 __all__ = ["run_batch", "expand_paths", "SUMMARY_COLUMNS"]
 
 log = logging.getLogger(__name__)
 
 SUMMARY_COLUMNS = ["scenario", "path", "status", "error", "wall_time_s", "run_dir"]
-
-
-def _is_sweep(path: Path) -> bool:
-    """True for sweep files (a top-level ``sweep:`` key), which ``batch`` skips."""
-    try:
-        import yaml
-
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except Exception:  # noqa: BLE001 - a broken file is reported by its run
-        return False
-    return isinstance(data, dict) and "sweep" in data
 
 
 def expand_paths(paths: Iterable[str | Path]) -> list[Path]:
@@ -48,7 +38,7 @@ def expand_paths(paths: Iterable[str | Path]) -> list[Path]:
         path = Path(p)
         if path.is_dir():
             found = sorted([*path.glob("*.yaml"), *path.glob("*.yml")])
-            out += [f for f in found if not _is_sweep(f)]
+            out += [f for f in found if not is_sweep_file(f)]
         else:
             out.append(path)
     return out

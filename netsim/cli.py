@@ -23,7 +23,6 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import logging  # noqa: E402
-import re  # noqa: E402
 import sys  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any, Callable, Sequence, TextIO  # noqa: E402
@@ -368,9 +367,6 @@ def _print_metrics(metrics: Any, limit: int = 30) -> None:
         print(f"  ... {len(items) - limit} more in metrics.csv")
 
 
-_SWEEP_LINE = re.compile(r"^sweep\s*:", re.MULTILINE)
-
-
 def _expand_batch(paths: Sequence[str]) -> list[Path]:
     """Files as given; folders become their *.yaml/*.yml scenarios (sweep files skipped), sorted."""
     from netsim.errors import ConfigError
@@ -380,7 +376,7 @@ def _expand_batch(paths: Sequence[str]) -> list[Path]:
         p = Path(item)
         if p.is_dir():
             found = sorted([*p.glob("*.yaml"), *p.glob("*.yml")])
-            found = [f for f in found if not _SWEEP_LINE.search(f.read_text(encoding="utf-8", errors="replace"))]
+            found = [f for f in found if not _is_sweep(str(f))]
             if not found:
                 raise ConfigError(f"no scenario files (*.yaml, *.yml) in folder {item}")
             out += found
