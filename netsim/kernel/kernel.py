@@ -883,13 +883,14 @@ class Kernel(KernelBuilder):
             self.job_records[:] = [r for r in self.job_records if id(r) not in stale]
         self._unfinished = []
         running, partial, windows = self._running, 0, 0
+        stop = min(self._sim.now, t_end)  # the simpy clock may stand at t_end + 1 ns after env.run(t_end)
         if running is not None and self._seg_job is running:
             if self._load is None:
-                partial = self._sim.now - running._seg_start
+                partial = stop - running._seg_start
             else:
-                partial = self._load_progress(running, self._sim.now)[1]
+                partial = self._load_progress(running, stop)[1]
                 if running._win_end <= running._seg_start:
-                    windows = self._load.ticks_in(running._seg_start, self._sim.now)
+                    windows = self._load.ticks_in(running._seg_start, stop)
         for task in self.tasks.values():
             jobs = ([task.active] if task.active is not None else []) + list(task.queue)
             for job in jobs:
