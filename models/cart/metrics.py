@@ -151,7 +151,7 @@ class CartMetricParams(StrictModel):
 
     position: str = "p"
     velocity: str = "v"
-    command: str = "cart.u"
+    command: str = "cart.accel"
     estimate: str = "cart.v_hat"
     count: str = "cart.count"
     vref: float | None = Field(None, description="reference (m/s); default: the largest recorded cart.vref")

@@ -17,7 +17,8 @@
     At each release: read the ISR's values (zero time, at the start of the job), step the controller
     (time update to the event, measurement update, time update for the rest of the step, control law),
     ``execute`` the task's execution time, then ``analog_out`` of ``uV``. The reference steps back to zero
-    when the measured position passes ``stop_at`` (the paper's 1 m run). Records ``cart.u`` (m/s^2),
+    when the measured position passes ``stop_at`` (the paper's 1 m run). Records ``cart.accel`` (the
+    commanded acceleration u = Ku uV in m/s^2; ``cart.u`` would collide with the plant's own input record),
     ``cart.uV``, ``cart.v_hat``, ``cart.u_bias_hat``, ``cart.vref`` and once ``cart.tfilter``.
 """
 
@@ -176,4 +177,4 @@ class CartControllerProgram:
             yield job.execute(self.ctx.execution)
         yield job.analog_out(p.output_channel, uv)
         rec("cart.uV", uv, job.now)
-        rec("cart.u", self.ctrl.u, job.now)
+        rec("cart.accel", self.ctrl.u, job.now)
