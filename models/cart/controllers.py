@@ -23,6 +23,7 @@ matrices computed once at construction.
 
 from __future__ import annotations
 
+import abc
 import math
 import numpy as np
 from scipy.linalg import expm
@@ -55,7 +56,7 @@ KU = 25.5
 CONTROLLERS = ("pure_pi", "observer_pi", "basic_event", "position_prediction", "full_event")
 
 
-class CartController:
+class CartController(abc.ABC):
     """Base class: control law, saturation and the memory of the applied command.
 
     Attributes
@@ -89,9 +90,9 @@ class CartController:
         self.u = self.ku * uv
         return uv
 
+    @abc.abstractmethod
     def update(self, t_ns: int, count: int, direction: int, stamp_ns: int, vref: float) -> float:
         """Step the controller at ``t_ns``; return the motor command ``uV`` (|uV| <= 1)."""
-        raise NotImplementedError
 
     def reset(self) -> None:
         """Back to rest: all estimates and the applied command zero."""
@@ -124,11 +125,13 @@ class _LTIController(CartController):
         self._x = np.zeros(2)
         self._y_prev: float | None = None
 
+    @abc.abstractmethod
     def _continuous(self) -> tuple[np.ndarray, np.ndarray]:
-        raise NotImplementedError
+        """Continuous-time ``(A, B)`` of the estimator state ``(v_hat, u_bias_hat)``."""
 
+    @abc.abstractmethod
     def _second_input(self, vref: float) -> float:
-        raise NotImplementedError
+        """The input held beside the measured velocity over a period."""
 
     def reset(self) -> None:
         super().reset()

@@ -22,6 +22,7 @@ it as ``"module:Class"``.
 
 from __future__ import annotations
 
+import abc
 import difflib
 import math
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -46,7 +47,7 @@ __all__ = [
 ]
 
 
-class Policy:
+class Policy(abc.ABC):
     """Interface of a scheduling policy.
 
     Attributes
@@ -66,12 +67,12 @@ class Policy:
     def check(self, node: str, spec: TaskSpec) -> None:
         """Reject a task this policy cannot schedule (raise via :func:`~netsim.kernel.task.task_error`)."""
 
+    @abc.abstractmethod
     def key(self, job: "Job") -> Any:
         """Urgency of ``job`` (smaller = more urgent); called when the job is released.
 
         ``job.spec`` is the task's :class:`TaskSpec`; ``job.release`` and ``job.deadline`` (absolute) are set.
         """
-        raise NotImplementedError
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"

@@ -13,6 +13,7 @@ side, playout buffer). Times are the best of interleaved repetitions (the machin
 """
 
 import copy
+import json
 import logging
 import time
 from pathlib import Path
@@ -134,3 +135,7 @@ def test_bench_hdd_sweep_point(tmp_path):
           f"each with its own seed): {walls[True] * 1e3:.0f} ms per point with the baseline cache, "
           f"{walls[False] * 1e3:.0f} ms when the TTS baseline is re-run; 441 points on 2 workers ~ "
           f"{441 * walls[True] / 2:.0f} s of runs (without the executor's overhead)")
+    # every point really ran: each wrote its run folder with an ok status
+    statuses = [json.loads((tmp_path / f"p{i}_{j}_{c}" / "meta.json").read_text())["status"]
+                for i, j in points for c in (True, False)]
+    assert statuses == ["ok"] * (2 * len(points))
