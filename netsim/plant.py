@@ -508,6 +508,18 @@ class Plant(abc.ABC):
         disturbance updates), or a huge number."""
         return min((s.next_ns for s in self._sources if s.kind == "lti_d"), default=NEVER)
 
+    def _prediction_window(self, t_first: int, tick: int, max_ticks: int) -> tuple[int, int, int]:
+        """``(max_ticks, t_end, barrier)`` for ``predict_exit``: the ticks ``t_first + j*tick`` that lie
+        strictly before the prediction barrier (starting the plant first if needed)."""
+        if not self._started:
+            self._start()
+        barrier = self.prediction_barrier()
+        t_end = t_first + (max_ticks - 1) * tick
+        if barrier <= t_end:
+            max_ticks = max(0, -(-(barrier - t_first) // tick))  # ticks strictly before the barrier
+            t_end = t_first + (max_ticks - 1) * tick
+        return max_ticks, t_end, barrier
+
     # ---------------------------------------------------------------- propagation
     def advance_to(self, t_ns: int) -> None:
         """Propagate the state to ``t_ns`` under the held inputs (no-op when already there)."""

@@ -89,6 +89,14 @@ def _shape_lti(A: Any, B: Any, C: Any, D: Any) -> tuple[np.ndarray, np.ndarray, 
     return A, B, C, D
 
 
+def _noise_matrix(process_noise: Any, n: int) -> np.ndarray:
+    """An n x n noise matrix from a matrix or a vector (its diagonal); checked positive semi-definite."""
+    q = np.array(process_noise, dtype=float)
+    Q = as_matrix("process_noise", np.diag(np.atleast_1d(q)) if q.ndim <= 1 else q, (n, n))
+    _psd_factor("process_noise", Q)
+    return Q
+
+
 class _LTIBase(Plant):
     """Shared machinery of the continuous and discrete LTI plants."""
 
@@ -166,9 +174,7 @@ class LTIPlant(_LTIBase):
         if process_noise is None:
             self.Qc = np.zeros((n, n))
         else:
-            q = np.array(process_noise, dtype=float)
-            self.Qc = as_matrix("process_noise", np.diag(np.atleast_1d(q)) if q.ndim <= 1 else q, (n, n))
-            _psd_factor("process_noise", self.Qc)
+            self.Qc = _noise_matrix(process_noise, n)
         self._rng: np.random.Generator | None = None
         self._build(self.x0)
 
@@ -188,12 +194,8 @@ class LTIPlant(_LTIBase):
 
     def set_process_noise(self, process_noise: Any) -> None:
         """Set the intensity ``Qc`` of white process noise (n x n, or a vector for a diagonal) before the run."""
-        n = self.n_states
-        q = np.array(process_noise, dtype=float)
-        Qc = as_matrix("process_noise", np.diag(np.atleast_1d(q)) if q.ndim <= 1 else q, (n, n))
-        _psd_factor("process_noise", Qc)
-        self.Qc = Qc
-        self._build(self._zu[:n].copy())
+        self.Qc = _noise_matrix(process_noise, self.n_states)
+        self._build(self._zu[: self.n_states].copy())
 
     # ---------------------------------------------------------------- augmented model
     def _check_source(self, src: _Source) -> None:
@@ -366,13 +368,7 @@ class LTIPlant(_LTIBase):
         Returns ``(candidate or None, last examined tick, wake-up instant)``; the wake-up instant is the
         last examined tick, or an earlier stochastic disturbance update beyond which nothing is known.
         """
-        if not self._started:
-            self._start()
-        barrier = self.prediction_barrier()
-        t_end = t_first + (max_ticks - 1) * tick
-        if barrier <= t_end:
-            max_ticks = max(0, -(-(barrier - t_first) // tick))  # ticks strictly before the barrier
-            t_end = t_first + (max_ticks - 1) * tick
+        max_ticks, t_end, barrier = self._prediction_window(t_first, tick, max_ticks)
         if max_ticks == 0:
             return None, t_first - tick, barrier
         breaks = sorted(
@@ -471,18 +467,14 @@ class DiscretePlant(_LTIBase):
         self._x = np.zeros(n) if x0 is None else _vector(f"plant {name} x0", x0, n)
         self._L = None
         if process_noise is not None:
-            q = np.array(process_noise, dtype=float)
-            Q = as_matrix("process_noise", np.diag(np.atleast_1d(q)) if q.ndim <= 1 else q, (n, n))
-            self._L = _psd_factor("process_noise", Q) if np.any(Q != 0) else None
+            self.set_process_noise(process_noise)
         self._rng: np.random.Generator | None = None
         self._ueff = np.zeros(self.n_inputs)
         self._sines: tuple | None = None  # sine disturbance sources (cached once started)
 
     def set_process_noise(self, process_noise: Any) -> None:
         """Set the covariance of the additive state noise per step (n x n, or a vector) before the run."""
-        n = self.n_states
-        q = np.array(process_noise, dtype=float)
-        Q = as_matrix("process_noise", np.diag(np.atleast_1d(q)) if q.ndim <= 1 else q, (n, n))
+        Q = _noise_matrix(process_noise, self.n_states)
         self._L = _psd_factor("process_noise", Q) if np.any(Q != 0) else None
 
     @classmethod
@@ -567,13 +559,7 @@ class DiscretePlant(_LTIBase):
         self, output: int, step: float, count: int, t_first: int, tick: int, max_ticks: int
     ) -> tuple[int | None, int, int]:
         """As :meth:`LTIPlant.predict_exit`: the output only changes at updates and input jumps."""
-        if not self._started:
-            self._start()
-        barrier = self.prediction_barrier()
-        t_end = t_first + (max_ticks - 1) * tick
-        if barrier <= t_end:
-            max_ticks = max(0, -(-(barrier - t_first) // tick))
-            t_end = t_first + (max_ticks - 1) * tick
+        max_ticks, t_end, barrier = self._prediction_window(t_first, tick, max_ticks)
         if max_ticks == 0:
             return None, t_first - tick, barrier
         piecewise = [s for s in self._sources if s.kind == "piecewise"]

@@ -355,13 +355,7 @@ class NonlinearPlant(Plant):
     ) -> tuple[int | None, int, int]:
         """Candidate tick where ``floor(y/step)`` may leave ``count``: the first band crossing found by
         solve_ivp events, snapped up to the tick grid (the encoder verifies it on the plant itself)."""
-        if not self._started:
-            self._start()
-        barrier = self.prediction_barrier()
-        t_end = t_first + (max_ticks - 1) * tick
-        if barrier <= t_end:
-            max_ticks = max(0, -(-(barrier - t_first) // tick))
-            t_end = t_first + (max_ticks - 1) * tick
+        max_ticks, t_end, barrier = self._prediction_window(t_first, tick, max_ticks)
         if max_ticks == 0:
             return None, t_first - tick, barrier
         lo, hi = count * step, (count + 1) * step
