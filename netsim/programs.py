@@ -135,6 +135,20 @@ def _value(msg: Any) -> float:
     return float(payload)
 
 
+@register("program", "idle", "execute the task's execution time and nothing else (a CPU load, an ISR whose effect is not modelled)")
+class Idle:
+    """A program that only uses the CPU: background load tasks, or interrupt handlers kept for their timing."""
+
+    class Params(StrictModel):
+        pass
+
+    def __init__(self, ctx: ProgramContext, params: Params) -> None:
+        self.ctx = ctx
+
+    def __call__(self, job: Any) -> Body:
+        yield from _run(self.ctx, job)
+
+
 @register("program", "sampler", "analog_in(channel), execute, send to `to` on `network` (or post to shared[key])")
 class Sampler:
     """Time-driven sensor: sample, execute, send."""

@@ -381,6 +381,12 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
             elif trig.kind == "external":
                 _call(kernel.create_trigger, f"{hpath}.trigger", h.name, h.name,
                       min_interarrival=trig.external.min_interarrival)
+            elif trig.kind == "periodic_load":
+                # the validator made sure the execution time is constant (an int of ns, or {dist: constant})
+                execution = h.execution if isinstance(h.execution, int) else getattr(h.execution, "value", 0)
+                _call(kernel.create_periodic_load, f"{hpath}.trigger", h.name,
+                      period=trig.periodic_load.period, execution=h.latency + int(execution or 0),
+                      start=trig.periodic_load.start, handler=h.name)
             else:
                 bindings.append((node_name, trig.on_message, h.name))
     return kernels, programs, bindings

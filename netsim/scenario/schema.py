@@ -477,19 +477,37 @@ class ExternalTrigger(SpecModel):
     min_interarrival: Time = 0
 
 
+class PeriodicLoadTrigger(SpecModel):
+    """A fast periodic interrupt accounted in closed form (``Kernel.create_periodic_load``).
+
+    Every tick ``start + k * period`` takes the handler's ``latency + execution`` of CPU from everything else on
+    the node, exactly as a timer-driven handler would, without one simulated invocation per tick. The handler's
+    code runs only when something invokes it (e.g. an exact-mode encoder at the ticks that see an edge). Its
+    execution time must be constant and shorter than the period.
+    """
+
+    period: Duration
+    start: Time = 0
+
+
+_TRIGGER_KINDS = ("timer", "on_message", "external", "periodic_load")
+
+
 class HandlerTrigger(SpecModel):
-    """What raises an interrupt handler: exactly one of ``timer``, ``on_message`` (a network), ``external``."""
+    """What raises an interrupt handler: exactly one of ``timer``, ``on_message`` (a network), ``external``,
+    ``periodic_load``."""
 
     timer: TimerTrigger | None = None
     on_message: Name | None = None
     external: ExternalTrigger | None = None
+    periodic_load: PeriodicLoadTrigger | None = None
 
     @model_validator(mode="after")
     def _exactly_one(self) -> HandlerTrigger:
-        given = [k for k in ("timer", "on_message", "external") if getattr(self, k) is not None]
+        given = [k for k in _TRIGGER_KINDS if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(
-                "give exactly one of 'timer', 'on_message' or 'external'"
+                "give exactly one of 'timer', 'on_message', 'external' or 'periodic_load'"
                 + (f" (got {', '.join(given)})" if given else "")
             )
         return self
@@ -501,8 +519,8 @@ class HandlerTrigger(SpecModel):
 
     @property
     def kind(self) -> str:
-        """``"timer"``, ``"on_message"`` or ``"external"``."""
-        for k in ("timer", "on_message", "external"):
+        """``"timer"``, ``"on_message"``, ``"external"`` or ``"periodic_load"``."""
+        for k in _TRIGGER_KINDS:
             if getattr(self, k) is not None:
                 return k
         raise AssertionError("unreachable: validated trigger has one kind")

@@ -41,7 +41,7 @@ from netsim.scenario.messages import problems_from_validation_error
 from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path, set_path
 from netsim.scenario.problems import WARNING, Problem, ScenarioError
 from netsim.scenario.schema import BUILTIN_POLICIES
-from netsim.timebase import TimeParseError, parse_time
+from netsim.timebase import TimeParseError, format_time, parse_time
 
 __all__ = ["validate_params", "check_raw", "plugin_load_problems"]
 
@@ -332,6 +332,23 @@ class _Checker:
             where = [*at, "trigger", "on_message"]
             if self.network_ref(node_name, trigger["on_message"], where):
                 self.one_receiver(node_name, trigger["on_message"], at, where)
+        if isinstance(trigger, dict) and isinstance(trigger.get("periodic_load"), dict):
+            self.periodic_load(handler, trigger["periodic_load"], at)
+
+    def periodic_load(self, handler: dict[str, Any], load: dict[str, Any], at: list[PathPart]) -> None:
+        """A periodic load needs a constant execution time that fits in its period."""
+        execution = handler.get("execution")
+        if isinstance(execution, dict) and execution.get("dist") == "constant":
+            execution = execution.get("value")
+        if isinstance(execution, dict):
+            self.error([*at, "execution"], "a handler with a 'periodic_load' trigger needs a constant execution time "
+                                           f"(e.g. 'execution: 2 us'), not a '{execution.get('dist')}' distribution")
+            return
+        cost = (_time_or_none(handler.get("latency")) or 0) + (_time_or_none(execution) or 0)
+        period = _time_or_none(load.get("period"))
+        if period is not None and period > 0 and cost >= period:
+            self.error([*at, "execution"], f"latency + execution ({format_time(cost)}) must be shorter than the "
+                                           f"periodic_load period ({format_time(period)})")
 
     def one_receiver(self, node: str, net: str, owner: list[PathPart], at: list[PathPart]) -> None:
         """A node has one receiver (task or handler) per network: the kernel binds each network once."""

@@ -126,8 +126,8 @@ def test_handler_trigger_takes_exactly_one_kind(base):
     raw = base()
     raw["nodes"]["actuator"]["handlers"][0]["trigger"] = {"on_message": "bus", "timer": {"period": "1 ms"}}
     assert _problems(raw) == {
-        "nodes.actuator.handlers[0].trigger": "give exactly one of 'timer', 'on_message' or 'external' "
-        "(got timer, on_message)"
+        "nodes.actuator.handlers[0].trigger": "give exactly one of 'timer', 'on_message', 'external' or "
+        "'periodic_load' (got timer, on_message)"
     }
 
 
