@@ -275,15 +275,35 @@ def _encoder_reader(enc: Any, plant: Any, output: Any, step: float) -> Callable[
     return quantized
 
 
-def _attach_io(kernel: Any, scenario: Any, channels: dict[str, Any], plant: Any) -> None:
+def _attach_io(kernel: Any, scenario: Any, channels: dict[str, Any], plant: Any, env: SimEnv) -> None:
+    """Give the kernel its analog channels; a channel named in ``record:`` is recorded at every read/write."""
+    recorder = env.recorder
     for name, ch in scenario.io.items():
         obj = channels[name]
-        if ch.type == "adc":
-            kernel.attach_analog_in(name, obj.read)
-        elif ch.type == "dac":
-            kernel.attach_analog_out(name, obj.write)
-        else:
-            kernel.attach_analog_in(name, _encoder_reader(obj, plant, ch.output, ch.step))
+        wanted = recorder.wants(name)  # named in record:, or record: omitted (everything)
+        if ch.type == "dac":
+            write = _recording_write(recorder, name, obj.write) if wanted else obj.write
+            kernel.attach_analog_out(name, write)
+            continue
+        read = obj.read if ch.type == "adc" else _encoder_reader(obj, plant, ch.output, ch.step)
+        kernel.attach_analog_in(name, _recording_read(recorder, name, read) if wanted else read)
+
+
+def _recording_read(recorder: Any, name: str, read: Callable[[int], Any]) -> Callable[[int], Any]:
+    def recorded_read(t_ns: int) -> Any:
+        value = read(t_ns)
+        recorder.record(name, t_ns, value)
+        return value
+
+    return recorded_read
+
+
+def _recording_write(recorder: Any, name: str, write: Callable[[int, Any], None]) -> Callable[[int, Any], None]:
+    def recorded_write(t_ns: int, value: Any) -> None:
+        write(t_ns, value)
+        recorder.record(name, t_ns, value)
+
+    return recorded_write
 
 
 def _policy(node_spec: Any) -> Any:
@@ -345,7 +365,7 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
             raise BuildError(str(exc), path=npath) from None
         kernels[node_name] = kernel
         env.components[f"kernel.{node_name}"] = kernel
-        _attach_io(kernel, scenario, channels, plant)
+        _attach_io(kernel, scenario, channels, plant, env)
 
         for i, h in enumerate(node.handlers):
             hpath = f"{npath}.handlers[{i}]"

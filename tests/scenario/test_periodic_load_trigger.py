@@ -70,3 +70,29 @@ def test_a_trigger_names_exactly_one_kind():
     raw["nodes"]["cpu"]["handlers"][0]["trigger"]["timer"] = {"period": "50 us"}
     messages = [p.message for p in check_scenario(raw) if p.is_error]
     assert any("give exactly one of 'timer', 'on_message', 'external' or 'periodic_load'" in m for m in messages)
+
+
+def test_io_channels_named_in_record_are_recorded_at_each_read_and_write():
+    # the README's example: y read and u written by a 10 ms PID task; both appear in signals.csv
+    import re
+    from pathlib import Path
+
+    import yaml
+
+    text = Path("README.md").read_text()
+    raw = yaml.safe_load(next(b for b in re.findall(r"```yaml\n(.*?)```", text, re.S) if b.startswith("name: my_loop")))
+    raw["duration"] = "100 ms"
+    result = run(raw, write=False)
+    assert list(result.signals.columns) == ["time_s", "y", "u", "r"]
+    assert result.meta["warnings"] == []
+    # periodic_controller reads y when its code starts and writes u when its execution ends: every finished
+    # job's start and finish instants are sample instants of the table
+    jobs = result.jobs[result.jobs["finish_s"].notna()]
+    assert len(jobs) == 10  # releases at 0, 10, ..., 90 ms finish; the one at 100 ms is cut by the end
+    instants = set(result.signals["time_s"].round(12))
+    assert set(jobs["finish_s"].round(12)) <= instants
+    # the first read follows the first dispatch (3 us, after the ISR window at 0) by the 10 us context switch
+    # and the ISR window at 10 us (3 us): 3 + 10 + 3 = 16 us
+    first_read = result.signals.loc[result.signals["y"].notna(), "time_s"].iloc[0]
+    assert jobs["start_s"].iloc[0] == 3e-6
+    assert round(first_read * 1e9) == 16_000
