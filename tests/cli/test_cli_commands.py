@@ -10,26 +10,14 @@ from pathlib import Path
 
 import pytest
 
+from cli_files import write
+
 import netsim
 from netsim.cli import main
 from netsim.errors import SimulationError
 from netsim.scenario import Scenario
 
 ROOT = Path(__file__).resolve().parents[2]
-
-def write(folder: Path, name: str, text: str) -> Path:
-    path = folder / name
-    path.write_text(text)
-    return path
-
-
-def line_of(path: Path, needle: str) -> int:
-    """1-based line of the first line containing ``needle`` (independent of the loader)."""
-    for i, line in enumerate(path.read_text().splitlines(), start=1):
-        if needle in line:
-            return i
-    raise AssertionError(needle)
-
 
 
 class _Calls:

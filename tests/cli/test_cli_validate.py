@@ -2,24 +2,9 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
+from cli_files import line_of, write
 
 from netsim.cli import main
-
-def write(folder: Path, name: str, text: str) -> Path:
-    path = folder / name
-    path.write_text(text)
-    return path
-
-
-def line_of(path: Path, needle: str) -> int:
-    """1-based line of the first line containing ``needle`` (independent of the loader)."""
-    for i, line in enumerate(path.read_text().splitlines(), start=1):
-        if needle in line:
-            return i
-    raise AssertionError(needle)
-
 
 
 def test_valid_file_exits_zero(tmp_path, capsys, good):
