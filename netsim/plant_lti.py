@@ -102,6 +102,17 @@ class _LTIBase(Plant):
 
     _cache_size = 256
 
+    def _init_shapes(self, A: Any, B: Any, C: Any, D: Any, *, input_names: Sequence[str] | None,
+                     output_names: Sequence[str] | None, state_names: Sequence[str] | None, name: str,
+                     divergence_bound: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Check the matrices' shapes, set up the common plant state; returns ``(A, B, C, D)`` as arrays."""
+        A, B, C, D = _shape_lti(A, B, C, D)
+        Plant.__init__(
+            self, A.shape[0], B.shape[1], C.shape[0], input_names=input_names, output_names=output_names,
+            state_names=state_names, name=name, divergence_bound=divergence_bound,
+        )
+        return A, B, C, D
+
     @classmethod
     def _system_arrays(cls, sys: Any) -> tuple[Any, ...]:
         import control
@@ -163,11 +174,8 @@ class LTIPlant(_LTIBase):
         name: str = "plant",
         divergence_bound: float = 1e12,
     ) -> None:
-        A, B, C, D = _shape_lti(A, B, C, D)
-        super().__init__(
-            A.shape[0], B.shape[1], C.shape[0], input_names=input_names, output_names=output_names,
-            state_names=state_names, name=name, divergence_bound=divergence_bound,
-        )
+        A, B, C, D = self._init_shapes(A, B, C, D, input_names=input_names, output_names=output_names,
+                                       state_names=state_names, name=name, divergence_bound=divergence_bound)
         n = self.n_states
         self.A, self.B, self.C, self.D = A, B, C, D
         self.x0 = np.zeros(n) if x0 is None else _vector(f"plant {name} x0", x0, n)
@@ -453,11 +461,8 @@ class DiscretePlant(_LTIBase):
         name: str = "plant",
         divergence_bound: float = 1e12,
     ) -> None:
-        A, B, C, D = _shape_lti(Ad, Bd, Cd, Dd)
-        super().__init__(
-            A.shape[0], B.shape[1], C.shape[0], input_names=input_names, output_names=output_names,
-            state_names=state_names, name=name, divergence_bound=divergence_bound,
-        )
+        A, B, C, D = self._init_shapes(Ad, Bd, Cd, Dd, input_names=input_names, output_names=output_names,
+                                       state_names=state_names, name=name, divergence_bound=divergence_bound)
         if int(dt_ns) <= 0:
             raise ConfigError(f"plant {name}: dt_ns must be positive, got {dt_ns}")
         self.Ad, self.Bd, self.Cd, self.Dd = A, B, C, D
