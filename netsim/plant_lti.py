@@ -313,18 +313,15 @@ class LTIPlant(_LTIBase):
         else:
             G, L = self._last_entry = self.transition(h)
             self._last_h = h
-        z = G @ self._zu
-        if L is not None:
-            z += L @ self._rng.standard_normal(self._nz)  # type: ignore[union-attr]
-        if not (z @ z <= self._bound2):
-            self._diverged(t, z)
-        self._zu[: self._nz] = z
-        self._t = t
-        if L is not None:
+        if self._apply(G, L, t):
             self._notify(t)
 
     def _step(self, t: int) -> bool:
         G, L = self.transition(t - self._t)
+        return self._apply(G, L, t)
+
+    def _apply(self, G: np.ndarray, L: np.ndarray | None, t: int) -> bool:
+        """``z+ = G [z; u] (+ L w)`` up to ``t``; True when noise was added."""
         z = G @ self._zu
         if L is not None:
             z += L @ self._rng.standard_normal(self._nz)  # type: ignore[union-attr]
