@@ -8,18 +8,80 @@ Every source of randomness asks for its own stream by name (``env.rng("network.c
 a :class:`numpy.random.Generator` seeded from the scenario seed and a stable hash of the name, so adding a
 new noise source does not shift the numbers drawn by the others, and a run is reproducible from its seed
 alone, whatever the order in which streams are created.
+
+Event loop
+----------
+simpy's heap holds ``(time, priority, event id, event)`` entries. netsim's own wake-ups (kernel segment ends,
+releases, timers, network transmissions, the plant's recording grid) are *call entries* on the same heap:
+``(time, priority, event id, fn, arg)``, scheduled with :func:`schedule_call` and run by :func:`run_events` as
+``fn(entry)`` (the callback reads ``entry[4]``; the entry tuple itself identifies the wake-up, e.g. to tell a
+superseded one). They cost no event object and no callback list; simpy events and processes still work
+beside them, in the same order of (time, priority, id). simpy's own ``Environment.step``/``run`` cannot
+process call entries: run the loop with :func:`run_events` (or :meth:`SimEnv.run`).
 """
 
 from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
+from heapq import heappop, heappush
 from typing import Any, Callable
 
 import numpy as np
 import simpy
 
-__all__ = ["SimEnv", "Recorder", "stream_seed"]
+__all__ = ["SimEnv", "Recorder", "stream_seed", "schedule_call", "run_events", "CallEntry"]
+
+#: A call entry: ``(time_ns, priority, event_id, fn, arg)``; ``fn`` is called with the entry itself.
+CallEntry = tuple[int, int, int, Callable[[Any], None], Any]
+
+
+def schedule_call(sim: simpy.Environment, delay: int, priority: int, fn: Callable[[Any], None],
+                  arg: Any = None) -> CallEntry:
+    """Schedule ``fn(entry)`` ``delay`` ns from now with simpy ``priority``; returns the entry.
+
+    Hot paths push the same tuple inline: ``heappush(sim._queue, (sim._now + d, prio, next(sim._eid), fn, arg))``.
+    """
+    entry = (sim._now + delay, priority, next(sim._eid), fn, arg)  # type: ignore[attr-defined]
+    heappush(sim._queue, entry)  # type: ignore[attr-defined]
+    return entry
+
+
+def run_events(sim: simpy.Environment, t_end: int) -> None:
+    """Process every event up to and including ``t_end`` ns: call entries and simpy events, in heap order.
+
+    simpy re-raises a process's unhandled exception as a *copy* built from ``exc.args``; netsim errors with
+    extra constructor arguments (``DivergenceError(message, time_ns)``) cannot be copied that way, and the
+    copy would lose ``time_ns`` anyway. So the loop looks at a simpy event before popping it and raises the
+    original exception of a failed, undefused event itself. An exception raised by a call entry's ``fn``
+    propagates as it is.
+    """
+    queue = sim._queue  # type: ignore[attr-defined]
+    until = int(t_end) + 1
+    pop = heappop
+    while queue:
+        entry = queue[0]
+        if entry[0] >= until:
+            break
+        if len(entry) == 5:  # a call entry
+            pop(queue)
+            sim._now = entry[0]  # type: ignore[attr-defined]
+            entry[3](entry)
+            continue
+        # a simpy event: simpy's Environment.step, inlined
+        event = entry[3]
+        if event._ok is False and not hasattr(event, "_defused") and isinstance(event._value, BaseException):
+            event._defused = True
+            raise event._value
+        pop(queue)
+        sim._now = entry[0]  # type: ignore[attr-defined]
+        callbacks, event.callbacks = event.callbacks, None
+        for callback in callbacks:
+            callback(event)
+        if not event._ok and not hasattr(event, "_defused"):
+            exc = type(event._value)(*event._value.args)
+            exc.__cause__ = event._value
+            raise exc
 
 
 def stream_seed(seed: int, name: str) -> np.random.SeedSequence:
@@ -137,6 +199,8 @@ class SimEnv:
 
     def run(self, until_ns: int) -> None:
         """Run the event loop up to and including events at ``until_ns``, then call the finalizers."""
-        self.sim.run(until=int(until_ns) + 1)
+        run_events(self.sim, int(until_ns))
+        if self.sim._now <= until_ns:  # as simpy's run(until=until_ns + 1) leaves the clock
+            self.sim._now = int(until_ns) + 1
         for fn in self._finalizers:
             fn(int(until_ns))

@@ -11,7 +11,7 @@ from collections import deque
 from typing import TYPE_CHECKING, Any, Callable
 
 from netsim.errors import BuildError
-from netsim.kernel.events import NORMAL, Wake
+from netsim.kernel.events import NORMAL, schedule_call
 from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.task import (Handler, HandlerSpec, Task, TaskSpec, check_body, check_time, did_you_mean,
                                 task_error)
@@ -110,7 +110,7 @@ class KernelBuilder:
         task = Task(spec, body, data, wcet_handler, deadline_handler)
         self.tasks[name] = task
         if period_ns is not None:
-            Wake(self._sim, offset_ns, NORMAL, self._on_periodic_release, task)
+            schedule_call(self._sim, offset_ns, NORMAL, self._on_periodic_release, task)
         return task
 
     def create_handler(self, name: str, body: Callable[[Job], Any], *, priority: int | float = 0, latency: int = 0,
@@ -159,7 +159,7 @@ class KernelBuilder:
             raise task_error(node, name, "handler", f"must be a handler name, got {handler!r}")
         timer = Timer(name, handler, period_ns, start_ns, data)
         self.timers[name] = timer
-        Wake(self._sim, start_ns - now, NORMAL, self._on_timer, timer)
+        schedule_call(self._sim, start_ns - now, NORMAL, self._on_timer, timer)
         return timer
 
     def create_periodic_load(self, name: str, *, period: int, execution: int, start: int = 0,

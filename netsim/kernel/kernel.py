@@ -47,7 +47,7 @@ from netsim.env import SimEnv
 from netsim.errors import BuildError, LivelockError, SimulationError
 from netsim.kernel import requests as rq
 from netsim.kernel.building import KernelBuilder
-from netsim.kernel.events import DEADLINE, DISPATCH, NORMAL, URGENT, Wake
+from netsim.kernel.events import DEADLINE, DISPATCH, NORMAL, URGENT, schedule_call
 from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
 from netsim.kernel.load import PeriodicLoad
@@ -148,7 +148,9 @@ class Kernel(KernelBuilder):
         self.switches = 0
         self.switch_time = 0
         self.segments = 0
-        Wake(self._sim, 0, URGENT, self._on_start)
+        self._queue = env.sim._queue  # simpy's heap; wake-ups are call entries pushed on it (kernel.events)
+        self._eid = env.sim._eid
+        schedule_call(self._sim, 0, URGENT, self._on_start)
         env.at_end(self._finalize)
 
     # ================================================================= run-time API
@@ -288,7 +290,7 @@ class Kernel(KernelBuilder):
         job._np = not (spec.preemptible and self.policy.preemptive)
         job._budget = spec.wcet
         if task.deadline_handler is not None and deadline is not None:
-            Wake(self._sim, deadline - now, DEADLINE, self._on_deadline, job)
+            heappush(self._queue, (deadline, DEADLINE, next(self._eid), self._on_deadline, job))
         if task.active is None:
             task.active = job
             self._make_ready(job, now)
@@ -351,27 +353,27 @@ class Kernel(KernelBuilder):
     def _on_start(self, _ev: Any) -> None:
         self.validate()
 
-    def _on_periodic_release(self, ev: Wake) -> None:
-        task: Task = ev._value
+    def _on_periodic_release(self, ev: tuple) -> None:
+        task: Task = ev[4]
         self._release(task, None)
-        Wake(self._sim, task.spec.period, NORMAL, self._on_periodic_release, task)  # type: ignore[arg-type]
+        heappush(self._queue, (ev[0] + task.spec.period, NORMAL, next(self._eid), self._on_periodic_release, task))
         self._request_dispatch()
 
-    def _on_timer(self, ev: Wake) -> None:
-        timer: Timer = ev._value
+    def _on_timer(self, ev: tuple) -> None:
+        timer: Timer = ev[4]
         if not timer.active:
             return
         timer.fired += 1
         handler = self.handlers.get(timer.handler) or self._get(self.handlers, timer.handler, "handler")
         self._invoke(handler, timer.data, timer.invoker)
         if timer.period is not None:
-            Wake(self._sim, timer.period, NORMAL, self._on_timer, timer)
+            heappush(self._queue, (ev[0] + timer.period, NORMAL, next(self._eid), self._on_timer, timer))
         else:
             timer.active = False
         self._request_dispatch()
 
-    def _on_sleep_done(self, ev: Wake) -> None:
-        job: Job = ev._value
+    def _on_sleep_done(self, ev: tuple) -> None:
+        job: Job = ev[4]
         if job._state != BLOCKED or job._wake is not ev:
             return
         job._wake = None
@@ -379,16 +381,16 @@ class Kernel(KernelBuilder):
         self._make_ready(job, self._sim.now)
         self._request_dispatch()
 
-    def _on_deadline(self, ev: Wake) -> None:
-        job: Job = ev._value
+    def _on_deadline(self, ev: tuple) -> None:
+        job: Job = ev[4]
         if job.finish is not None:
             return
         job.deadline_overrun = True
         self._fire_overrun(job._task.deadline_handler, job, "deadline")
         self._request_dispatch()
 
-    def _on_segment_event(self, ev: Wake) -> None:
-        job: Job = ev._value
+    def _on_segment_event(self, ev: tuple) -> None:
+        job: Job = ev[4]
         if ev is not job._ev:
             return  # superseded by a nearer wake-up of the same job
         job._ev = None
@@ -397,7 +399,8 @@ class Kernel(KernelBuilder):
         now = self._sim._now
         end = job._seg_end
         if now < end:  # the job was preempted and resumed: its segment ends later than first planned
-            job._ev = Wake(self._sim, end - now, NORMAL, self._on_segment_event, job)
+            job._ev = ev = (end, NORMAL, next(self._eid), self._on_segment_event, job)
+            heappush(self._queue, ev)
             job._ev_time = end
             return
         self._seg_job = None
@@ -446,14 +449,14 @@ class Kernel(KernelBuilder):
             self._dispatch()
         else:
             self._dispatch_pending = True
-            Wake(sim, 0, DISPATCH, self._on_deferred_dispatch)
+            heappush(queue, (sim._now, DISPATCH, next(self._eid), self._on_deferred_dispatch, None))
 
     def _request_dispatch_deferred(self) -> None:
         """Dispatch after every event of this instant (entry points called from outside the kernel)."""
         if self._busy or self._dispatch_pending:
             return
         self._dispatch_pending = True
-        Wake(self._sim, 0, DISPATCH, self._on_deferred_dispatch)
+        heappush(self._queue, (self._sim._now, DISPATCH, next(self._eid), self._on_deferred_dispatch, None))
 
     def _dispatch(self) -> None:
         """Give the CPU to the most urgent job and run it until it starts a segment or the CPU idles."""
@@ -517,7 +520,7 @@ class Kernel(KernelBuilder):
             self._preempt(cur, now)
         if self._win_wake != we:
             self._win_wake = we
-            Wake(self._sim, we - now, DISPATCH, self._on_window_end)
+            schedule_call(self._sim, we - now, DISPATCH, self._on_window_end)
         return True
 
     def _on_window_end(self, _ev: Any) -> None:
@@ -564,7 +567,8 @@ class Kernel(KernelBuilder):
         # One wake-up per job, re-armed lazily: a preempted job keeps its pending wake-up, which re-arms
         # itself for the later end when it fires early, so a preemption costs no new simpy event.
         if job._ev is None or job._ev_time > end:
-            job._ev = Wake(self._sim, length, NORMAL, self._on_segment_event, job)
+            job._ev = ev = (end, NORMAL, next(self._eid), self._on_segment_event, job)
+            heappush(self._queue, ev)
             job._ev_time = end
 
     def _charge(self, job: Job, elapsed: int) -> None:
@@ -698,7 +702,7 @@ class Kernel(KernelBuilder):
                             f"node '{self.name}', task '{job.task_name}': sleep({t}) is negative")
                     t += now
                 if t > now:
-                    job._wake = Wake(self._sim, t - now, NORMAL, self._on_sleep_done, job)
+                    job._wake = schedule_call(self._sim, t - now, NORMAL, self._on_sleep_done, job)
                     self._block(job, job._wake, now)
                     self._zt_count += n
                     return

@@ -25,12 +25,11 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
-from heapq import heappop
 from typing import Any, Callable
 
 import numpy as np
 
-from netsim.env import SimEnv
+from netsim.env import SimEnv, run_events
 from netsim.errors import BuildError, ConfigError, NetsimError
 from netsim.timebase import MS
 
@@ -137,32 +136,8 @@ def _run_sliced(env: SimEnv, t_end: int, progress: ProgressFn, slices: int = PRO
 
 
 def _run_events(env: SimEnv, t_end: int) -> None:
-    """Process every event up to and including ``t_end`` (what ``SimEnv.run`` does, without finalizers).
-
-    simpy re-raises a process's unhandled exception as a *copy* built from ``exc.args``; our errors with
-    extra constructor arguments (``DivergenceError(message, time_ns)``) cannot be copied that way, and the copy
-    would lose ``time_ns`` anyway. So the loop looks at the next event first and raises the original
-    exception of a failed, undefused event itself.
-    """
-    sim = env.sim
-    queue = sim._queue  # simpy 4: heap of (time, priority, id, event)
-    until = int(t_end) + 1
-    # simpy's Environment.step, inlined (one Python call less per event): pop the next event, advance the
-    # clock, run its callbacks; a failed event nobody defused raises (the original exception, see above)
-    pop = heappop
-    while queue and queue[0][0] < until:
-        event = queue[0][3]
-        if event._ok is False and not hasattr(event, "_defused") and isinstance(event._value, BaseException):
-            event._defused = True
-            raise event._value
-        sim._now, _, _, event = pop(queue)
-        callbacks, event.callbacks = event.callbacks, None
-        for callback in callbacks:
-            callback(event)
-        if not event._ok and not hasattr(event, "_defused"):
-            exc = type(event._value)(*event._value.args)
-            exc.__cause__ = event._value
-            raise exc
+    """Process every event up to and including ``t_end`` (what ``SimEnv.run`` does, without finalizers)."""
+    run_events(env.sim, t_end)
 
 
 # --------------------------------------------------------------------------------------------- pieces
