@@ -15,7 +15,8 @@
     ``analog_out`` the buffer's value for the period (current action, then the future ones, then the last
     one held).
 
-The fast-period index is ``k = (now - offset) // period``.
+The fast-period index is ``k = (now - offset) // period``. The requests a program yields at every job with the
+same arguments (``analog_in``, ``receive``, ``execute``) are built once (requests are immutable values).
 """
 
 from __future__ import annotations
@@ -30,6 +31,8 @@ from netsim.control.controller_trigger import ControllerTrigger
 from netsim.control.packets import ControlPacket, PlayoutBuffer
 from netsim.control.triggers import AnyOf, MaxIntervalTrigger, MixedTrigger, ReferenceChangeTrigger, SendOnDelta, TimeTriggered
 from netsim.errors import BuildError
+from netsim.kernel import requests as rq
+from netsim.kernel.requests import Request
 from netsim.registry import lookup, register
 from netsim.units import Duration, StrictModel, Time
 
@@ -38,10 +41,6 @@ __all__ = ["EtSensor", "EtController", "PlayoutActuator"]
 log = logging.getLogger(__name__)
 
 Body = Generator[Any, Any, None]
-
-
-def _k(now: int, period: int, offset: int) -> int:
-    return (now - offset) // period
 
 
 @register("program", "et_sensor", "sensor handler at T: analog_in, execute, PET/TT trigger (eqs 6-8), send")
@@ -99,15 +98,18 @@ class EtSensor:
             members.append(ReferenceChangeTrigger(p.reference_k_max))
         self.trigger = base if len(members) == 1 else AnyOf(members)
         self.ref = ctx.signal(p.reference) if p.reference else None
+        self._read = Request(rq.ANALOG_IN, p.channel)  # job.analog_in(p.channel)
+        self._exec = None if ctx.execution is None else Request(rq.EXECUTE, ctx.execution)  # job.execute(...)
 
     def __call__(self, job: Any) -> Body:
         p = self.p
-        k = _k(job.now, p.period, p.offset)
-        y = float((yield job.analog_in(p.channel)))
+        now = job.now
+        k = (now - p.offset) // p.period
+        y = float((yield self._read))
         if p.record_as:
-            self.ctx.record(p.record_as, y, job.now)
-        if self.ctx.execution is not None:
-            yield job.execute(self.ctx.execution)
+            self.ctx.record(p.record_as, y, now)
+        if self._exec is not None:
+            yield self._exec
         r = self.ref(job.now) if self.ref is not None else None
         if self.trigger.should_send(k, y, r):
             yield job.send(p.network, p.to, {"k": k, "y": y}, p.bits, priority=p.priority, tag=p.tag)
@@ -160,6 +162,8 @@ class EtController:
         T, off = int(p.period), int(p.offset)
         trig = ControllerTrigger(p.sigma_c, p.delta_c, p.norm, enabled=p.controller_et)
         self.side = factory(p.design_params, reference=lambda k: float(r_t(off + k * T)), trigger=trig)
+        self._receive = Request(rq.RECEIVE, p.network)  # job.receive(p.network)
+        self._exec = None if ctx.execution is None else Request(rq.EXECUTE, ctx.execution)  # job.execute(...)
         ctx.env.at_end(self._finish)
 
     def _finish(self, t_end: int) -> None:
@@ -172,20 +176,22 @@ class EtController:
 
     def __call__(self, job: Any) -> Body:
         p = self.p
+        record = self.ctx.record
         while True:
-            msg = yield job.receive(p.network)
+            msg = yield self._receive
             if msg is None:
                 return
             payload = msg.payload
             k, y = int(payload["k"]), float(payload["y"])
             dec = self.side.on_measurement(k, y)
             if p.record:
-                self.ctx.record("N", float(dec.N), job.now)
-                self.ctx.record("y_hat", dec.y_hat, job.now)
-                self.ctx.record("d_hat", dec.d_hat, job.now)
-                self.ctx.record("u_hat", dec.packet.values[0], job.now)
-            if self.ctx.execution is not None:
-                yield job.execute(self.ctx.execution)
+                now = job.now
+                record("N", float(dec.N), now)
+                record("y_hat", dec.y_hat, now)
+                record("d_hat", dec.d_hat, now)
+                record("u_hat", dec.packet.values[0], now)
+            if self._exec is not None:
+                yield self._exec
             if dec.send:
                 pkt = dec.packet
                 yield job.send(p.network, p.to, {"k": pkt.k, "values": pkt.values},
@@ -215,14 +221,15 @@ class PlayoutActuator:
         if params.key not in shared:
             shared[params.key] = PlayoutBuffer(params.u0)
         self.buf: PlayoutBuffer = shared[params.key]
+        self._receive = None if params.network is None else Request(rq.RECEIVE, params.network)
+        self._exec = None if ctx.execution is None else Request(rq.EXECUTE, ctx.execution)  # job.execute(...)
 
     def __call__(self, job: Any) -> Body:
         p = self.p
-        k = _k(job.now, p.period, p.offset)
         if p.mode == "receive":
             got = False
             while True:
-                msg = yield job.receive(p.network)
+                msg = yield self._receive  # job.receive(p.network)
                 if msg is None:
                     break
                 pl = msg.payload
@@ -232,10 +239,10 @@ class PlayoutActuator:
                 got = self.buf.receive(ControlPacket(int(pl["k"]), values)) or got
             if not got:
                 return
-        if self.ctx.execution is not None:
-            yield job.execute(self.ctx.execution)
-        u = self.buf.value(_k(job.now, p.period, p.offset))
+        if self._exec is not None:
+            yield self._exec
+        now = job.now
+        u = self.buf.value((now - p.offset) // p.period)
         yield job.analog_out(p.channel, u)
         if p.record_as:
-            self.ctx.record(p.record_as, u, job.now)
-        del k
+            self.ctx.record(p.record_as, u, now)

@@ -64,9 +64,12 @@ class ExecTime:
     ----------
     kind : str
         ``"constant"``, ``"uniform"``, ``"normal"``, ``"empirical"`` or ``"function"``.
+    const : int | None
+        The duration of a ``"constant"`` model (what every :meth:`draw` returns), else ``None``; the kernel
+        reads it instead of calling :meth:`draw`.
     """
 
-    __slots__ = ("kind", "_a", "_b", "_lo", "_hi", "_values", "_fn")
+    __slots__ = ("kind", "_a", "_b", "_lo", "_hi", "_values", "_fn", "const")
 
     def __init__(self, kind: str, a: int = 0, b: int = 0, lo: int = 0, hi: int | None = None,
                  values: np.ndarray | None = None, fn: Callable[[Any], Any] | None = None) -> None:
@@ -77,6 +80,7 @@ class ExecTime:
         self._hi = hi
         self._values = values
         self._fn = fn
+        self.const = a if kind == "constant" else None
 
     # ----------------------------------------------------------------- constructors
     @classmethod

@@ -685,7 +685,7 @@ class Kernel(KernelBuilder):
             if op == _EXECUTE:
                 d = req.a
                 if type(d) is not int:
-                    d = self._duration(job, d)
+                    d = d.const if type(d) is ExecTime and d.const is not None else self._duration(job, d)
                 elif d < 0:
                     raise SimulationError(f"node '{self.name}', task '{job.task_name}': execute({d}) is negative")
                 if d:
