@@ -94,6 +94,7 @@ class SwitchedEthernet(Network):
     def _store(self, frame: Frame) -> None:
         failed: list[Copy] = []
         bits = frame.wire_bits
+        unicast = len(frame.copies) == 1
         for copy in frame.copies:
             port = copy[0].receiver
             assert port is not None
@@ -104,8 +105,9 @@ class SwitchedEthernet(Network):
             self._used_port[port] += bits
             if self._used > self.memory_max:
                 self.memory_max = self._used
-            cf = Frame(copy[0], [copy], frame.sender, frame.priority, bits, frame.tx_ns, frame.order,
-                       tx_start_ns=frame.tx_start_ns)
+            # a unicast frame goes on as it is (it carries exactly this copy); a broadcast is split per port
+            cf = frame if unicast else Frame(copy[0], [copy], frame.sender, frame.priority, bits, frame.tx_ns,
+                                             frame.order, tx_start_ns=frame.tx_start_ns)
             self._down[port].offer(cf)
         if not failed:
             return

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import abc
 import logging
+from heapq import heappush
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar
 
@@ -39,7 +40,7 @@ from netsim.network.records import (
     MessageRecord,
 )
 from netsim.network.stats import BusyMeter
-from netsim.network.timing import Call, call_later, tx_time_ns
+from netsim.network.timing import call_later, tx_time_ns
 from netsim.timebase import S
 
 __all__ = ["Frame", "Network", "Transmitter"]
@@ -416,7 +417,7 @@ class Transmitter:
         ``on_done(frame, start_ns, end_ns)`` after each transmission.
     """
 
-    __slots__ = ("net", "sim", "queue", "rate", "meter", "on_done", "busy", "_pending")
+    __slots__ = ("net", "sim", "queue", "rate", "meter", "on_done", "busy", "_pending", "_tx_ns")
 
     def __init__(
         self,
@@ -434,6 +435,13 @@ class Transmitter:
         self.on_done = on_done
         self.busy = False
         self._pending = False
+        self._tx_ns: dict[int, int] = {}  # tx_time_ns(wire_bits, rate) by wire_bits
+
+    def _tx_time(self, bits: int) -> int:
+        tx = self._tx_ns.get(bits)
+        if tx is None:
+            tx = self._tx_ns[bits] = tx_time_ns(bits, self.rate)
+        return tx
 
     def offer(self, frame: Frame, *, front: bool = False) -> bool:
         """Queue ``frame`` (dropped as ``queue_full`` if the queue is full) and start sending if idle."""
@@ -447,7 +455,11 @@ class Transmitter:
                 q.max_len = 1
             self.busy = True
             self.meter.open_since = now  # meter.start(now)
-            Call(self.sim, tx_time_ns(frame.wire_bits, self.rate), self._done, (frame, now), NORMAL)
+            tx = self._tx_ns.get(frame.wire_bits)
+            if tx is None:
+                tx = self._tx_time(frame.wire_bits)
+            sim = self.sim
+            heappush(sim._queue, (now + tx, NORMAL, next(sim._eid), self._done, (frame, now)))  # a call entry
             return True
         if not self.net._push(q, frame, front=front):
             return False
@@ -472,12 +484,16 @@ class Transmitter:
         frame = self.queue.pop(now)
         self.busy = True
         self.meter.start(now)
-        call_later(self.sim, tx_time_ns(frame.wire_bits, self.rate), self._done, (frame, now))
+        sim = self.sim
+        heappush(sim._queue, (now + self._tx_time(frame.wire_bits), NORMAL, next(sim._eid), self._done, (frame, now)))
 
-    def _done(self, arg: tuple[Frame, int]) -> None:
-        frame, start = arg
-        now = self.sim._now
-        self.meter.stop(now)
+    def _done(self, entry: tuple) -> None:
+        """The call entry of a transmission's end: ``entry[4]`` is ``(frame, start_ns)``."""
+        frame, start = entry[4]
+        now = entry[0]
+        meter = self.meter
+        meter.open_since = None  # meter.stop(now), inlined
+        meter.add(start, now)
         self.busy = False
         self.on_done(frame, start, now)
         if len(self.queue):

@@ -1,7 +1,8 @@
 """Small event helpers shared by the network models: scheduled calls and transmission times.
 
-Networks are driven by callbacks on simpy events rather than by one process per message, which keeps the
-cost per message to one or two heap operations. :data:`LATE` is a simpy event priority below ``NORMAL``: an
+Networks are driven by call entries on simpy's heap (see :mod:`netsim.env`) rather than by one process per
+message, which keeps the cost per message to one or two heap operations.
+:data:`LATE` is a simpy event priority below ``NORMAL``: an
 event scheduled with it at time *t* runs after every ordinary event at *t*, including those created while
 *t* is being processed. Media arbitrate at ``LATE`` so that every frame queued "in the same instant" takes
 part (CAN priority arbitration, CSMA/CD collisions of simultaneous starts, TDMA slot starts).
@@ -24,28 +25,26 @@ __all__ = ["LATE", "Call", "call_later", "late_event", "tx_time_ns"]
 LATE: Final[int] = 2
 
 
-def _run(event: "Call") -> None:
-    if event.live:
-        event.fn(event.arg)
+def _run(entry: tuple) -> None:
+    call: Call = entry[4]
+    if call.live:
+        call.fn(call.arg)
 
 
-class Call(Event):
-    """An already-triggered event that calls ``fn(arg)`` when processed, unless :meth:`cancel` was called."""
+class Call:
+    """A scheduled call of ``fn(arg)`` ``delay`` ns from now (a call entry of :mod:`netsim.env`), unless
+    :meth:`cancel` was called before it is due."""
+
+    __slots__ = ("fn", "arg", "live")
 
     def __init__(self, sim: simpy.Environment, delay: int, fn: Callable[[Any], None], arg: Any, priority: int) -> None:
-        # Inlined Event.__init__ plus trigger, as simpy's Timeout does, for speed.
-        self.env = sim
-        self.callbacks = [_run]
-        self._value = None
-        self._ok = True
         self.fn = fn
         self.arg = arg
         self.live = True
-        # sim.schedule(self, priority, delay), inlined (same heap entry, same event id)
-        heappush(sim._queue, (sim._now + delay, priority, next(sim._eid), self))  # type: ignore[attr-defined]
+        heappush(sim._queue, (sim._now + delay, priority, next(sim._eid), _run, self))  # type: ignore[attr-defined]
 
     def cancel(self) -> None:
-        """Do not call ``fn`` after all (the event stays in the heap and is ignored)."""
+        """Do not call ``fn`` after all (the entry stays in the heap and is ignored)."""
         self.live = False
 
 
