@@ -106,7 +106,7 @@ class ADC:
             v += self.noise_std * float(self._rng.standard_normal())
         if self.limits is not None:
             v = min(max(v, self.limits[0]), self.limits[1])
-        return quantize(v, self.quant_step)
+        return v if self.quant_step is None else quantize(v, self.quant_step)
 
 
 class DAC:
@@ -138,7 +138,7 @@ class DAC:
         v = float(value)
         if self.limits is not None and math.isfinite(v):
             v = min(max(v, self.limits[0]), self.limits[1])
-        return quantize(v, self.resolution)
+        return v if self.resolution is None else quantize(v, self.resolution)
 
     def write(self, t_ns: int, value: float) -> None:
         """Advance the plant to ``t_ns`` and hold the converted ``value`` from then on."""

@@ -39,7 +39,7 @@ import abc
 import logging
 import math
 from heapq import heappush
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, ClassVar, Iterable, Sequence
 
 import numpy as np
 from simpy.events import Event
@@ -296,6 +296,11 @@ class Plant(abc.ABC):
     apart from sinusoidal/continuous-model disturbances they handle themselves), :meth:`_output_now` and
     :meth:`_state_now`, and may override :meth:`advance_to` with a faster path.
 
+    A subclass whose output is a pure function of (plant time, state, effective input) sets
+    ``_cache_output = True``: :meth:`output` then computes it once per such triple and returns the same
+    read-only array until the plant time, the state (:meth:`set_state`) or the effective input (an input
+    change, a disturbance jump) changes.
+
     Parameters
     ----------
     n_states, n_inputs, n_outputs
@@ -340,10 +345,19 @@ class Plant(abc.ABC):
         self._has_held = False
         self._started = False
         self._record_events = False
+        # True once started when an advance needs no per-call bookkeeping (no sampled-and-held disturbance
+        # to re-sample, no state recording): the subclasses' fast paths are allowed then
+        self._plain = False
+        self._y: np.ndarray | None = None  # cached output at time _y_t (see _cache_output)
+        self._y_t = -1
+
+    _cache_output: ClassVar[bool] = False
 
     # ---------------------------------------------------------------- names
     def input_index(self, key: int | str) -> int:
         """Index of input ``key`` (an index or a name)."""
+        if type(key) is int and 0 <= key < self.n_inputs:  # a valid plain index: what _index returns for it
+            return key
         return self._index("input", key, self.input_names)
 
     def output_index(self, key: int | str) -> int:
@@ -393,6 +407,7 @@ class Plant(abc.ABC):
         self.env = env
         self._t = int(env.now)
         self._record_events = bool(record_events)
+        self._plain = self._started and self._is_plain()
         for src in self._sources:
             if src.lti is not None and src.lti.noisy:
                 src.rng = env.rng(f"plant.{self.name}.disturbance.{self.input_names[src.index]}")
@@ -433,8 +448,9 @@ class Plant(abc.ABC):
         return lambda: self._listeners.remove(callback) if callback in self._listeners else None
 
     def _notify(self, t: int) -> None:
-        for cb in list(self._listeners):
-            cb(t)
+        if self._listeners:
+            for cb in list(self._listeners):
+                cb(t)
 
     def _now(self, t_ns: int | None) -> int:
         if t_ns is not None:
@@ -468,12 +484,18 @@ class Plant(abc.ABC):
     def _start(self) -> None:
         """First use: evaluate the disturbances at the start instant."""
         self._started = True
+        self._plain = self._is_plain()
         for src in self._sources:
             if src.kind == "lti_d" and src.lti.noisy and src.rng is None:  # type: ignore[union-attr]
                 raise BuildError(f"plant {self.name}: bind(env) before running a noisy disturbance model")
         self._refresh_sources(self._t)
 
+    def _is_plain(self) -> bool:
+        """True when an advance needs no per-call bookkeeping (see ``_plain``); fixed once started."""
+        return not self._has_held and not self._record_events
+
     def _refresh_sources(self, t: int) -> None:
+        self._y = None  # the effective input may change
         nxt = NEVER
         for src in self._sources:
             src.refresh(t)
@@ -577,9 +599,20 @@ class Plant(abc.ABC):
     # ---------------------------------------------------------------- sampling and actuation
     def output(self, t_ns: int | None = None) -> np.ndarray:
         """Outputs at ``t_ns`` after advancing the plant there (default: ``env.now``, or the plant's own time
-        when that is later or the plant is unbound)."""
-        self.advance_to(self._now(t_ns))
-        return self._output_now()
+        when that is later or the plant is unbound).
+
+        On plants with ``_cache_output`` the array is read-only and shared by all calls at the same plant
+        time and state; copy it to modify it.
+        """
+        self.advance_to(self._now(None) if t_ns is None else t_ns)  # advance_to takes int(t_ns) as _now does
+        if not self._cache_output:
+            return self._output_now()
+        y = self._y
+        if y is None or self._y_t != self._t:
+            y = self._output_now()
+            y.flags.writeable = False
+            self._y, self._y_t = y, self._t
+        return y
 
     def state(self, t_ns: int | None = None) -> np.ndarray:
         """State (a copy) at ``t_ns`` after advancing the plant there (default as in :meth:`output`)."""
@@ -600,7 +633,7 @@ class Plant(abc.ABC):
                 f"plant {self.name}: input {self.input_names[i]} set to {value!r} at "
                 f"t = {to_seconds(self._now(t_ns)):.9g} s (the controller produced a non-finite value)"
             )
-        t = self._now(t_ns)
+        t = self._now(None) if t_ns is None else int(t_ns)  # self._now(t_ns) without the call
         self.advance_to(t)
         if self._u[i] == v:
             return
@@ -622,6 +655,7 @@ class Plant(abc.ABC):
         self._input_changed(t)
 
     def _input_changed(self, t: int) -> None:
+        self._y = None
         self._update_effective_input(t)
         if self._record_events:
             self.env.record(f"{self.name}.u", self._u, t)
@@ -632,6 +666,7 @@ class Plant(abc.ABC):
         t = self._now(t_ns)
         self.advance_to(t)
         self._set_state_now(_vector(f"plant {self.name} state", x, self.n_states))
+        self._y = None
         self._notify(t)
 
     @abc.abstractmethod
