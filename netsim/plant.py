@@ -430,13 +430,13 @@ class Plant(abc.ABC):
         y = self.output(now)
         rec = env.recorder
         times, values = rec.times, rec.values
-        for name, v in zip(names, y):
+        for name, v in zip(names, y.tolist()):  # tolist: the values as Python floats, in one call
             ts = times.get(name)
             if ts is not None and (rec.enabled is None or name in rec.enabled):  # Recorder.record's fast case
                 ts.append(now)
-                values[name].append(float(v))
+                values[name].append(v)
             else:
-                env.record(name, float(v))
+                env.record(name, v)
 
     def _finish(self, t_end: int) -> None:
         if t_end > self._t:
@@ -610,7 +610,7 @@ class Plant(abc.ABC):
         y = self._y
         if y is None or self._y_t != self._t:
             y = self._output_now()
-            y.flags.writeable = False
+            y.setflags(write=False)
             self._y, self._y_t = y, self._t
         return y
 

@@ -522,6 +522,11 @@ class DiscretePlant(_LTIBase):
         self._ueff = self._piecewise_input()
 
     def _input_now(self, t: int) -> np.ndarray:
+        """The input the plant sees at ``t``: ``_ueff`` plus the sine disturbances at ``t``.
+
+        Once the plant has started, ``_sines`` holds the sine sources and the hot paths skip this call when
+        it is ``()`` (the input is then ``_ueff`` itself); before, it is None (not known yet).
+        """
         u = self._ueff
         sines = self._sines
         if sines is None:  # sources are fixed once the plant has started
@@ -560,7 +565,7 @@ class DiscretePlant(_LTIBase):
             while tk <= t:
                 # the update at tk integrates the input held over (tk - dt, tk]: a sine is sampled at its start
                 # (without sines that input is the effective input _ueff, as _input_now returns it)
-                x = Ad.dot(x) + Bd.dot(self._input_now(tk - dt) if self._sines else self._ueff)
+                x = Ad.dot(x) + Bd.dot(self._ueff if self._sines == () else self._input_now(tk - dt))
                 if L is not None:
                     x = x + L.dot(self._rng.standard_normal(self.n_states))  # type: ignore[union-attr]
                     noisy = True
@@ -573,7 +578,8 @@ class DiscretePlant(_LTIBase):
         return noisy
 
     def _output_now(self) -> np.ndarray:
-        return self.Cd.dot(self._x) + self.Dd.dot(self._input_now(self._t))
+        # without sines the input is _ueff, as _input_now returns it
+        return self.Cd.dot(self._x) + self.Dd.dot(self._ueff if self._sines == () else self._input_now(self._t))
 
     def _state_now(self) -> np.ndarray:
         return self._x.copy()
