@@ -97,7 +97,7 @@ class ADC:
 
     def read(self, t_ns: int) -> float:
         """The converted value of the output at ``t_ns``."""
-        v = float(self.plant.output(t_ns)[self.output])
+        v = self.plant.output_value(self.output, t_ns)
         if self.noise_std > 0.0:
             if self._rng is None:
                 if self.plant.env is None:

@@ -297,9 +297,10 @@ class Plant(abc.ABC):
     :meth:`_state_now`, and may override :meth:`advance_to` with a faster path.
 
     A subclass whose output is a pure function of (plant time, state, effective input) sets
-    ``_cache_output = True``: :meth:`output` then computes it once per such triple and returns the same
-    read-only array until the plant time, the state (:meth:`set_state`) or the effective input (an input
-    change, a disturbance jump) changes.
+    ``_cache_output = True``: the output is then computed once per such triple and kept (privately) until
+    the plant time, the state (:meth:`set_state`) or the effective input (an input change, a disturbance
+    jump) changes; :meth:`output` hands out copies, :meth:`output_value` and the ``record_grid`` sampler
+    read it without one.
 
     Parameters
     ----------
@@ -427,10 +428,10 @@ class Plant(abc.ABC):
         """Record the outputs now (one sample of the ``record_grid``)."""
         env = self.env
         now = env.sim._now
-        y = self.output(now)
+        self.advance_to(now)
         rec = env.recorder
         times, values = rec.times, rec.values
-        for name, v in zip(names, y.tolist()):  # tolist: the values as Python floats, in one call
+        for name, v in zip(names, self._current_output().tolist()):  # tolist: Python floats, in one call
             ts = times.get(name)
             if ts is not None and (rec.enabled is None or name in rec.enabled):  # Recorder.record's fast case
                 ts.append(now)
@@ -601,17 +602,27 @@ class Plant(abc.ABC):
         """Outputs at ``t_ns`` after advancing the plant there (default: ``env.now``, or the plant's own time
         when that is later or the plant is unbound).
 
-        On plants with ``_cache_output`` the array is read-only and shared by all calls at the same plant
-        time and state; copy it to modify it.
+        The array is the caller's own (a copy where the plant caches its output).
         """
         self.advance_to(self._now(None) if t_ns is None else t_ns)  # advance_to takes int(t_ns) as _now does
+        y = self._current_output()
+        return y.copy() if self._cache_output else y
+
+    def output_value(self, index: int, t_ns: int | None = None) -> float:
+        """Output number ``index`` (an int, see :meth:`output_index`) at ``t_ns`` as a float: the value of
+        ``float(self.output(t_ns)[index])`` without building an array for the caller."""
+        self.advance_to(self._now(None) if t_ns is None else t_ns)
+        return float(self._current_output()[index])
+
+    def _current_output(self) -> np.ndarray:
+        """The output at the plant's current time. With ``_cache_output`` this is the cached array itself:
+        callers read it or copy it, never modify or keep it."""
         if not self._cache_output:
             return self._output_now()
         y = self._y
         if y is None or self._y_t != self._t:
-            y = self._output_now()
-            y.setflags(write=False)
-            self._y, self._y_t = y, self._t
+            y = self._y = self._output_now()
+            self._y_t = self._t
         return y
 
     def state(self, t_ns: int | None = None) -> np.ndarray:

@@ -32,18 +32,19 @@ def _recomputed(plant, u: float) -> float:
 
 
 @pytest.mark.parametrize("kind", ["discrete", "continuous"])
-def test_output_at_one_instant_is_read_only_and_refreshed_by_set_input(kind):
+def test_output_at_one_instant_is_the_callers_own_and_refreshed_by_set_input(kind):
     plant = _discrete() if kind == "discrete" else LTIPlant([[-1.0, 0.5], [0.0, -2.0]], BD, CD, DD, x0=[1.0, -1.0])
     t = 2 * MS + 300 * US
     y1 = plant.output(t)
-    assert plant.output(t)[0] == y1[0] == pytest.approx(_recomputed(plant, 0.0), abs=1e-15)
-    with pytest.raises(ValueError):
-        y1[0] = 3.0  # the shared cached array cannot be corrupted by a caller
+    expected = _recomputed(plant, 0.0)
+    assert plant.output(t)[0] == y1[0] == plant.output_value(0, t) == pytest.approx(expected, abs=1e-15)
+    y1[0] = 3.0  # the caller's copy: the plant's cached value is untouched
+    assert plant.output(t)[0] == plant.output_value(0, t) == pytest.approx(expected, abs=1e-15)
     plant.set_input(0, 2.0, t)  # same instant: only the input changes
     assert plant.output(t)[0] == pytest.approx(_recomputed(plant, 2.0), abs=1e-15)
-    assert plant.output(t)[0] - y1[0] == pytest.approx(0.5 * 2.0)  # D u
+    assert plant.output(t)[0] - expected == pytest.approx(0.5 * 2.0)  # D u
     plant.set_inputs([-1.0], t)
-    assert plant.output(t)[0] == pytest.approx(_recomputed(plant, -1.0), abs=1e-15)
+    assert plant.output_value(0, t) == pytest.approx(_recomputed(plant, -1.0), abs=1e-15)
 
 
 def test_set_state_at_the_same_instant_refreshes_the_output():
@@ -71,7 +72,7 @@ def test_sine_disturbance_output_follows_time_between_updates():
     plant = _discrete()
     plant.add_disturbance(0, sine)
     for t in (1 * MS + 100 * US, 1 * MS + 200 * US, 1 * MS + 200 * US, 1 * MS + 700 * US):
-        assert plant.output(t)[0] == pytest.approx(_recomputed(plant, float(sine(t))), abs=1e-15)
+        assert plant.output_value(0, t) == pytest.approx(_recomputed(plant, float(sine(t))), abs=1e-15)
 
 
 def test_process_noise_updates_refresh_the_output():
@@ -131,3 +132,21 @@ def test_listeners_see_noisy_updates_on_the_fast_path():
     assert calls == [2 * MS + 1]
     plant.advance_to(int(0.5 * S))
     assert calls[-1] == int(0.5 * S) and len(calls) == 2
+
+
+def test_output_value_and_record_grid_agree_with_output_on_a_mimo_plant():
+    # two outputs: output_value(i) and the record_grid samples are the entries of output(), bit for bit
+    env = SimEnv(seed=0)
+    plant = DiscretePlant(AD, BD, [[1.0, 2.0], [-1.0, 0.5]], [[0.5], [0.0]], 1 * MS, x0=[1.0, -1.0],
+                          output_names=["a", "b"])
+    plant.bind(env, record_grid_ns=700 * US, grid_prefix="g.")
+    plant.set_input(0, 0.3, 0)
+    env.run(10 * MS)
+    times = env.recorder.times["g.a"]
+    assert times == list(range(0, 10 * MS + 1, 700 * US))
+    replay = DiscretePlant(AD, BD, [[1.0, 2.0], [-1.0, 0.5]], [[0.5], [0.0]], 1 * MS, x0=[1.0, -1.0])
+    replay.set_input(0, 0.3, 0)
+    for k, t in enumerate(times):
+        y = replay.output(t)
+        assert [replay.output_value(0, t), replay.output_value(1, t)] == y.tolist()
+        assert env.recorder.values["g.a"][k] == y[0] and env.recorder.values["g.b"][k] == y[1]
