@@ -142,6 +142,7 @@ class DAC:
 
     def write(self, t_ns: int, value: float) -> None:
         """Advance the plant to ``t_ns`` and hold the converted ``value`` from then on."""
-        v = self.convert(value)
+        # an exact, unlimited converter puts out float(value), as convert() does then
+        v = float(value) if self.limits is None and self.resolution is None else self.convert(value)
         self.plant.set_input(self.input, v, t_ns)
         self.last = v

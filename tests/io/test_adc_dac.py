@@ -68,3 +68,27 @@ def test_bad_channel_parameters_are_reported():
         DAC(plant, 0, resolution=0.0)
     with pytest.raises(ConfigError, match="noise needs an rng"):
         ADC(plant, 0, noise_std=1.0).read(0)
+
+
+def test_exact_dac_holds_the_value_as_written_and_rejects_non_finite_values():
+    from netsim.errors import SimulationError
+
+    plant = _integrator(x0=[0.0])
+    dac = DAC(plant, 0)  # no saturation, no resolution: the written value itself
+    dac.write(0, 0.1 + 0.2)
+    assert plant.inputs[0] == 0.1 + 0.2 == dac.last == dac.convert(0.1 + 0.2)
+    with pytest.raises(SimulationError, match="non-finite"):
+        dac.write(1 * MS, float("nan"))
+
+
+def test_adc_read_equals_the_plant_output_at_each_instant():
+    # an ADC without noise, saturation or quantization returns the plant output itself, also when several
+    # reads fall on one instant and the input changes in between
+    plant = LTIPlant([[-1.0]], [[1.0]], [[2.0]], [[0.5]], x0=[1.0])
+    adc = ADC(plant, 0)
+    for k, u in enumerate([0.0, 1.0, -3.0, 2.5]):
+        t = k * 100 * MS
+        assert adc.read(t) == adc.read(t) == float(plant.output(t)[0])
+        plant.set_input(0, u, t)
+        # after the write at t: 2 x(t) + 0.5 u, recomputed from the state
+        assert adc.read(t) == pytest.approx(2.0 * plant.state(t)[0] + 0.5 * u, rel=1e-15)
