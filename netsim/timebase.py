@@ -109,6 +109,8 @@ def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int
     elif isinstance(value, float):
         if not math.isfinite(value):
             raise TimeParseError(f"time must be finite, got {value!r}")
+        if not math.isfinite(value * S):
+            raise TimeParseError(f"time {value!r} s is too large to count in nanoseconds")
         ns = round(value * S)
     elif isinstance(value, str):
         match = _PATTERN.match(value)

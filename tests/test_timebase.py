@@ -78,3 +78,9 @@ def test_formatted_time_parses_back_to_the_same_nanoseconds():
     for t in samples:
         assert parse_time(format_time(t), allow_negative=True) == t
     assert format_time(1_000_000_500) == "1.0000005 s"
+
+
+def test_a_finite_float_too_large_for_nanoseconds_is_a_parse_error():
+    # 1e300 s is finite, but 1e300 * 1e9 ns overflows a float to infinity (found by the hypothesis robustness test)
+    with pytest.raises(TimeParseError, match="too large"):
+        parse_time(1e300)
