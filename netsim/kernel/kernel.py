@@ -129,6 +129,7 @@ class Kernel(KernelBuilder):
         self.networks: dict[str, Any] = {}
         self._inboxes: dict[str, deque[Message]] = {}
         self._bindings: dict[str, str] = {}
+        self._net_labels: dict[str, str] = {}  # invoker label of each network's receptions
         self._ain: dict[str, Callable[[int], Any]] = {}
         self._aout: dict[str, Callable[[int, Any], None]] = {}
         self._ready: list[tuple[Any, int, Job]] = []
@@ -204,7 +205,10 @@ class Kernel(KernelBuilder):
             return
         handler = self.handlers.get(target)
         if handler is not None:
-            self._invoke(handler, msg, f"network:{network}")
+            label = self._net_labels.get(network)
+            if label is None:
+                label = self._net_labels[network] = f"network:{network}"
+            self._invoke(handler, msg, label)
         else:
             self._release(self._get(self.tasks, target, "task"), msg)
         self._request_dispatch_deferred()
@@ -484,7 +488,26 @@ class Kernel(KernelBuilder):
                         self._last_task_job = None  # idle: the next task pays a context switch
                         return
                     cur = heappop(ready)[2]
-                    self._switch_in(cur, now)
+                    # switch in: the job holds the CPU (a task job after another task job or idle pays a context switch)
+                    cur._state = RUNNING
+                    self._running = cur
+                    if cur.start is None:
+                        cur.start = now
+                    if cur._np:
+                        cur._rank = _NP_RANK  # a started non-preemptible job yields to handlers only
+                    if not cur.is_handler and self._last_task_job is not cur:
+                        self._last_task_job = cur
+                        self.switches += 1
+                        if self.context_switch:
+                            cur._pre_left = self.context_switch
+                    if self.trace:
+                        ent = cur._task
+                        old = ent.trace_state
+                        if old != "running":  # self._trace(ent, "running", now), inlined
+                            if old is not None and now > ent.trace_since:
+                                self.schedule.append((ent.name, old, ent.trace_since, now))
+                            ent.trace_state = "running"
+                            ent.trace_since = now
                 if cur._pre_left:
                     self._start_segment(cur, cur._pre_left, now)
                     return
@@ -527,27 +550,6 @@ class Kernel(KernelBuilder):
         self._win_wake = -1
         if not self._busy:
             self._dispatch()
-
-    def _switch_in(self, job: Job, now: int) -> None:
-        job._state = RUNNING
-        self._running = job
-        if job.start is None:
-            job.start = now
-        if job._np:
-            job._rank = _NP_RANK  # a started non-preemptible job yields to handlers only
-        if not job.is_handler and self._last_task_job is not job:
-            self._last_task_job = job
-            self.switches += 1
-            if self.context_switch:
-                job._pre_left = self.context_switch
-        if self.trace:
-            ent = job._task
-            old = ent.trace_state
-            if old != "running":  # self._trace(ent, "running", now), inlined
-                if old is not None and now > ent.trace_since:
-                    self.schedule.append((ent.name, old, ent.trace_since, now))
-                ent.trace_state = "running"
-                ent.trace_since = now
 
     def _start_segment(self, job: Job, length: int, now: int) -> None:
         job._seg_start = now
@@ -653,7 +655,10 @@ class Kernel(KernelBuilder):
             names[job.task_name] = names.get(job.task_name, 0) + 1
         gen = job._gen
         if gen is None:
-            gen = job._gen = self._make_generator(job)
+            gen = job._task.body(job)
+            if type(gen) is not GeneratorType:
+                self._check_generator(job, gen)
+            job._gen = gen
         value = job._value
         job._value = None
         send = gen.send
@@ -707,9 +712,15 @@ class Kernel(KernelBuilder):
                     self._zt_count += n
                     return
             elif op == rq.ANALOG_IN:
-                value = self._io(self._ain, req.a, job, "analog input")(now)
+                fn = self._ain.get(req.a)
+                if fn is None:
+                    fn = self._io(self._ain, req.a, job, "analog input")
+                value = fn(now)
             elif op == rq.ANALOG_OUT:
-                self._io(self._aout, req.a, job, "analog output")(now, req.b)
+                fn = self._aout.get(req.a)
+                if fn is None:
+                    fn = self._io(self._aout, req.a, job, "analog output")
+                fn(now, req.b)
             elif op == rq.SEND:
                 self._send(job, req)
             elif op == rq.RECEIVE:
@@ -757,12 +768,11 @@ class Kernel(KernelBuilder):
             else:  # pragma: no cover - Request objects come from Job methods only
                 raise SimulationError(f"unknown request {req!r}")
 
-    def _make_generator(self, job: Job) -> Any:
-        gen = job._task.body(job)
-        if type(gen) is not GeneratorType and not (hasattr(gen, "send") and hasattr(gen, "close")):
+    def _check_generator(self, job: Job, gen: Any) -> None:
+        """A body's result that is not a Python generator must at least behave like one."""
+        if not (hasattr(gen, "send") and hasattr(gen, "close")):
             raise SimulationError(f"node '{self.name}': body of '{job.task_name}' returned {gen!r}, not a "
                                   "generator; the body must contain `yield job.<request>(...)`")
-        return gen
 
     def _duration(self, job: Job, d: Any) -> int:
         if isinstance(d, ExecTime):

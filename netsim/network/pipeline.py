@@ -478,7 +478,7 @@ class Transmitter:
 
     def _start(self, _: Any) -> None:
         self._pending = False
-        if self.busy or not len(self.queue):
+        if self.busy or not self.queue._len:
             return
         now = self.sim._now
         frame = self.queue.pop(now)
@@ -496,5 +496,5 @@ class Transmitter:
         meter.add(start, now)
         self.busy = False
         self.on_done(frame, start, now)
-        if len(self.queue):
+        if self.queue._len:
             self._kick()
