@@ -450,6 +450,9 @@ class Kernel(KernelBuilder):
         sim = self._sim
         queue = sim._queue  # simpy's event heap: dispatch at once if nothing else is due now
         if not queue or queue[0][0] > sim._now:
+            if not self._ready and self._running is None and self._load is None:
+                self._last_task_job = None  # what _dispatch does when nothing is ready: the CPU idles
+                return
             self._dispatch()
         else:
             self._dispatch_pending = True

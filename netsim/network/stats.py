@@ -16,14 +16,15 @@ class BusyMeter:
         Share of the network's capacity this channel represents (FDMA sub-channels); 1 otherwise.
     """
 
-    __slots__ = ("bin_ns", "weight", "total", "open_since", "bins")
+    __slots__ = ("bin_ns", "weight", "total", "open_since", "_intervals", "_bins")
 
     def __init__(self, bin_ns: int, weight: float = 1.0) -> None:
         self.bin_ns = int(bin_ns)
         self.weight = float(weight)
         self.total = 0
         self.open_since: int | None = None
-        self.bins: dict[int, int] = {}
+        self._intervals: list[tuple[int, int]] = []  # closed busy intervals not yet spread over the bins
+        self._bins: dict[int, int] = {}
 
     def start(self, t: int) -> None:
         """The channel becomes busy at ``t``."""
@@ -38,18 +39,25 @@ class BusyMeter:
         self.add(s, t)
 
     def add(self, s: int, t: int) -> None:
-        """Count the closed busy interval ``[s, t)``."""
-        if t <= s:
-            return
-        self.total += t - s
+        """Count the closed busy interval ``[s, t)`` (spread over the bins when the series is asked for)."""
+        if t > s:
+            self.total += t - s
+            self._intervals.append((s, t))
+
+    @property
+    def bins(self) -> dict[int, int]:
+        """Busy ns per bin index ``k`` (bin ``[k*bin_ns, (k+1)*bin_ns)``) of the closed intervals."""
         b = self.bin_ns
-        k = s // b
-        bins = self.bins
-        while s < t:
-            edge = min(t, (k + 1) * b)
-            bins[k] = bins.get(k, 0) + (edge - s)
-            s = edge
-            k += 1
+        bins = self._bins
+        for s, t in self._intervals:
+            k = s // b
+            while s < t:
+                edge = min(t, (k + 1) * b)
+                bins[k] = bins.get(k, 0) + (edge - s)
+                s = edge
+                k += 1
+        self._intervals.clear()
+        return bins
 
     def busy(self, t_end: int) -> int:
         """Busy time in ``[0, t_end]`` (an interval still open counts up to ``t_end``)."""
@@ -69,9 +77,10 @@ class BusyMeter:
         b = self.bin_ns
         n = -(-t_end // b)
         out = []
+        bins = self.bins
         for k in range(n):
             width = min(b, t_end - k * b)
-            busy = self.bins.get(k, 0)
+            busy = bins.get(k, 0)
             if self.open_since is not None:
                 lo, hi = max(self.open_since, k * b), min(t_end, (k + 1) * b)
                 busy += max(0, hi - lo)
