@@ -76,3 +76,50 @@ def test_recorder_stores_plain_numbers_and_numpy_scalars_alike():
     env.record("a", np.array(3.0), t_ns=4)
     assert env.recorder.values["a"] == [1.5, 2.0, 2.5, 3.0]
     assert all(type(v) is float for v in env.recorder.values["a"])
+
+
+def test_call_entries_and_simpy_events_run_in_time_priority_and_id_order():
+    from netsim.env import schedule_call
+
+    env = SimEnv(seed=0)
+    sim = env.sim
+    order = []
+
+    def proc():
+        yield sim.timeout(5)
+        order.append(("proc", sim.now))
+
+    sim.process(proc())  # a simpy process: its Initialize event is due at 0 (URGENT), its timeout at 5 (NORMAL)
+    schedule_call(sim, 5, 1, lambda e: order.append(("b", sim.now, e[4])), "x")  # scheduled after the process
+    schedule_call(sim, 5, 0, lambda e: order.append(("a", sim.now, e[4])), "y")  # more urgent at the same time
+    schedule_call(sim, 7, 2, lambda e: order.append(("c", sim.now, e[4])), None)
+    schedule_call(sim, 9, 1, lambda e: order.append(("late", sim.now)), None)
+    env.run(7)
+    # (time, priority, id) order. Ids: the process start 0, 'b' 1, 'a' 2, 'c' 3, 'late' 4; the process's timeout
+    # gets id 5 when the process starts at t=0. At t=5: 'a' (priority 0), then 'b' (1, id 1), then the timeout (1, id 5).
+    assert order[:3] == [("a", 5, "y"), ("b", 5, "x"), ("proc", 5)]
+    assert order[3] == ("c", 7, None)
+    assert len(order) == 4  # the entry at 9 ns lies beyond the end
+    assert sim.now == 8  # as simpy's run(until=7 + 1) leaves the clock
+
+
+def test_an_exception_in_a_call_entry_propagates_unchanged():
+    from netsim.env import run_events, schedule_call
+
+    class Boom(Exception):
+        def __init__(self, message, code):  # an extra argument: a copy built from args would fail
+            super().__init__(message)
+            self.code = code
+
+    env = SimEnv(seed=0)
+
+    def fail(_e):
+        raise Boom("boom", 42)
+
+    schedule_call(env.sim, 3, 1, fail)
+    try:
+        run_events(env.sim, 10)
+    except Boom as exc:
+        assert exc.code == 42 and env.sim.now == 3
+    else:  # pragma: no cover - the loop must raise
+        raise AssertionError("the exception did not propagate")
