@@ -110,15 +110,15 @@ def as_matrix(name: str, value: Any, shape: tuple[int | None, int | None] | None
     return arr
 
 
-def matvec(M: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """``M @ v`` for a 2-D ``M`` and a 1-D ``v``, bit for bit, with less call overhead where possible.
+def matvec(M: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """The product ``v -> M @ v`` with a 2-D ``M`` (bit for bit), as a bound method to keep and call.
 
-    With two or more entries in ``v``, ``M.dot(v)`` calls the same BLAS routine as ``@`` (the same bits) at a
-    fraction of its call overhead on the small arrays of a plant step (about 0.7 us against 3 us for a
-    10 x 10 product). With one entry ``dot`` multiplies by a scalar instead, which can differ from ``@`` in
-    the sign of a zero result (and for ``0 * inf``), so ``@`` is used there.
+    With two or more columns, ``M.dot`` calls the same BLAS routine as ``@`` (the same bits) at a fraction
+    of its call overhead on the small arrays of a plant step (about 0.7 us against 3 us for a 10 x 10
+    product). With one column ``dot`` multiplies by a scalar instead, which can differ from ``@`` in the
+    sign of a zero result (and for ``0 * inf``), so the operator itself (``M.__matmul__``) is used there.
     """
-    return M.dot(v) if v.shape[0] > 1 else M @ v
+    return M.dot if M.shape[1] > 1 else M.__matmul__
 
 
 def _names(kind: str, given: Sequence[str] | None, n: int, prefix: str) -> list[str]:
@@ -369,8 +369,6 @@ class Plant(abc.ABC):
     # ---------------------------------------------------------------- names
     def input_index(self, key: int | str) -> int:
         """Index of input ``key`` (an index or a name)."""
-        if type(key) is int and 0 <= key < self.n_inputs:  # a valid plain index: what _index returns for it
-            return key
         return self._index("input", key, self.input_names)
 
     def output_index(self, key: int | str) -> int:
@@ -649,7 +647,8 @@ class Plant(abc.ABC):
 
     def set_input(self, key: int | str, value: float, t_ns: int | None = None) -> None:
         """Advance to ``t_ns`` (default now), then hold input ``key`` at ``value`` (zero-order hold)."""
-        i = self.input_index(key)
+        # a valid int index is its own input_index (the call is skipped for what DACs pass)
+        i = key if type(key) is int and 0 <= key < self.n_inputs else self.input_index(key)
         v = float(value)
         if not math.isfinite(v):
             raise SimulationError(

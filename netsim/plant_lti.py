@@ -19,8 +19,8 @@ taken at ``h0 = h / 2**k`` (``|A| h0 <= 1`` keeps the ``-A`` block harmless) and
 held just before the update instant (an input written exactly at an update instant takes effect at the next
 update), outputs ``y = Cd x + Dd u`` are held between updates.
 
-The per-event matrix-vector products go through :func:`netsim.plant.matvec` (``@``, bit for bit, with less
-call overhead); the divergence checks' ``x.dot(x)`` only feed a comparison.
+The per-event matrix-vector products are :func:`netsim.plant.matvec` bound methods (``@``, bit for bit, with
+less call overhead), made once per matrix; the divergence checks' ``x.dot(x)`` only feed a comparison.
 """
 
 from __future__ import annotations
@@ -258,6 +258,7 @@ class LTIPlant(_LTIBase):
         Bf[:n] = self.B
         self._Af, self._Bf, self._Cf, self._Qf, self._nz = Af, Bf, Cf, Qf, nz
         self._noisy = bool(np.any(Qf != 0.0))
+        self._Cz, self._Du = matvec(Cf), matvec(self.D)  # output products (see _output_now)
         self._zu = np.zeros(nz + m)
         self._zu[:nz] = np.concatenate(z0)
         self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray | None]] = OrderedDict()
@@ -331,9 +332,9 @@ class LTIPlant(_LTIBase):
 
     def _apply(self, G: np.ndarray, L: np.ndarray | None, t: int) -> bool:
         """``z+ = G [z; u] (+ L w)`` up to ``t``; True when noise was added."""
-        z = matvec(G, self._zu)
+        z = matvec(G)(self._zu)
         if L is not None:
-            z += matvec(L, self._rng.standard_normal(self._nz))  # type: ignore[union-attr]
+            z += matvec(L)(self._rng.standard_normal(self._nz))  # type: ignore[union-attr]
         if not (z.dot(z) <= self._bound2):
             self._diverged(t, z)
         self._zu[: self._nz] = z
@@ -342,7 +343,7 @@ class LTIPlant(_LTIBase):
 
     def _output_now(self) -> np.ndarray:
         nz = self._nz
-        return matvec(self._Cf, self._zu[:nz]) + matvec(self.D, self._zu[nz:])
+        return self._Cz(self._zu[:nz]) + self._Du(self._zu[nz:])  # _Cf @ z + D @ u
 
     def _state_now(self) -> np.ndarray:
         return self._zu[: self.n_states].copy()
@@ -472,11 +473,14 @@ class DiscretePlant(_LTIBase):
         if int(dt_ns) <= 0:
             raise ConfigError(f"plant {name}: dt_ns must be positive, got {dt_ns}")
         self.Ad, self.Bd, self.Cd, self.Dd = A, B, C, D
+        # the per-update products Ad @ x, Bd @ u, Cd @ x, Dd @ u (the matrices are fixed once built)
+        self._Ax, self._Bu, self._Cx, self._Du = matvec(A), matvec(B), matvec(C), matvec(D)
         self.dt_ns = int(dt_ns)
         self.offset_ns = int(offset_ns)
         n = self.n_states
         self._x = np.zeros(n) if x0 is None else _vector(f"plant {name} x0", x0, n)
-        self._L = None
+        self._L: np.ndarray | None = None
+        self._Lw: Any = None  # product L @ w, with _L
         if process_noise is not None:
             self.set_process_noise(process_noise)
         self._rng: np.random.Generator | None = None
@@ -488,6 +492,7 @@ class DiscretePlant(_LTIBase):
         """Set the covariance of the additive state noise per step (n x n, or a vector) before the run."""
         Q = _noise_matrix(process_noise, self.n_states)
         self._L = _psd_factor("process_noise", Q) if np.any(Q != 0) else None
+        self._Lw = None if self._L is None else matvec(self._L)
 
     @classmethod
     def from_system(cls, sys: Any, **kwargs: Any) -> "DiscretePlant":
@@ -561,13 +566,13 @@ class DiscretePlant(_LTIBase):
         tk = self._next_update  # first update instant in (self._t, t], if any
         if tk <= t:
             x = self._x
-            Ad, Bd, L, bound2, dt = self.Ad, self.Bd, self._L, self._bound2, self.dt_ns
+            Ax, Bu, Lw, bound2, dt = self._Ax, self._Bu, self._Lw, self._bound2, self.dt_ns
             while tk <= t:
-                # the update at tk integrates the input held over (tk - dt, tk]: a sine is sampled at its start
-                # (without sines that input is the effective input _ueff, as _input_now returns it)
-                x = matvec(Ad, x) + matvec(Bd, self._ueff if self._sines == () else self._input_now(tk - dt))
-                if L is not None:
-                    x = x + matvec(L, self._rng.standard_normal(self.n_states))  # type: ignore[union-attr]
+                # x = Ad @ x + Bd @ u (+ L @ w): the update at tk integrates the input held over (tk - dt, tk],
+                # a sine sampled at its start (without sines that input is _ueff, as _input_now returns it)
+                x = Ax(x) + Bu(self._ueff if self._sines == () else self._input_now(tk - dt))
+                if Lw is not None:
+                    x = x + Lw(self._rng.standard_normal(self.n_states))  # type: ignore[union-attr]
                     noisy = True
                 if not (x.dot(x) <= bound2):
                     self._diverged(tk, x)
@@ -580,7 +585,7 @@ class DiscretePlant(_LTIBase):
     def _output_now(self) -> np.ndarray:
         # without sines the input is _ueff, as _input_now returns it
         u = self._ueff if self._sines == () else self._input_now(self._t)
-        return matvec(self.Cd, self._x) + matvec(self.Dd, u)
+        return self._Cx(self._x) + self._Du(u)  # Cd @ x + Dd @ u
 
     def _state_now(self) -> np.ndarray:
         return self._x.copy()

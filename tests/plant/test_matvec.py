@@ -19,7 +19,7 @@ def test_matvec_matches_the_matmul_operator_bit_for_bit_including_signed_zeros()
                     M = np.asfortranarray(M)
                 v = rng.choice(values, size=cols)
                 with np.errstate(all="ignore"):
-                    assert matvec(M, v).tobytes() == (M @ v).tobytes(), (rows, cols, M, v)
+                    assert matvec(M)(v).tobytes() == (M @ v).tobytes(), (rows, cols, M, v)
 
 
 def test_one_entry_vectors_where_dot_multiplies_by_a_scalar_give_the_operators_zero():
@@ -27,6 +27,6 @@ def test_one_entry_vectors_where_dot_multiplies_by_a_scalar_give_the_operators_z
     # starting from zero); the plant's output must not depend on which one is used
     M, v = np.array([[0.0]]), np.array([-1.0])
     assert not np.signbit((M @ v)[0])
-    assert matvec(M, v).tobytes() == (M @ v).tobytes()
+    assert matvec(M)(v).tobytes() == (M @ v).tobytes()
     C = np.array([[0.0], [1.0], [-0.0]])  # a one-column B or D matrix
-    assert matvec(C, v).tobytes() == (C @ v).tobytes()
+    assert matvec(C)(v).tobytes() == (C @ v).tobytes()
