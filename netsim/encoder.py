@@ -129,7 +129,7 @@ class Encoder:
         return self.offset_ns + k * self.tick_ns
 
     def _quantize(self, t: int) -> int:
-        return math.floor(float(self.plant.output(t)[self.output]) / self.delta)
+        return math.floor(self.plant.output_value(self.output, t) / self.delta)
 
     def read(self, t_ns: int | None = None) -> float:
         """The position the ISR holds: ``count * delta`` (``t_ns`` unused; for analog_in compatibility)."""

@@ -42,8 +42,8 @@ from heapq import heappush
 from typing import Any, Callable, ClassVar, Iterable, Sequence
 
 import numpy as np
-from simpy.events import Event
 
+from netsim.env import schedule_call
 from netsim.errors import BuildError, ConfigError, DivergenceError, SimulationError
 from netsim.timebase import format_time, to_seconds
 
@@ -411,7 +411,7 @@ class Plant(abc.ABC):
             every input change.
         record_grid_ns
             Also record every output, under its output name (prefixed by ``grid_prefix``), on this fixed grid
-            starting at the current time (a simpy process).
+            starting at the current time (a chain of call entries on the event heap).
         """
         if self.env is not None:
             raise BuildError(f"plant {self.name} is already bound to an environment")
@@ -427,7 +427,7 @@ class Plant(abc.ABC):
             grid = int(record_grid_ns)
             if grid <= 0:
                 raise ConfigError(f"plant {self.name}: record_grid must be positive, got {record_grid_ns}")
-            _GridTick(env.sim, 0, _URGENT, self, grid, [grid_prefix + n for n in self.output_names])
+            schedule_call(env.sim, 0, _URGENT, _grid_tick, (self, grid, [grid_prefix + n for n in self.output_names]))
         env.at_end(self._finish)
         return self
 
@@ -699,32 +699,25 @@ class Plant(abc.ABC):
 _URGENT, _NORMAL = 0, 1  # simpy event priorities
 
 
-class _GridTick(Event):
-    """The ``record_grid`` sampler as a chain of self-scheduling events (what a simpy process with a timeout
-    per period did, with the same event ids and priorities: URGENT at bind time, NORMAL after).
+def _grid_tick(entry: tuple) -> None:
+    """One sample of the ``record_grid`` (a call entry of :mod:`netsim.env`; ``entry[4]`` is ``(plant, grid,
+    names)``), then the entry of the next sample, ``grid`` ns later, with NORMAL priority (the first one, at bind
+    time, is URGENT).
 
-    An exception while sampling (e.g. :class:`~netsim.errors.DivergenceError`) fails an event scheduled now,
-    as a failing process would, so the run stops at the same point.
+    An exception while sampling (e.g. :class:`~netsim.errors.DivergenceError`) is raised by an entry scheduled
+    now, after the events already due at this instant (where a failing simpy process raised it), so the run
+    stops at the same point.
     """
+    value = entry[4]
+    plant = value[0]
+    sim = plant.env.sim
+    try:
+        plant._record_grid(value[2])
+    except BaseException as exc:  # noqa: BLE001 - handed to the event loop, as a failing process would
+        heappush(sim._queue, (sim._now, _NORMAL, next(sim._eid), _raise, exc))
+        return
+    heappush(sim._queue, (entry[0] + value[1], _NORMAL, next(sim._eid), _grid_tick, value))
 
-    __slots__ = ()
 
-    def __init__(self, sim: Any, delay: int, priority: int, plant: "Plant", grid: int, names: list[str]) -> None:
-        self.env = sim
-        self.callbacks = [self._fire]
-        self._value = (plant, grid, names)
-        self._ok = True
-        heappush(sim._queue, (sim._now + delay, priority, next(sim._eid), self))
-
-    @staticmethod
-    def _fire(ev: "_GridTick") -> None:
-        plant, grid, names = ev._value
-        try:
-            plant._record_grid(names)
-        except BaseException as exc:  # noqa: BLE001 - handed to the event loop like a failed process
-            failed = Event(ev.env)
-            failed._ok = False
-            failed._value = exc
-            ev.env.schedule(failed)
-            return
-        _GridTick(ev.env, grid, _NORMAL, plant, grid, names)
+def _raise(entry: tuple) -> None:
+    raise entry[4]

@@ -78,7 +78,7 @@ class CartEncoderIsr:
         if self.mode == "exact" and trigger is not None:
             raise BuildError(f"handler '{ctx.task}': with an exact encoder the ISR is invoked at edges; remove "
                              f"its trigger (or use mode: polling on io.{params.encoder_channel})")
-        count = math.floor(float(self.plant.output(ctx.env.now)[self.output]) / self.delta)
+        count = math.floor(self.plant.output_value(self.output, ctx.env.now) / self.delta)
         self.state = {"count": count, "direction": 0, "stamp": -1, "delta": self.delta, "q": q, "edges": 0}
         ctx.kernel.shared[params.key] = self.state
         if params.record:
@@ -121,7 +121,7 @@ class CartEncoderIsr:
             self._store(c, d, s)
         else:
             now = job.now
-            c = math.floor(float(self.plant.output(now)[self.output]) / self.delta)
+            c = math.floor(self.plant.output_value(self.output, now) / self.delta)
             old = self.state["count"]
             if c != old:
                 self._store(c, 1 if c > old else -1, now)
