@@ -325,7 +325,8 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
     ------
     ConfigError
         For schema errors, an unreadable base, an empty factor list, or a factor path that does not exist
-        in the base scenario (with a "did you mean").
+        in the base scenario (with a "did you mean"); a last key that the base leaves at its default is
+        accepted (see :func:`_check_paths`).
     """
     path = None if isinstance(source, dict) else Path(source)
     data = dict(source) if isinstance(source, dict) else _read_yaml(path, sweep_file=True)  # type: ignore[arg-type]
@@ -355,15 +356,30 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
 
 
 def _check_paths(spec: SweepSpec, raw: dict[str, Any], where: str) -> None:
-    from netsim.scenario.paths import get_path
+    """Every factor path must lead to a value of the base scenario, or name a key that the base leaves at
+    its default: the last key may be missing from a mapping that exists, unless a key of that mapping is
+    close to it (then it is taken as a typo). Whether such a key is a parameter at all is checked with the
+    factor levels (the plugins' parameter models refuse unknown keys, with a "did you mean")."""
+    from netsim.scenario.paths import did_you_mean, get_path, parse_path
 
     problems = []
     for name, factor in spec.factors.items():
         for i, p in enumerate(factor.paths):
             try:
                 get_path(raw, p)
+                continue
             except ConfigError as exc:
-                problems.append(f"{where}: factors.{name}.paths[{i}]: '{p}' is not in the base scenario: {exc.message}")
+                message = exc.message
+            parts = parse_path(p)
+            last = parts[-1]
+            if len(parts) > 1 and isinstance(last, str) and not last.startswith("["):
+                try:
+                    parent = get_path(raw, parts[:-1])
+                except ConfigError:
+                    parent = None
+                if isinstance(parent, dict) and not did_you_mean(last, [k for k in parent if isinstance(k, str)]):
+                    continue  # a parameter left at its default: set_path creates it at each point
+            problems.append(f"{where}: factors.{name}.paths[{i}]: '{p}' is not in the base scenario: {message}")
     if problems:
         raise ConfigError("\n".join(problems))
 

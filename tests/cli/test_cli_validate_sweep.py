@@ -53,6 +53,35 @@ def test_a_misspelt_factor_path_gets_a_suggestion(tmp_path, capsys, good):
     assert out.count(str(path)) == 1  # the file is named once per problem line
 
 
+def test_a_parameter_left_at_its_default_can_be_swept(tmp_path, capsys, good):
+    # the base scenario does not write the task's deadline (default: its period): the factor sets it
+    path = _sweep(tmp_path, good, """\
+        deadline:
+          paths:
+            - nodes.a.tasks[0].deadline
+          values: [5 ms, 8 ms]
+        """)
+    assert main(["validate", str(path)]) == 0, capsys.readouterr().out
+    from netsim.sweep.spec import load_sweep
+
+    sweep = load_sweep(path)
+    assert [sweep.point_raw(p)["nodes"]["a"]["tasks"][0]["deadline"] for p in sweep.points] == ["5 ms", "8 ms"]
+
+
+def test_an_absent_key_that_is_no_parameter_is_reported_per_level(tmp_path, capsys, good):
+    # 'colour' is close to no key of networks.net, so the path check lets it through; the network's parameter
+    # model then refuses it at each level
+    path = _sweep(tmp_path, good, """\
+        colour:
+          paths:
+            - networks.net.colour
+          values: [red]
+        """)
+    assert main(["validate", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert "point (colour='red')" in out and "colour" in out.split("point (colour='red')", 1)[1]
+
+
 def test_shipped_sweep_files_validate(capsys):
     files = sorted(str(p) for p in Path("scenarios").glob("*.yaml") if "sweep:" in p.read_text())
     assert len(files) >= 3  # hdd_gpi_sweep, cart_fig2, cart_quant
