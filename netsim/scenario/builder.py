@@ -244,7 +244,7 @@ def _encoder_reader(enc: Any, plant: Any, output: Any, step: float) -> Callable[
     idx = plant.output_index(output)
 
     def quantized(t_ns: int) -> float:
-        y = float(np.asarray(plant.output(t_ns)).ravel()[idx])
+        y = plant.output_value(idx, t_ns)
         return float(np.floor(y / step) * step)
 
     return quantized
