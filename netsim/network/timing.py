@@ -3,8 +3,9 @@
 Networks are driven by call entries on simpy's heap (see :mod:`netsim.env`) rather than by one process per
 message, which keeps the cost per message to one or two heap operations. :data:`LATE` is a simpy event
 priority below ``NORMAL``: an event scheduled with it at time *t* runs after every ordinary event at *t*,
-including those created while *t* is being processed. Media arbitrate at ``LATE`` so that every frame queued "in the same instant" takes
-part (CAN priority arbitration, CSMA/CD collisions of simultaneous starts, TDMA slot starts).
+including those created while *t* is being processed. Media arbitrate at ``LATE`` so that every frame
+queued "in the same instant" takes part (CAN priority arbitration, CSMA/CD collisions of simultaneous
+starts, TDMA slot starts).
 """
 
 from __future__ import annotations
