@@ -219,7 +219,7 @@ class LTIPlant(_LTIBase):
     def _build(self, x: np.ndarray) -> None:
         """Append oscillators (sine disturbances) and continuous disturbance models to the state."""
         n, m = self.n_states, self.n_inputs
-        blocks_A, cols_B, z0, cols_C, q_blocks = [], [], [x], [], []
+        blocks_A, z0, q_blocks = [], [x], []
         couple = []  # (input index, row vector acting on the extra block)
         t = self._t / S
         self._sine_bias = np.zeros(m)

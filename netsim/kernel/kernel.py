@@ -41,7 +41,7 @@ import logging
 from collections import deque
 from heapq import heappop, heappush
 from types import GeneratorType
-from typing import Any
+from typing import Any, Callable
 
 from netsim.env import SimEnv
 from netsim.errors import BuildError, LivelockError, SimulationError
