@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any, Callable, Generator
 
 from pydantic import model_validator
@@ -95,6 +96,14 @@ class ProgramContext:
             else:
                 return
         self.env.record(name, value, t_ns)
+
+    @cached_property
+    def execute_request(self) -> Any:
+        """``job.execute(self.execution)`` built once (requests are immutable), or ``None`` without an
+        execution time: for programs that yield it at every job."""
+        from netsim.kernel.requests import EXECUTE, Request
+
+        return None if self.execution is None else Request(EXECUTE, self.execution)
 
     def signal(self, name: str) -> Callable[[int], float]:
         """The scenario signal ``name``."""

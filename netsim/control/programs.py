@@ -99,7 +99,7 @@ class EtSensor:
         self.trigger = base if len(members) == 1 else AnyOf(members)
         self.ref = ctx.signal(p.reference) if p.reference else None
         self._read = Request(rq.ANALOG_IN, p.channel)  # job.analog_in(p.channel)
-        self._exec = None if ctx.execution is None else Request(rq.EXECUTE, ctx.execution)  # job.execute(...)
+        self._exec = ctx.execute_request  # job.execute(ctx.execution), built once
 
     def __call__(self, job: Any) -> Body:
         p = self.p
@@ -163,7 +163,7 @@ class EtController:
         trig = ControllerTrigger(p.sigma_c, p.delta_c, p.norm, enabled=p.controller_et)
         self.side = factory(p.design_params, reference=lambda k: float(r_t(off + k * T)), trigger=trig)
         self._receive = Request(rq.RECEIVE, p.network)  # job.receive(p.network)
-        self._exec = None if ctx.execution is None else Request(rq.EXECUTE, ctx.execution)  # job.execute(...)
+        self._exec = ctx.execute_request  # job.execute(ctx.execution), built once
         ctx.env.at_end(self._finish)
 
     def _finish(self, t_end: int) -> None:
@@ -222,7 +222,7 @@ class PlayoutActuator:
             shared[params.key] = PlayoutBuffer(params.u0)
         self.buf: PlayoutBuffer = shared[params.key]
         self._receive = None if params.network is None else Request(rq.RECEIVE, params.network)
-        self._exec = None if ctx.execution is None else Request(rq.EXECUTE, ctx.execution)  # job.execute(...)
+        self._exec = ctx.execute_request  # job.execute(ctx.execution), built once
 
     def __call__(self, job: Any) -> Body:
         p = self.p

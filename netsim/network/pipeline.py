@@ -437,12 +437,6 @@ class Transmitter:
         self._pending = False
         self._tx_ns: dict[int, int] = {}  # tx_time_ns(wire_bits, rate) by wire_bits
 
-    def _tx_time(self, bits: int) -> int:
-        tx = self._tx_ns.get(bits)
-        if tx is None:
-            tx = self._tx_ns[bits] = tx_time_ns(bits, self.rate)
-        return tx
-
     def offer(self, frame: Frame, *, front: bool = False) -> bool:
         """Queue ``frame`` (dropped as ``queue_full`` if the queue is full) and start sending if idle."""
         q = self.queue
@@ -453,13 +447,7 @@ class Transmitter:
             q._last_t = now  # the length-time integral gains nothing: the queue was empty
             if q.max_len < 1:
                 q.max_len = 1
-            self.busy = True
-            self.meter.open_since = now  # meter.start(now)
-            tx = self._tx_ns.get(frame.wire_bits)
-            if tx is None:
-                tx = self._tx_time(frame.wire_bits)
-            sim = self.sim
-            heappush(sim._queue, (now + tx, NORMAL, next(sim._eid), self._done, (frame, now)))  # a call entry
+            self._begin(frame, now)
             return True
         if not self.net._push(q, frame, front=front):
             return False
@@ -481,11 +469,17 @@ class Transmitter:
         if self.busy or not self.queue._len:
             return
         now = self.sim._now
-        frame = self.queue.pop(now)
+        self._begin(self.queue.pop(now), now)
+
+    def _begin(self, frame: Frame, now: int) -> None:
+        """Put ``frame`` on the output now; its end is a call entry to :meth:`_done`."""
         self.busy = True
-        self.meter.start(now)
+        self.meter.open_since = now  # meter.start(now)
+        tx = self._tx_ns.get(frame.wire_bits)
+        if tx is None:
+            tx = self._tx_ns[frame.wire_bits] = tx_time_ns(frame.wire_bits, self.rate)
         sim = self.sim
-        heappush(sim._queue, (now + self._tx_time(frame.wire_bits), NORMAL, next(sim._eid), self._done, (frame, now)))
+        heappush(sim._queue, (now + tx, NORMAL, next(sim._eid), self._done, (frame, now)))
 
     def _done(self, entry: tuple) -> None:
         """The call entry of a transmission's end: ``entry[4]`` is ``(frame, start_ns)``."""
