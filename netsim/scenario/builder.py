@@ -95,7 +95,7 @@ class Simulation:
         t_end = self.duration if until is None else int(until)
         try:
             if progress is None:
-                _run_events(self.env, t_end)
+                run_events(self.env.sim, t_end)
             else:
                 _run_sliced(self.env, t_end, progress)
         except BaseException:
@@ -125,19 +125,14 @@ class Simulation:
 
 
 def _run_sliced(env: SimEnv, t_end: int, progress: ProgressFn, slices: int = PROGRESS_SLICES) -> None:
-    """:func:`_run_events` to ``t_end`` in ``slices`` steps of simulated time, reporting after each."""
+    """:func:`netsim.env.run_events` to ``t_end`` in ``slices`` steps of simulated time, reporting after each."""
     start = int(env.now)
     progress(start, t_end)
     span = max(t_end - start, 0)
     for k in range(1, slices + 1):
         t = start + span * k // slices  # integer ns; the last slice ends exactly at t_end
-        _run_events(env, t)
+        run_events(env.sim, t)
         progress(t, t_end)
-
-
-def _run_events(env: SimEnv, t_end: int) -> None:
-    """Process every event up to and including ``t_end`` (what ``SimEnv.run`` does, without finalizers)."""
-    run_events(env.sim, t_end)
 
 
 # --------------------------------------------------------------------------------------------- pieces
