@@ -67,6 +67,7 @@ class SwitchedEthernet(Network):
         self._used_port = {n: 0 for n in self.nodes}
         self.memory_max = 0
         self.retransmissions = 0
+        self._switch_delay = p.switch_delay
 
     def _meter(self, name: str) -> BusyMeter:
         m = self.meters[name] = BusyMeter(self.params.utilization_bin)
@@ -78,7 +79,7 @@ class SwitchedEthernet(Network):
     def _at_switch(self, frame: Frame, start: int, end: int) -> None:
         if frame.tx_start_ns is None:
             frame.tx_start_ns = start
-        d = self.params.switch_delay
+        d = self._switch_delay
         if d:
             call_later(self.sim, d, self._store, frame)
         else:
@@ -92,10 +93,25 @@ class SwitchedEthernet(Network):
         return self._used_port[port] + bits <= (self._cap_port or 0)
 
     def _store(self, frame: Frame) -> None:
-        failed: list[Copy] = []
         bits = frame.wire_bits
-        unicast = len(frame.copies) == 1
-        for copy in frame.copies:
+        copies = frame.copies
+        if len(copies) == 1:
+            # a unicast frame (the loop below for one copy): it goes on as it is, since it carries exactly this
+            # copy, if it fits (self._fits inlined)
+            port = copies[0][0].receiver
+            cap = self._cap_total
+            used_port = self._used_port
+            if (cap is None or (self._used + bits <= cap if self._common
+                                else used_port[port] + bits <= (self._cap_port or 0))):  # type: ignore[index]
+                self._used = used = self._used + bits
+                used_port[port] += bits  # type: ignore[index]
+                if used > self.memory_max:
+                    self.memory_max = used
+                self._down[port].offer(frame)  # type: ignore[index]
+                return
+        failed: list[Copy] = []
+        unicast = len(copies) == 1
+        for copy in copies:
             port = copy[0].receiver
             assert port is not None
             if not self._fits(port, bits):

@@ -143,6 +143,9 @@ class Network(abc.ABC):
         self._delay_max = 0
         self.drops: dict[str, int] = {r: 0 for r in self.drop_reasons}
         self._warned: set[str] = set()
+        # (wire bits, transmission time) by (payload bits, sender): what wire_bits and _frame_time give, which
+        # depend on nothing else (a subclass whose framing also depends on the message must clear this cache)
+        self._framing: dict[tuple[int, str], tuple[int, int]] = {}
         self._setup()
 
     # ------------------------------------------------------------------------------------------ public API
@@ -201,21 +204,31 @@ class Network(abc.ABC):
                 f"the network's nodes are {self.nodes} (or use None for broadcast)"
             )
         bits = msg.bits
-        if not isinstance(bits, int) or isinstance(bits, bool) or bits < 0:
-            raise ConfigError(f"network '{self.name}': '{sender}' sent a message of {bits!r} bits; use an int >= 0")
-        wire = self.wire_bits(msg)
+        if type(bits) is not int or bits < 0:
+            if not isinstance(bits, int) or isinstance(bits, bool) or bits < 0:
+                raise ConfigError(f"network '{self.name}': '{sender}' sent a message of {bits!r} bits; use an int >= 0")
+        framing = self._framing.get((bits, sender))
+        if framing is None:  # wire bits and transmission time depend on (bits, sender) only: computed once
+            wire = self.wire_bits(msg)
+            framing = self._framing[(bits, sender)] = (wire, self._frame_time(wire, sender))
         now = self.sim._now
-        msg.network = self.name
+        msg.network = name = self.name
         msg.sent_ns = now
         if msg.msg_id < 0:
-            msg.msg_id = self.env.next_id("msg")
+            counters = self.env._counters  # self.env.next_id("msg"), inlined
+            msg.msg_id = counters.get("msg", 0)
+            counters["msg"] = msg.msg_id + 1
         seqs = self._seq
         key = (sender, receiver)
-        msg.seq = seqs.get(key, -1) + 1
-        seqs[key] = msg.seq
+        msg.seq = seq = seqs.get(key, -1) + 1
+        seqs[key] = seq
         copies: list[Copy]
         if receiver is not None:
-            copies = [(msg, self._record(msg))]
+            # self._record(msg), inlined
+            rec = MessageRecord(msg.msg_id, name, sender, receiver, msg.tag, bits, msg.priority, now)
+            if self._keep:
+                self.records.append(rec)
+            copies = [(msg, rec)]
             if receiver not in self._receivers:
                 self._drop_copy(copies[0], DROP_NO_RECEIVER)
                 if receiver not in self._warned:
@@ -234,7 +247,7 @@ class Network(abc.ABC):
                 seqs[k] = c.seq
                 copies.append((c, self._record(c)))
         self._order += 1
-        frame = Frame(msg, copies, sender, msg.priority, wire, self._frame_time(wire, sender), self._order)
+        frame = Frame(msg, copies, sender, msg.priority, framing[0], framing[1], self._order)
         self.n_frames += 1
         self.n_copies += len(copies)
         pre = self._pre[sender]
@@ -305,14 +318,18 @@ class Network(abc.ABC):
         """Build the medium's runtime state (called at the end of ``__init__``)."""
 
     def wire_bits(self, msg: Message) -> int:
-        """Bits ``msg`` occupies on the medium; raises ConfigError for messages larger than the medium allows."""
+        """Bits ``msg`` occupies on the medium; raises ConfigError for messages larger than the medium allows.
+
+        The result may depend on ``msg.bits`` only: :meth:`send` computes it once per (bits, sender).
+        """
         mx = self.params.max_frame_bits
         if mx is not None and msg.bits > mx:
             self._too_large(msg, mx)
         return max(msg.bits, self.params.min_frame_bits)
 
     def _frame_time(self, wire_bits: int, sender: str) -> int:
-        """Transmission time of a frame of ``wire_bits`` sent by ``sender``."""
+        """Transmission time of a frame of ``wire_bits`` sent by ``sender`` (computed once per pair, as
+        :meth:`wire_bits`)."""
         return tx_time_ns(wire_bits, self.params.bitrate)
 
     @abc.abstractmethod
@@ -487,7 +504,9 @@ class Transmitter:
         now = entry[0]
         meter = self.meter
         meter.open_since = None  # meter.stop(now), inlined
-        meter.add(start, now)
+        if now > start:  # meter.add(start, now), inlined
+            meter.total += now - start
+            meter._intervals.append((start, now))
         self.busy = False
         self.on_done(frame, start, now)
         if self.queue._len:

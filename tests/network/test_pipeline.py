@@ -258,3 +258,22 @@ def test_params_round_trip_through_their_json_dump(type_name):
     P = network_class(type_name).Params
     p = P.model_validate({**CAN3, "pre_delay": "1.5 us", **extra.get(type_name, {})})
     assert P.model_validate(p.model_dump(mode="json")) == p
+
+
+def test_framing_is_computed_per_size_and_sender_and_an_oversized_message_fails_every_time():
+    env = SimEnv()
+    net = make_network(env, "n", "fdma", {"nodes": ["a", "b", "c"], "bitrate": "100 kbit/s",
+                                          "shares": {"a": 0.5, "b": 0.25}, "max_frame_bits": 1000})
+    for n in ("a", "b", "c"):
+        net.attach(n, type("R", (), {"deliver": lambda self, a, b: None})())
+    for _ in range(2):  # the second send of each size and sender uses what the first computed
+        for sender in ("a", "b"):
+            for bits in (100, 300):
+                net.send(Message(sender, "c", None, bits))
+    env.run(100 * MS)
+    tx = {(r.sender, r.bits): r.tx_end_ns - r.tx_start_ns for r in net.records}
+    # bits / (share * 100 kbit/s), in ns
+    assert tx == {("a", 100): 2 * MS, ("a", 300): 6 * MS, ("b", 100): 4 * MS, ("b", 300): 12 * MS}
+    for _ in range(2):  # an oversized message is refused each time, never remembered as a size that was fine
+        with pytest.raises(ConfigError, match="at most 1000 bits"):
+            net.send(Message("a", "c", None, 2000))
