@@ -4,8 +4,8 @@ Build one with :func:`make_network` (``type_name`` registered under kind ``"netw
 receiver with :meth:`Network.attach`, and let kernels call :meth:`Network.send`. Every medium shares the
 pipeline in :mod:`netsim.network.pipeline`; the modules :mod:`~netsim.network.link`,
 :mod:`~netsim.network.can`, :mod:`~netsim.network.tdma`, :mod:`~netsim.network.csma_cd`,
-:mod:`~netsim.network.ethernet`, :mod:`~netsim.network.round_robin` and :mod:`~netsim.network.fdma` model
-the media.
+:mod:`~netsim.network.ethernet`, :mod:`~netsim.network.round_robin`, :mod:`~netsim.network.fdma` and
+:mod:`~netsim.network.wireless` (IEEE 802.15.4 and 802.11b radios) model the media.
 """
 
 from netsim.network.can import CanBus, can_frame_bits
@@ -22,6 +22,7 @@ from netsim.network.loss import LossSpec
 from netsim.network.records import DROP_REASONS, MessageRecord
 from netsim.network.round_robin import RoundRobinBus
 from netsim.network.tdma import TdmaBus
+from netsim.network.wireless import Ieee80211b, Ieee802154, WirelessMedium
 
 __all__ = [
     "make_network",
@@ -45,4 +46,7 @@ __all__ = [
     "SwitchedEthernet",
     "RoundRobinBus",
     "FdmaMedium",
+    "WirelessMedium",
+    "Ieee802154",
+    "Ieee80211b",
 ]

@@ -17,6 +17,10 @@ __all__ = [
     "DROP_SWITCH_FULL",
     "DROP_COLLISIONS",
     "DROP_NO_RECEIVER",
+    "DROP_OUT_OF_RANGE",
+    "DROP_INTERFERENCE",
+    "DROP_NO_ACK",
+    "DROP_CHANNEL_ACCESS",
     "DROP_REASONS",
 ]
 
@@ -32,6 +36,15 @@ DROP_SWITCH_FULL: Final[str] = "switch_full"
 DROP_COLLISIONS: Final[str] = "collisions"
 #: Addressed to a node on the network that has no receiver attached.
 DROP_NO_RECEIVER: Final[str] = "no_receiver"
+#: Wireless: the power received was below the receiver threshold (a broadcast copy; unicast frames are retried).
+DROP_OUT_OF_RANGE: Final[str] = "out_of_range"
+#: Wireless: other transmissions overlapped the copy (signal-to-interference-and-noise ratio too low), or the
+#: receiver was transmitting itself (a broadcast copy).
+DROP_INTERFERENCE: Final[str] = "interference"
+#: Wireless: no acknowledgement after the last retry.
+DROP_NO_ACK: Final[str] = "no_ack"
+#: Wireless (802.15.4): the channel was busy at every clear channel assessment allowed.
+DROP_CHANNEL_ACCESS: Final[str] = "channel_access"
 #: Every drop reason a network can report.
 DROP_REASONS: Final[tuple[str, ...]] = (
     DROP_LOST,
@@ -40,6 +53,10 @@ DROP_REASONS: Final[tuple[str, ...]] = (
     DROP_SWITCH_FULL,
     DROP_COLLISIONS,
     DROP_NO_RECEIVER,
+    DROP_OUT_OF_RANGE,
+    DROP_INTERFERENCE,
+    DROP_NO_ACK,
+    DROP_CHANNEL_ACCESS,
 )
 
 

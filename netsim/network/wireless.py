@@ -1,0 +1,552 @@
+"""Wireless media: a shared radio channel with path loss, interference, CSMA/CA, acknowledgements and retries.
+
+Two MACs on one radio model (TrueTime's wireless network block offers the same two):
+
+``ieee802154`` (alias ``802.15.4``)
+    Unslotted CSMA/CA of IEEE 802.15.4: wait a random number of unit backoff periods in
+    ``0 .. 2**BE - 1``, then a clear channel assessment (CCA); a busy channel raises ``BE`` (up to
+    ``max_be``) and counts one more backoff, and after ``max_csma_backoffs + 1`` busy CCAs the frame is
+    dropped (``channel_access``). An idle CCA is followed by the receive-to-transmit turnaround, then
+    the frame.
+``ieee80211b`` (alias ``802.11b``)
+    The DCF of IEEE 802.11 (basic access, no RTS/CTS): a node whose frame arrives when the medium has
+    been idle for DIFS sends at once; otherwise, and for every frame after a transmission of its own, it
+    draws a backoff of ``0 .. CW`` slots, counted down only while the medium stays idle after a DIFS
+    (frozen while busy). ``CW`` starts at ``cw_min`` and doubles (``2 CW + 1``, at most ``cw_max``) at
+    every retry.
+
+The radio (both MACs)
+    Nodes stand at ``positions`` (metres; :meth:`WirelessMedium.set_position` moves them during a run).
+    A transmission of power ``P_tx`` (dBm) reaches a node at distance ``d`` with
+    ``P_tx - 10 a log10(max(d, d0) / d0)`` dBm (log-distance path loss, exponent ``a``, TrueTime's
+    ``1/d^a`` with ``d0`` = 1 m). A node senses the medium busy while the powers it receives add up to at
+    least ``receiver_threshold_dbm``, or while it transmits. A copy is received when its power is at least
+    ``receiver_threshold_dbm``, the receiver did not transmit during it (half duplex), and the ratio of
+    its power to the noise plus the largest sum of powers of the other transmissions that overlapped it
+    stayed at least ``sinr_threshold_db``.
+
+Acknowledgements
+    A unicast frame received correctly is acknowledged by the receiver ``ack_delay`` after its end (SIFS or
+    the turnaround), with an ACK frame lasting ``ack_ns`` that occupies the channel like any other
+    transmission (it can collide, and be lost). Without an ACK within ``ack_timeout`` of the frame's end the
+    sender retries, up to ``max_retries`` times, then drops the copy (``no_ack``). A copy is delivered at the
+    end of the first transmission it was received from; the copies of later retransmissions (their ACK
+    was lost) are discarded by the receiver as duplicates. Broadcasts are sent once, without ACK; each
+    receiver that does not get one drops it as ``out_of_range`` or ``interference``.
+
+Frames carry ``phy_overhead`` (time at the start of every frame: preamble and PHY header) and
+``mac_overhead_bits`` (MAC header and checksum) besides the payload. The ``loss`` model of every network
+applies on top, to copies the radio delivered. Random backoffs come from the stream ``network.<name>.backoff``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+from pydantic import Field, model_validator
+
+from netsim.errors import ConfigError
+from netsim.network.message import Message
+from netsim.network.params import NetworkParams
+from netsim.network.pipeline import Copy, Frame, Network
+from netsim.network.records import (
+    DROP_CHANNEL_ACCESS,
+    DROP_INTERFERENCE,
+    DROP_LOST,
+    DROP_NO_ACK,
+    DROP_NO_RECEIVER,
+    DROP_OUT_OF_RANGE,
+    DROP_QUEUE_FULL,
+    DROP_STALE,
+)
+from netsim.network.stats import BusyMeter
+from netsim.network.timing import Call, call_later, tx_time_ns
+from netsim.registry import register
+from netsim.timebase import US
+from netsim.units import Bitrate, Duration, Time
+
+__all__ = ["WirelessMedium", "Ieee802154", "Ieee80211b", "received_dbm"]
+
+
+def received_dbm(tx_dbm: float, distance_m: float, exponent: float, d0: float = 1.0) -> float:
+    """Power (dBm) received at ``distance_m`` from a transmitter of ``tx_dbm``: log-distance path loss.
+
+    >>> received_dbm(0.0, 10.0, 2.0)
+    -20.0
+    """
+    return tx_dbm - 10.0 * exponent * math.log10(max(distance_m, d0) / d0)
+
+
+def _mw(dbm: float) -> float:
+    return 10.0 ** (dbm / 10.0)
+
+
+class WirelessParams(NetworkParams):
+    """What both wireless MACs share: the radio, the frame overheads and acknowledgements."""
+
+    positions: dict[str, tuple[float, float]] = Field(description="node -> [x, y] in metres")
+    transmit_power_dbm: float = 0.0
+    receiver_threshold_dbm: float = -85.0
+    path_loss_exponent: float = Field(3.5, gt=0)
+    reference_distance: float = Field(1.0, gt=0, description="d0 (m): no loss closer than this")
+    noise_dbm: float = -100.0
+    sinr_threshold_db: float = 10.0
+    phy_overhead: Duration = 0
+    mac_overhead_bits: int = Field(0, ge=0)
+    acks: bool = True
+    ack_bits: int = Field(0, ge=0, description="MAC bits of an ACK frame (sent at bitrate, after phy_overhead)")
+    ack_delay: Duration = 0
+    ack_timeout: Duration | None = Field(None, description="default: ack_delay + ACK duration + 1 us")
+    max_retries: int = Field(3, ge=0)
+
+    @model_validator(mode="after")
+    def _check_radio(self) -> "WirelessParams":
+        missing = [n for n in self.nodes if n not in self.positions]
+        if missing:
+            raise ValueError(f"positions: no position for {missing}; give each node [x, y] in metres")
+        extra = [n for n in self.positions if n not in self.nodes]
+        if extra:
+            raise ValueError(f"positions: {extra} not in the network's nodes {self.nodes}")
+        return self
+
+
+class WirelessMedium(Network):
+    """The radio, acknowledgements and retries shared by the wireless MACs (see the module docstring).
+
+    Subclasses implement the channel access: :meth:`_contend` (a frame is at the head of ``node``'s MAC),
+    :meth:`_on_medium_change` (what a node senses may have changed) and :meth:`_after_attempt` (the attempt
+    ended; ``success`` False means a retry is due).
+    """
+
+    Params: ClassVar[type[NetworkParams]] = WirelessParams
+    drop_reasons = (DROP_QUEUE_FULL, DROP_LOST, DROP_STALE, DROP_NO_RECEIVER, DROP_OUT_OF_RANGE,
+                    DROP_INTERFERENCE, DROP_NO_ACK, DROP_CHANNEL_ACCESS)
+
+    def _setup(self) -> None:
+        p: Any = self.params
+        self._meter = self.meters["channel"] = BusyMeter(p.utilization_bin)
+        self._rng = self.env.rng(f"network.{self.name}.backoff")
+        self._pos = {n: (float(x), float(y)) for n, (x, y) in p.positions.items()}
+        self._gain: dict[tuple[str, str], float] = {}  # received power (mW) by (sender, receiver)
+        self._thr = _mw(p.receiver_threshold_dbm)
+        self._noise = _mw(p.noise_dbm)
+        self._sinr = 10.0 ** (p.sinr_threshold_db / 10.0)
+        self._ack_ns = int(p.phy_overhead) + tx_time_ns(p.ack_bits, p.bitrate)
+        self._ack_timeout = (int(p.ack_timeout) if p.ack_timeout is not None
+                             else int(p.ack_delay) + self._ack_ns + 1 * US)
+        if self._ack_timeout < int(p.ack_delay) + self._ack_ns:
+            raise ConfigError(
+                f"network '{self.name}': ack_timeout ({self._ack_timeout} ns) is shorter than ack_delay + the ACK "
+                f"frame ({int(p.ack_delay) + self._ack_ns} ns): no ACK could ever arrive; raise ack_timeout",
+                path=f"networks.{self.name}.ack_timeout")
+        self._active: list[list[Any]] = []  # transmissions on the air: [sender, receptions]
+        self._current: dict[str, Frame | None] = {n: None for n in self.nodes}
+        self._pending: dict[str, list[Copy]] = {}  # copies still waiting for an ACK, per sender
+        self._retries: dict[str, int] = {n: 0 for n in self.nodes}
+        self._ack_wait: dict[str, Call | None] = {n: None for n in self.nodes}
+        self._last_end: dict[str, int] = {}  # end of the last transmission of each node's current frame
+        self._seen: set[tuple[int, str]] = set()  # (msg_id, receiver) delivered: later copies are duplicates
+        self.attempts = 0
+        self.retransmissions = 0
+        self.acks_sent = 0
+        self.duplicates = 0
+        self._mac_setup()
+
+    def _mac_setup(self) -> None:
+        """MAC state (subclasses)."""
+
+    # ------------------------------------------------------------------------------------------ public API
+    def set_position(self, node: str, x: float, y: float) -> None:
+        """Move ``node`` to ``(x, y)`` metres now (transmissions already on the air keep their powers)."""
+        if node not in self._pos:
+            raise ConfigError(f"network '{self.name}': no node '{node}' (nodes: {self.nodes})")
+        self._pos[node] = (float(x), float(y))
+        self._gain.clear()
+
+    def received_power_dbm(self, sender: str, receiver: str) -> float:
+        """Power (dBm) ``receiver`` gets from a transmission of ``sender`` at their current positions."""
+        return 10.0 * math.log10(self._power(sender, receiver))
+
+    # ------------------------------------------------------------------------------------------ framing
+    def wire_bits(self, msg: Message) -> int:
+        return super().wire_bits(msg) + self.params.mac_overhead_bits  # type: ignore[attr-defined]
+
+    def _frame_time(self, wire_bits: int, sender: str) -> int:
+        return int(self.params.phy_overhead) + tx_time_ns(wire_bits, self.params.bitrate)  # type: ignore[attr-defined]
+
+    # ------------------------------------------------------------------------------------------ radio
+    def _power(self, sender: str, receiver: str) -> float:
+        g = self._gain.get((sender, receiver))
+        if g is None:
+            p: Any = self.params
+            (xa, ya), (xb, yb) = self._pos[sender], self._pos[receiver]
+            dbm = received_dbm(p.transmit_power_dbm, math.hypot(xa - xb, ya - yb), p.path_loss_exponent,
+                               p.reference_distance)
+            g = self._gain[(sender, receiver)] = _mw(dbm)
+        return g
+
+    def _transmitting(self, node: str) -> bool:
+        return any(tx[0] == node for tx in self._active)
+
+    def _sensed_busy(self, node: str) -> bool:
+        """Carrier sense at ``node``: it transmits, or the powers it receives reach the threshold."""
+        total = 0.0
+        for tx in self._active:
+            if tx[0] == node:
+                return True
+            total += self._power(tx[0], node)
+        return total >= self._thr
+
+    def _interference(self, receiver: str, tx: list[Any]) -> float:
+        return sum(self._power(o[0], receiver) for o in self._active if o is not tx)
+
+    def _start_tx(self, sender: str, receivers: list[str], duration: int, on_end: Any, arg: Any) -> None:
+        """Put a transmission of ``sender`` on the air for ``duration``; ``on_end(arg, ok)`` gets, at its end,
+        the receivers that received it."""
+        now = self.sim._now
+        for other in self._active:  # the new transmission interferes with every reception under way
+            for rx in other[1]:
+                if rx[0] == sender:
+                    rx[2] = False  # half duplex: the receiver started to transmit
+                else:
+                    rx[1] = max(rx[1], self._interference(rx[0], other) + self._power(sender, rx[0]))
+        tx: list[Any] = [sender, []]
+        for r in receivers:
+            rx = [r, self._interference(r, tx), not self._transmitting(r)]
+            tx[1].append(rx)
+        if not self._active:
+            self._meter.start(now)
+        self._active.append(tx)
+        call_later(self.sim, duration, self._end_tx, (tx, on_end, arg))
+        self._on_medium_change()
+
+    def _end_tx(self, item: tuple) -> None:
+        tx, on_end, arg = item
+        self._active.remove(tx)
+        if not self._active:
+            self._meter.stop(self.sim._now)
+        sender = tx[0]
+        outcome: dict[str, str | None] = {}
+        for r, interf, duplex_ok in tx[1]:
+            signal = self._power(sender, r)
+            if signal < self._thr:
+                outcome[r] = DROP_OUT_OF_RANGE
+            elif not duplex_ok or signal < self._sinr * (self._noise + interf):
+                outcome[r] = DROP_INTERFERENCE
+            else:
+                outcome[r] = None
+        on_end(arg, outcome)
+        self._on_medium_change()
+
+    # ------------------------------------------------------------------------------------------ frames
+    def _offer(self, frame: Frame) -> None:
+        node = frame.sender
+        if self._push(self.queues[node], frame) and self._current[node] is None:
+            self._load(node)
+
+    def _load(self, node: str) -> None:
+        """Take ``node``'s next frame to the MAC (if any) and start its channel access."""
+        q = self.queues[node]
+        if len(q):
+            frame = self._current[node] = q.pop(self.sim._now)
+            self._retries[node] = 0
+            self._pending[node] = list(frame.copies)
+            self._contend(node, first=True)
+
+    def _send_frame(self, node: str) -> None:
+        """The MAC grants the channel: ``node``'s current frame goes on the air now."""
+        frame = self._current[node]
+        assert frame is not None
+        now = self.sim._now
+        if frame.tx_start_ns is None:
+            frame.tx_start_ns = now
+        self.attempts += 1
+        receivers = [c[0].receiver for c in self._pending[node]]
+        self._start_tx(node, receivers, frame.tx_ns, self._frame_end, (node, frame, now))  # type: ignore[arg-type]
+
+    def _frame_end(self, item: tuple, outcome: dict[str, str | None]) -> None:
+        node, frame, start = item
+        now = self.sim._now
+        p: Any = self.params
+        pending = self._pending[node]
+        got = [c for c in pending if outcome.get(c[0].receiver) is None]  # type: ignore[arg-type]
+        fresh = []
+        for c in got:
+            key = (c[0].msg_id, c[0].receiver)
+            if key in self._seen:
+                self.duplicates += 1
+            else:
+                self._seen.add(key)
+                fresh.append(c)
+        if fresh:
+            self._deliver_copies(frame, fresh, now)
+        unicast = frame.msg.receiver is not None
+        self._last_end[node] = now
+        if not (unicast and p.acks):
+            for c in pending:
+                reason = outcome.get(c[0].receiver)  # type: ignore[arg-type]
+                if reason is not None:
+                    self._drop_on_air(c, frame, now, reason)
+            self._finish(node, True)
+            return
+        if got:  # the receiver acknowledges after ack_delay
+            receiver = got[0][0].receiver
+            call_later(self.sim, int(p.ack_delay), self._send_ack, (receiver, node))
+        self._ack_wait[node] = call_later(self.sim, self._ack_timeout, self._ack_timed_out, node)
+
+    def _drop_on_air(self, copy: Copy, frame: Frame, end: int, reason: str) -> None:
+        """Drop a copy that was transmitted (its record keeps the first start and the last end on the air)."""
+        msg, rec = copy
+        msg.tx_start_ns = rec.tx_start_ns = frame.tx_start_ns
+        msg.tx_end_ns = rec.tx_end_ns = end
+        self._drop_copy(copy, reason)
+
+    def _deliver_copies(self, frame: Frame, copies: list[Copy], now: int) -> None:
+        start = frame.tx_start_ns if frame.tx_start_ns is not None else now
+        self._transmitted(Frame(frame.msg, copies, frame.sender, frame.priority, frame.wire_bits, frame.tx_ns,
+                                frame.order, tx_start_ns=start), start, now)
+
+    def _send_ack(self, item: tuple) -> None:
+        receiver, sender = item
+        self.acks_sent += 1
+        self._start_tx(receiver, [sender], self._ack_ns, self._ack_end, sender)
+
+    def _ack_end(self, sender: str, outcome: dict[str, str | None]) -> None:
+        wait = self._ack_wait[sender]
+        if outcome.get(sender) is None and wait is not None and wait.live:
+            wait.cancel()
+            self._ack_wait[sender] = None
+            self._finish(sender, True)
+
+    def _ack_timed_out(self, node: str) -> None:
+        self._ack_wait[node] = None
+        p: Any = self.params
+        if self._retries[node] >= p.max_retries:
+            frame = self._current[node]
+            assert frame is not None
+            for c in self._pending[node]:
+                if (c[0].msg_id, c[0].receiver) not in self._seen:
+                    self._drop_on_air(c, frame, self._last_end[node], DROP_NO_ACK)
+            self._finish(node, False)
+            return
+        self._retries[node] += 1
+        self.retransmissions += 1
+        self._after_attempt(node, False)
+
+    def _finish(self, node: str, success: bool) -> None:
+        """The current frame of ``node`` is done (acknowledged, broadcast, or given up)."""
+        self._current[node] = None
+        self._pending.pop(node, None)
+        self._after_attempt(node, True)
+        self._load(node)
+
+    def _give_up_access(self, node: str) -> None:
+        """Channel access failed: drop the current frame's copies (``channel_access``) and go on."""
+        for c in self._pending.get(node, []):
+            self._drop_copy(c, DROP_CHANNEL_ACCESS)
+        self._current[node] = None
+        self._pending.pop(node, None)
+        self._load(node)
+
+    # ------------------------------------------------------------------------------------------ MAC hooks
+    def _contend(self, node: str, first: bool) -> None:
+        raise NotImplementedError
+
+    def _on_medium_change(self) -> None:
+        """What the nodes sense may have changed (a transmission started or ended)."""
+
+    def _after_attempt(self, node: str, done: bool) -> None:
+        """``done``: the frame is finished (the next one, if any, is loaded after this); else retry it."""
+        if not done:
+            self._contend(node, first=False)
+
+    def _extra_metrics(self, t_end_ns: int) -> dict[str, float]:
+        return {"attempts": float(self.attempts), "retransmissions": float(self.retransmissions),
+                "acks": float(self.acks_sent), "duplicates": float(self.duplicates)}
+
+
+@register("network", "ieee802154", "IEEE 802.15.4 radio: unslotted CSMA/CA, path loss, interference, ACK and retries")
+@register("network", "802.15.4", "IEEE 802.15.4 radio (same as 'ieee802154')")
+class Ieee802154(WirelessMedium):
+    """IEEE 802.15.4 (2.4 GHz O-QPSK PHY defaults), unslotted CSMA/CA (see the module docstring)."""
+
+    class Params(WirelessParams):
+        """802.15.4 defaults: 250 kbit/s, 16 us symbols, 127-byte PSDU (116 bytes of payload)."""
+
+        bitrate: Bitrate = 250_000.0
+        max_frame_bits: int | None = Field(928, gt=0)
+        phy_overhead: Duration = 192 * US  # preamble, SFD and PHY header: 6 bytes at 250 kbit/s
+        mac_overhead_bits: int = Field(88, ge=0)  # frame control, sequence, short addresses, PAN id, FCS
+        ack_bits: int = Field(40, ge=0)  # 5-byte ACK frame
+        ack_delay: Duration = 192 * US  # aTurnaroundTime, 12 symbols
+        ack_timeout: Duration | None = 864 * US  # macAckWaitDuration, 54 symbols
+        max_retries: int = Field(3, ge=0)  # macMaxFrameRetries
+        unit_backoff: Duration = 320 * US  # aUnitBackoffPeriod, 20 symbols
+        cca_time: Duration = 128 * US  # 8 symbols
+        turnaround: Duration = 192 * US
+        min_be: int = Field(3, ge=0, le=20)
+        max_be: int = Field(5, ge=0, le=20)
+        max_csma_backoffs: int = Field(4, ge=0)
+
+        @model_validator(mode="after")
+        def _check_be(self) -> "Ieee802154.Params":
+            if self.min_be > self.max_be:
+                raise ValueError(f"min_be ({self.min_be}) is larger than max_be ({self.max_be})")
+            return self
+
+    def _mac_setup(self) -> None:
+        self._nb = {n: 0 for n in self.nodes}
+        self._be = {n: 0 for n in self.nodes}
+        self.busy_ccas = 0
+
+    def _contend(self, node: str, first: bool) -> None:
+        p: Any = self.params
+        self._nb[node] = 0
+        self._be[node] = p.min_be
+        self._backoff(node)
+
+    def _backoff(self, node: str) -> None:
+        p: Any = self.params
+        slots = int(self._rng.integers(0, 1 << self._be[node]))
+        call_later(self.sim, slots * int(p.unit_backoff) + int(p.cca_time), self._cca, node)
+
+    def _cca(self, node: str) -> None:
+        p: Any = self.params
+        if not self._sensed_busy(node):
+            call_later(self.sim, int(p.turnaround), self._transmit, node)
+            return
+        self.busy_ccas += 1
+        self._nb[node] += 1
+        self._be[node] = min(self._be[node] + 1, p.max_be)
+        if self._nb[node] > p.max_csma_backoffs:
+            self._give_up_access(node)
+        else:
+            self._backoff(node)
+
+    def _transmit(self, node: str) -> None:
+        self._send_frame(node)
+
+    def _extra_metrics(self, t_end_ns: int) -> dict[str, float]:
+        return {**super()._extra_metrics(t_end_ns), "busy_ccas": float(self.busy_ccas)}
+
+
+@register("network", "ieee80211b", "IEEE 802.11b radio: DCF (CSMA/CA with frozen backoff), path loss, ACK and retries")
+@register("network", "802.11b", "IEEE 802.11b radio (same as 'ieee80211b')")
+class Ieee80211b(WirelessMedium):
+    """IEEE 802.11b (DSSS, long preamble defaults) with the DCF's basic access (see the module docstring)."""
+
+    class Params(WirelessParams):
+        """802.11b defaults: 11 Mbit/s data, 192 us PLCP preamble and header, 2304-byte payload at most."""
+
+        bitrate: Bitrate = 11_000_000.0
+        max_frame_bits: int | None = Field(18432, gt=0)
+        transmit_power_dbm: float = 20.0
+        receiver_threshold_dbm: float = -82.0
+        phy_overhead: Duration = 192 * US
+        mac_overhead_bits: int = Field(272, ge=0)  # 34-byte MAC header and FCS
+        ack_bits: int = Field(112, ge=0)  # 14-byte ACK frame
+        ack_delay: Duration = 10 * US  # SIFS
+        ack_timeout: Duration | None = None
+        max_retries: int = Field(7, ge=0)  # dot11ShortRetryLimit
+        slot: Duration = 20 * US
+        sifs: Duration = 10 * US
+        cw_min: int = Field(31, ge=0)
+        cw_max: int = Field(1023, ge=0)
+
+        @model_validator(mode="after")
+        def _check_cw(self) -> "Ieee80211b.Params":
+            if self.cw_min > self.cw_max:
+                raise ValueError(f"cw_min ({self.cw_min}) is larger than cw_max ({self.cw_max})")
+            return self
+
+    def _mac_setup(self) -> None:
+        p: Any = self.params
+        self._difs = int(p.sifs) + 2 * int(p.slot)
+        self._slot = int(p.slot)
+        self._cw = {n: p.cw_min for n in self.nodes}
+        self._bo: dict[str, int | None] = {n: None for n in self.nodes}  # backoff slots left (None: none drawn)
+        self._timer: dict[str, Call | None] = {n: None for n in self.nodes}
+        self._count_from: dict[str, int] = {n: 0 for n in self.nodes}
+        # when each node's medium went idle (None while sensed busy); before the run it was idle for a DIFS
+        self._idle_since: dict[str, int | None] = {n: -self._difs for n in self.nodes}
+        self._post_backoff: dict[str, bool] = {n: False for n in self.nodes}
+        self._contending: set[str] = set()
+
+    def _contend(self, node: str, first: bool) -> None:
+        p: Any = self.params
+        now = self.sim._now
+        idle = self._idle_since[node]
+        if first and not self._post_backoff[node] and idle is not None and now - idle >= self._difs:
+            self._bo[node] = None
+            self._send_frame(node)  # the medium has been idle for DIFS: immediate access
+            return
+        if not first:
+            self._cw[node] = min(2 * self._cw[node] + 1, p.cw_max)
+        if self._bo[node] is None:
+            self._bo[node] = int(self._rng.integers(0, self._cw[node] + 1))
+        self._contending.add(node)
+        self._arm(node)
+
+    def _arm(self, node: str) -> None:
+        """Count the backoff down from now if the medium is idle (after a DIFS), else stay frozen."""
+        if self._timer[node] is not None or self._sensed_busy(node):
+            return
+        self._count_from[node] = self.sim._now
+        slots = self._bo[node] or 0
+        self._timer[node] = call_later(self.sim, self._difs + slots * self._slot, self._backoff_done, node)
+
+    def _freeze(self, node: str) -> None:
+        timer = self._timer[node]
+        if timer is None:
+            return
+        timer.cancel()
+        self._timer[node] = None
+        counted = (self.sim._now - self._count_from[node] - self._difs) // self._slot
+        if counted > 0:
+            self._bo[node] = max(0, self._bo[node] - counted)  # type: ignore[operator]
+
+    def _backoff_done(self, node: str) -> None:
+        self._timer[node] = None
+        self._contending.discard(node)
+        self._bo[node] = None
+        if self._current[node] is None:  # a post-backoff with nothing to send: the node may access at once
+            self._post_backoff[node] = False
+            return
+        self._post_backoff[node] = False
+        self._send_frame(node)
+
+    def _on_medium_change(self) -> None:
+        now = self.sim._now
+        for n in self.nodes:
+            busy = self._sensed_busy(n)
+            if busy:
+                self._idle_since[n] = None
+            elif self._idle_since[n] is None:
+                self._idle_since[n] = now
+        for n in sorted(self._contending):
+            if self._sensed_busy(n):
+                self._freeze(n)
+            else:
+                self._arm(n)
+
+    def _after_attempt(self, node: str, done: bool) -> None:
+        p: Any = self.params
+        if done:  # success or given up: CW resets and a post-transmission backoff starts
+            self._cw[node] = p.cw_min
+            self._post_backoff[node] = True
+            self._bo[node] = int(self._rng.integers(0, self._cw[node] + 1))
+            self._contending.add(node)
+            self._arm(node)
+        else:
+            self._contend(node, first=False)
+
+    def _load(self, node: str) -> None:
+        q = self.queues[node]
+        if len(q) and self._current[node] is None:
+            frame = self._current[node] = q.pop(self.sim._now)
+            self._retries[node] = 0
+            self._pending[node] = list(frame.copies)
+            if self._post_backoff[node]:
+                return  # the post-transmission backoff under way sends this frame when it ends
+            self._contend(node, first=True)
