@@ -49,6 +49,27 @@ def test_networked_servo_sample_to_actuation_latency_is_3_5_ms(scenario, tmp_pat
     assert {p.name for p in (tmp_path / "run").glob("*.png")} == {"responses.png", "schedule.png", "network.png"}
 
 
+def test_servo_on_an_802154_radio_has_latency_within_the_csma_ca_bounds(tmp_path):
+    result = run("scenarios/dc_servo_zigbee.yaml", out=tmp_path / "run", overrides={"duration": "1 s"})
+    assert result.ok
+    ch = _chains(result.jobs, result.messages)
+    assert len(ch) == 100
+    # per hop (802.15.4 defaults): backoff 0..7 x 320 us, CCA 128 us, turnaround 192 us, then 192 us of PHY
+    # overhead + (80 payload + 88 MAC) bits at 250 kbit/s = 864 us on the air
+    hop_min = (128 + 192 + 864) * 1e-6
+    hop_max = hop_min + 7 * 320e-6
+    for hop in (ch.recv_y - ch.sent_y, ch.recv_u - ch.sent_u):
+        assert hop.min() >= hop_min - 1e-12 and hop.max() <= hop_max + 1e-12
+        # the backoff slots are whole multiples of 320 us
+        slots = np.round((hop - hop_min) / 320e-6)
+        np.testing.assert_allclose(hop, hop_min + slots * 320e-6, atol=1e-12)
+        assert slots.nunique() > 1  # random backoffs: the latency varies, unlike on CAN
+    # sensor 0.5 ms, controller 0.5 ms, actuator 0.5 ms around the two hops
+    lat = ch.act_finish - ch["sample"]
+    assert lat.min() >= 1.5 * MS + 2 * hop_min - 1e-12 and lat.max() <= 1.5 * MS + 2 * hop_max + 1e-12
+    assert result.metrics["net.bus.dropped"] == 0 and result.metrics["net.bus.retransmissions"] == 0
+
+
 def test_interference_delays_and_eventually_starves_the_loop():
     share = {"nodes.interference.tasks[0].params.share": 0.5, "duration": "1 s"}
     half = run("scenarios/dc_servo_can.yaml", write=False, overrides=share)
