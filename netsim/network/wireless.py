@@ -41,6 +41,7 @@ applies on top, to copies the radio delivered. Random backoffs come from the str
 
 from __future__ import annotations
 
+import abc
 import math
 from typing import Any, ClassVar
 
@@ -64,7 +65,7 @@ from netsim.network.stats import BusyMeter
 from netsim.network.timing import Call, call_later, tx_time_ns
 from netsim.registry import register
 from netsim.timebase import US
-from netsim.units import Bitrate, Duration, Time
+from netsim.units import Bitrate, Duration
 
 __all__ = ["WirelessMedium", "Ieee802154", "Ieee80211b", "received_dbm"]
 
@@ -252,7 +253,11 @@ class WirelessMedium(Network):
             frame = self._current[node] = q.pop(self.sim._now)
             self._retries[node] = 0
             self._pending[node] = list(frame.copies)
-            self._contend(node, first=True)
+            self._start_access(node)
+
+    def _start_access(self, node: str) -> None:
+        """A new frame is at the head of ``node``'s MAC."""
+        self._contend(node, first=True)
 
     def _send_frame(self, node: str) -> None:
         """The MAC grants the channel: ``node``'s current frame goes on the air now."""
@@ -350,8 +355,9 @@ class WirelessMedium(Network):
         self._load(node)
 
     # ------------------------------------------------------------------------------------------ MAC hooks
+    @abc.abstractmethod
     def _contend(self, node: str, first: bool) -> None:
-        raise NotImplementedError
+        """Start the channel access for ``node``'s current frame (``first``: its first attempt)."""
 
     def _on_medium_change(self) -> None:
         """What the nodes sense may have changed (a transmission started or ended)."""
@@ -541,12 +547,6 @@ class Ieee80211b(WirelessMedium):
         else:
             self._contend(node, first=False)
 
-    def _load(self, node: str) -> None:
-        q = self.queues[node]
-        if len(q) and self._current[node] is None:
-            frame = self._current[node] = q.pop(self.sim._now)
-            self._retries[node] = 0
-            self._pending[node] = list(frame.copies)
-            if self._post_backoff[node]:
-                return  # the post-transmission backoff under way sends this frame when it ends
+    def _start_access(self, node: str) -> None:
+        if not self._post_backoff[node]:  # else the post-transmission backoff under way sends it when it ends
             self._contend(node, first=True)

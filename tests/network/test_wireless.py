@@ -5,11 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from netsim.env import stream_seed
 from netsim.errors import ConfigError
-from netsim.network import make_network
+from netsim.network import Message, make_network
 from netsim.network.wireless import received_dbm
-from netsim.env import SimEnv
+from netsim.env import SimEnv, stream_seed
 from netsim.timebase import MS, US
 
 
@@ -166,5 +165,4 @@ def test_bad_wireless_parameters_are_named():
         net = make_network(SimEnv(), "n", "802.15.4", _line(0, 1))
         for n in ("a", "b"):
             net.attach(n, type("R", (), {"deliver": lambda self, a, b: None})())
-        from netsim.network import Message
         net.send(Message("a", "b", None, 1000))
