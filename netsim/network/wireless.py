@@ -271,7 +271,7 @@ class WirelessMedium(Network):
         self._start_tx(node, receivers, frame.tx_ns, self._frame_end, (node, frame, now))  # type: ignore[arg-type]
 
     def _frame_end(self, item: tuple, outcome: dict[str, str | None]) -> None:
-        node, frame, start = item
+        node, frame, _start = item
         now = self.sim._now
         p: Any = self.params
         pending = self._pending[node]
@@ -293,7 +293,7 @@ class WirelessMedium(Network):
                 reason = outcome.get(c[0].receiver)  # type: ignore[arg-type]
                 if reason is not None:
                     self._drop_on_air(c, frame, now, reason)
-            self._finish(node, True)
+            self._finish(node)
             return
         if got:  # the receiver acknowledges after ack_delay
             receiver = got[0][0].receiver
@@ -322,7 +322,7 @@ class WirelessMedium(Network):
         if outcome.get(sender) is None and wait is not None and wait.live:
             wait.cancel()
             self._ack_wait[sender] = None
-            self._finish(sender, True)
+            self._finish(sender)
 
     def _ack_timed_out(self, node: str) -> None:
         self._ack_wait[node] = None
@@ -333,13 +333,13 @@ class WirelessMedium(Network):
             for c in self._pending[node]:
                 if (c[0].msg_id, c[0].receiver) not in self._seen:
                     self._drop_on_air(c, frame, self._last_end[node], DROP_NO_ACK)
-            self._finish(node, False)
+            self._finish(node)
             return
         self._retries[node] += 1
         self.retransmissions += 1
         self._after_attempt(node, False)
 
-    def _finish(self, node: str, success: bool) -> None:
+    def _finish(self, node: str) -> None:
         """The current frame of ``node`` is done (acknowledged, broadcast, or given up)."""
         self._current[node] = None
         self._pending.pop(node, None)
@@ -516,11 +516,9 @@ class Ieee80211b(WirelessMedium):
         self._timer[node] = None
         self._contending.discard(node)
         self._bo[node] = None
-        if self._current[node] is None:  # a post-backoff with nothing to send: the node may access at once
-            self._post_backoff[node] = False
-            return
         self._post_backoff[node] = False
-        self._send_frame(node)
+        if self._current[node] is not None:  # else nothing to send: the next frame may access at once
+            self._send_frame(node)
 
     def _on_medium_change(self) -> None:
         now = self.sim._now
