@@ -95,20 +95,6 @@ class SwitchedEthernet(Network):
     def _store(self, frame: Frame) -> None:
         bits = frame.wire_bits
         copies = frame.copies
-        if len(copies) == 1:
-            # a unicast frame (the loop below for one copy): it goes on as it is, since it carries exactly this
-            # copy, if it fits (self._fits inlined)
-            port = copies[0][0].receiver
-            cap = self._cap_total
-            used_port = self._used_port
-            if (cap is None or (self._used + bits <= cap if self._common
-                                else used_port[port] + bits <= (self._cap_port or 0))):  # type: ignore[index]
-                self._used = used = self._used + bits
-                used_port[port] += bits  # type: ignore[index]
-                if used > self.memory_max:
-                    self.memory_max = used
-                self._down[port].offer(frame)  # type: ignore[index]
-                return
         failed: list[Copy] = []
         unicast = len(copies) == 1
         for copy in copies:
