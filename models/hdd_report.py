@@ -35,8 +35,8 @@ PAPER = pd.DataFrame(
     columns=["case", "Nsc", "Nca", "Uc", "Ua", "Cc_pct", "ISE", "ISEP", "NE"],
 )
 
-_COLS = {"Nsc": "Nsc", "Nca": "Nca", "Uc": "Uc", "Ua": "Ua", "Cc_pct": "Cc", "ISE": "ISE", "ISEP": "ISEP",
-         "NE": "NE", "GPI": "GPI"}
+_COLS = {"Nsc": "et.Nsc", "Nca": "et.Nca", "Uc": "et.Uc", "Ua": "et.Ua", "Cc_pct": "et.Cc", "ISE": "et.ISE",
+         "ISEP": "et.ISEP", "NE": "et.NE", "GPI": "et.GPI"}
 
 REASONS = {
     1: "ISE 4.16 vs 3.75: the reference is not stated (we use a unit step at t = 0) and our plant reading "

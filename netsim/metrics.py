@@ -41,7 +41,31 @@ __all__ = [
     "count_messages",
     "et_control",
     "EtControlParams",
+    "ET_PREFIX",
+    "LEGACY_METRIC_NAMES",
+    "canonical_metric_names",
 ]
+
+#: Scope of the loop-level measures of :func:`et_control` (metric names are ``<scope>.<measure>``).
+ET_PREFIX = "et"
+
+#: Metric names written by older versions (before the ``<scope>.<measure>`` rule) -> today's names.
+LEGACY_METRIC_NAMES: dict[str, str] = {
+    name: f"{ET_PREFIX}.{name}"
+    for name in ("N_TTS", "Nsc", "Nca", "Uc", "Ua", "CS", "Cc", "ISE_own", "ISE", "ISEP", "NE", "GPI")
+}
+
+
+def canonical_metric_names(values: dict[str, float]) -> dict[str, float]:
+    """``values`` with legacy metric names (:data:`LEGACY_METRIC_NAMES`) renamed to today's names.
+
+    A name that exists under both spellings keeps today's value.
+    """
+    out = {LEGACY_METRIC_NAMES.get(k, k): v for k, v in values.items() if k not in LEGACY_METRIC_NAMES}
+    for old, new in LEGACY_METRIC_NAMES.items():
+        if old in values and new not in out:
+            out[new] = values[old]
+    return out
 
 
 def ise(r, y) -> float:
@@ -171,11 +195,18 @@ def _et_params(params: Any) -> EtControlParams:
                                                      for p in problems)) from None
 
 
-@register("metric", "et_control", "Uc, Ua, Cc, CS, ISE, ISEP, NE, GPI of Cuenca et al. eqs (20)-(29)")
+@register("metric", "et_control", "et.Uc, et.Ua, et.Cc, et.CS, et.ISE, et.ISEP, et.NE, et.GPI of Cuenca et al. "
+         "eqs (20)-(29)")
 def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[str, float]:
     """Metrics of an event-triggered run (``params``: :class:`EtControlParams`) against an optional TTS baseline.
 
-    ``N_TTS`` (default) is the number of whole periods in the run, counted in integer nanoseconds.
+    The names are ``et.<measure>`` (see :data:`LEGACY_METRIC_NAMES` for the unprefixed names of older run
+    folders): ``et.N_TTS`` (by default the number of whole periods in the run, counted in integer nanoseconds),
+    ``et.Nsc``, ``et.Nca`` (transmissions sensor->controller and controller->actuator in those periods),
+    ``et.Uc``, ``et.Ua`` (eqs 26-27), ``et.CS`` (eq 20), ``et.Cc`` (eq 28), ``et.ISE`` (eq 23, of the TTS
+    baseline when there is one), ``et.ISE_own`` (eq 23 of this run), ``et.ISEP`` (eq 24), ``et.NE`` (eq 25)
+    and ``et.GPI`` (eq 29). Eq (23) is a root of a sum over samples, not the time integral ``<y>.ISE`` of
+    :func:`netsim.runtime_metrics.control_error`.
     """
     p = _et_params(params)
     sig = result.signals
@@ -210,7 +241,7 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
         res["ISEP"] = 0.0
     res["NE"] = sampling_efficiency(res["ISEP"], res["ISE"])
     res["GPI"] = gpi(uc, ua, res["NE"], p.weights)
-    return res
+    return {f"{ET_PREFIX}.{k}": v for k, v in res.items()}
 
 
 et_control.Params = EtControlParams  # type: ignore[attr-defined]

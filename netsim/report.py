@@ -64,17 +64,17 @@ log = logging.getLogger(__name__)
 
 #: (metric name in metrics.csv, column in the utilization table)
 UTILIZATION_COLUMNS: list[tuple[str, str]] = [
-    ("Nsc", "Nsc_count"),
-    ("Nca", "Nca_count"),
-    ("N_TTS", "NTTS_count"),
-    ("Uc", "Uc_ratio"),
-    ("Ua", "Ua_ratio"),
-    ("Cc", "Cc_pct"),
-    ("CS", "CS_pct"),
-    ("ISE", "ISE"),
-    ("ISEP", "ISEP"),
-    ("NE", "NE_ratio"),
-    ("GPI", "GPI"),
+    ("et.Nsc", "Nsc_count"),
+    ("et.Nca", "Nca_count"),
+    ("et.N_TTS", "NTTS_count"),
+    ("et.Uc", "Uc_ratio"),
+    ("et.Ua", "Ua_ratio"),
+    ("et.Cc", "Cc_pct"),
+    ("et.CS", "CS_pct"),
+    ("et.ISE", "ISE"),
+    ("et.ISEP", "ISEP"),
+    ("et.NE", "NE_ratio"),
+    ("et.GPI", "GPI"),
 ]
 TASK_COLUMNS = [
     "case", "node", "task", "jobs_count", "cpu_time_s", "cpu_util_ratio", "response_mean_s", "response_std_s",
@@ -142,7 +142,10 @@ def _metrics(folder: Path) -> dict[str, float]:
     if not path.exists():
         return {}
     frame = pd.read_csv(path)
-    return {str(k): float(v) for k, v in zip(frame["metric"], frame["value"])}
+    from netsim.metrics import canonical_metric_names
+
+    # run folders of older versions used unprefixed names (Nsc, GPI, ...): read them under today's names
+    return canonical_metric_names({str(k): float(v) for k, v in zip(frame["metric"], frame["value"])})
 
 
 def _read(folder: Path, name: str) -> pd.DataFrame:

@@ -52,13 +52,13 @@ def test_et_control_counts_messages_by_tag_and_compares_with_baseline():
     base = _result([0.0, 0.5, 1.0, 1.0], [("y", k + 0.1) for k in range(4)] + [("u", k + 0.2) for k in range(4)])
     run = _result([0.0, 0.5, 0.8, 0.9], [("y", 0.1), ("y", 2.1), ("u", 0.2), ("y", 4.1)])  # 4.1: past N_TTS T
     m = et_control(run, {"period": T}, base)
-    assert (m["N_TTS"], m["Nsc"], m["Nca"]) == (4, 2, 1)
-    assert m["Uc"] == pytest.approx(0.5) and m["Ua"] == pytest.approx(0.25)
-    assert m["ISE"] == pytest.approx(np.sqrt(1 + 0.25))  # the baseline's ISE, eq (23)
-    assert m["ISEP"] == pytest.approx(np.sqrt(0.04 + 0.01))  # eq (24)
-    assert m["NE"] == pytest.approx(m["ISEP"] / m["ISE"])
-    assert m["Cc"] == pytest.approx(0.5 * (2 / 3) * 100)
-    assert m["GPI"] == pytest.approx(0.45 * 0.5 + 0.45 * 0.25 + 0.1 * m["NE"])
+    assert (m["et.N_TTS"], m["et.Nsc"], m["et.Nca"]) == (4, 2, 1)
+    assert m["et.Uc"] == pytest.approx(0.5) and m["et.Ua"] == pytest.approx(0.25)
+    assert m["et.ISE"] == pytest.approx(np.sqrt(1 + 0.25))  # the baseline's ISE, eq (23)
+    assert m["et.ISEP"] == pytest.approx(np.sqrt(0.04 + 0.01))  # eq (24)
+    assert m["et.NE"] == pytest.approx(m["et.ISEP"] / m["et.ISE"])
+    assert m["et.Cc"] == pytest.approx(0.5 * (2 / 3) * 100)
+    assert m["et.GPI"] == pytest.approx(0.45 * 0.5 + 0.45 * 0.25 + 0.1 * m["et.NE"])
 
 
 def test_et_control_reports_unknown_parameters_and_missing_signals():

@@ -164,3 +164,15 @@ def test_unknown_folder_or_report_name_is_refused(tmp_path: Path) -> None:
     (tmp_path / "empty").mkdir()
     with pytest.raises(ConfigError, match="is not a run folder"):
         report(tmp_path / "empty", plots=False)
+
+
+def test_run_folders_with_legacy_metric_names_read_like_todays(tmp_path: Path) -> None:
+    # before the <scope>.<measure> rule, et_control wrote "Uc", "GPI", ...; today it writes "et.Uc", "et.GPI"
+    old = _fake_run(tmp_path / "b" / "old", name="old", uc=0.5, gpi=0.4)
+    new = _fake_run(tmp_path / "b" / "new", name="new", uc=0.5, gpi=0.4)
+    frame = pd.read_csv(new / "metrics.csv")
+    frame["metric"] = [m if m.startswith("cpu.") else f"et.{m}" for m in frame["metric"]]
+    frame.to_csv(new / "metrics.csv", index=False)
+    util = report(tmp_path / "b", plots=False)["utilization"].set_index("case")
+    assert (util.loc["new", "Uc_ratio"], util.loc["new", "GPI"]) == (0.5, 0.4)
+    assert util.loc["old"].drop("status").equals(util.loc["new"].drop("status"))

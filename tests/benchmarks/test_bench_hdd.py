@@ -96,10 +96,10 @@ def test_bench_hdd_cases_and_tts_vs_numpy():
           f"plain numpy loop {t_np * 1e3:.2f} ms, reference_loop.simulate_loop {t_ref * 1e3:.2f} ms")
     print(f"  ratio simulation / numpy loop {t_sim / t_np:.1f}x, / simulate_loop {t_sim / t_ref:.1f}x; "
           f"ratio run() / numpy loop {t_run / t_np:.1f}x, / simulate_loop {t_run / t_ref:.1f}x "
-          f"(ISE netsim {float(res1.metrics['ISE']):.6f} vs numpy {ise_np:.6f})")
+          f"(ISE netsim {float(res1.metrics['et.ISE']):.6f} vs numpy {ise_np:.6f})")
     # the ratio compares like with like only if both loops computed the same closed loop: the TTS ISE of eq (23)
     # from netsim must equal the one of the plain loop written in this file
-    assert float(res1.metrics["ISE"]) == pytest.approx(ise_np, rel=1e-9)
+    assert float(res1.metrics["et.ISE"]) == pytest.approx(ise_np, rel=1e-9)
 
 
 @pytest.mark.benchmark

@@ -32,50 +32,50 @@ def test_case1_equals_the_plain_numpy_loop(cases):
     side = ControlSide(MrciController(decompose(m.controller_num, m.controller_den, m=2)), lambda k: 1.0)
     tr = simulate_loop(m.Ap, m.Bp, m.Cp, side, TimeTriggered(), 464, reference=lambda k: 1.0)
     ise_np = float(np.sqrt(np.sum((1.0 - tr.y) ** 2)))  # independent: the ideal discrete loop
-    assert _m(cases[1], "ISE") == pytest.approx(ise_np, rel=1e-9)
-    assert (_m(cases[1], "Uc"), _m(cases[1], "Ua")) == (1.0, 1.0)
-    assert _m(cases[1], "Cc") == pytest.approx(200 / 3)  # eq (28) with CS = 1/3: paper Cc = 66 %
+    assert _m(cases[1], "et.ISE") == pytest.approx(ise_np, rel=1e-9)
+    assert (_m(cases[1], "et.Uc"), _m(cases[1], "et.Ua")) == (1.0, 1.0)
+    assert _m(cases[1], "et.Cc") == pytest.approx(200 / 3)  # eq (28) with CS = 1/3: paper Cc = 66 %
 
 
 def test_petc_alone_cuts_utilization_but_worsens_ne(cases):
-    assert _m(cases[2], "Uc") < 1.0 and _m(cases[2], "Ua") < _m(cases[2], "Uc")
-    assert _m(cases[2], "NE") > 0.1
+    assert _m(cases[2], "et.Uc") < 1.0 and _m(cases[2], "et.Ua") < _m(cases[2], "et.Uc")
+    assert _m(cases[2], "et.NE") > 0.1
 
 
 def test_numre_cuts_utilization_further_and_restores_performance(cases):
-    assert _m(cases[3], "Uc") < _m(cases[2], "Uc")
-    assert _m(cases[3], "Ua") < _m(cases[2], "Ua")
-    assert _m(cases[3], "NE") < 0.5 * _m(cases[2], "NE")
+    assert _m(cases[3], "et.Uc") < _m(cases[2], "et.Uc")
+    assert _m(cases[3], "et.Ua") < _m(cases[2], "et.Ua")
+    assert _m(cases[3], "et.NE") < 0.5 * _m(cases[2], "et.NE")
 
 
 def test_numre_reproduces_tts_output_when_every_packet_is_sent():
     res = run(SCEN / "hdd_case3.yaml", write=False,
               overrides={"nodes.controller.tasks[0].params.controller_et": False})
-    assert _m(res, "Uc") < 0.5
-    assert _m(res, "NE") < 0.01  # exact model, no noise: only the h-horizon and K(N) corrections remain
+    assert _m(res, "et.Uc") < 0.5
+    assert _m(res, "et.NE") < 0.01  # exact model, no noise: only the h-horizon and K(N) corrections remain
 
 
 def test_noise_and_disturbance_raise_utilization(cases):
-    assert _m(cases[4], "Uc") > _m(cases[3], "Uc")
+    assert _m(cases[4], "et.Uc") > _m(cases[3], "et.Uc")
 
 
 def test_narrower_thresholds_raise_utilization_and_lower_ne(cases):
-    assert _m(cases[5], "Uc") > _m(cases[4], "Uc")
-    assert _m(cases[5], "Ua") > _m(cases[4], "Ua")
-    assert _m(cases[5], "NE") < _m(cases[4], "NE")
+    assert _m(cases[5], "et.Uc") > _m(cases[4], "et.Uc")
+    assert _m(cases[5], "et.Ua") > _m(cases[4], "et.Ua")
+    assert _m(cases[5], "et.NE") < _m(cases[4], "et.NE")
 
 
 def test_transmission_counts_come_from_the_messages_table(cases):
     res = cases[3]
     msgs = res.messages
     T = 20e-6
-    assert _m(res, "Nsc") == int(((msgs["tag"] == "y") & (msgs["sent_s"] < 464 * T)).sum())
-    assert _m(res, "Nca") == int(((msgs["tag"] == "u") & (msgs["sent_s"] < 464 * T)).sum())
+    assert _m(res, "et.Nsc") == int(((msgs["tag"] == "y") & (msgs["sent_s"] < 464 * T)).sum())
+    assert _m(res, "et.Nca") == int(((msgs["tag"] == "u") & (msgs["sent_s"] < 464 * T)).sum())
 
 
 def test_short_duration_override_runs(cases):
     res = run(SCEN / "hdd_case4.yaml", write=False, overrides={"duration": "1 ms"})
-    assert _m(res, "N_TTS") == 50
+    assert _m(res, "et.N_TTS") == 50
 
 
 @pytest.fixture(scope="module")
@@ -88,13 +88,13 @@ def test_dob_case_performs_close_to_known_model_case(cases, case6):
     # in the previous case" (paper NE 1 % vs 2 %), "a similar computation saving" (Uc 0.78 vs 0.73) "but
     # sending around 15% more packets from controller to actuator" (Nca 315 vs 231).
     assert case6.meta.get("status") == "ok", case6.meta.get("error")
-    assert _m(case6, "NE") < 1.5 * _m(cases[5], "NE")
-    assert abs(_m(case6, "Uc") - _m(cases[5], "Uc")) < 0.1
-    assert _m(case6, "Ua") > _m(cases[5], "Ua")
+    assert _m(case6, "et.NE") < 1.5 * _m(cases[5], "et.NE")
+    assert abs(_m(case6, "et.Uc") - _m(cases[5], "et.Uc")) < 0.1
+    assert _m(case6, "et.Ua") > _m(cases[5], "et.Ua")
 
 
 def test_dob_improves_on_the_plant_only_estimator(case6):
     # Without the DOB the plant-only NUMRE has no disturbance estimate at all (d_hat = 0).
     res = run(SCEN / "hdd_case6.yaml", write=False,
               overrides={"nodes.controller.tasks[0].params.design_params.dob": False})
-    assert _m(case6, "NE") < 0.5 * _m(res, "NE")
+    assert _m(case6, "et.NE") < 0.5 * _m(res, "et.NE")
