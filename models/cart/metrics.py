@@ -12,6 +12,14 @@ Over the *stationary* part of the run -- the last 0.7 m of the 1 m, after 0.3 m 
     one-sample timing relaxation, ``Ev_jmap0`` without it -- our samples have no timing jitter).
 ``events_per_tfilter``
     Encoder events (edges at the controller's resolution) per ``Tfilter`` in the stationary part.
+``Ev_half1``, ``Ev_half2``
+    ``Ev`` (true velocity) over the first and the second half of the stationary part (0.3-0.65 m and
+    0.65-1 m): the paper's Fig. 1 shows the tracking degrading in the later half.
+``v_rms_stop``
+    The stop phase: RMS of the true velocity (m/s) over ``STOP_WINDOW`` = [0.5 s, 1.0 s] after the cart first
+    reaches the end of the run (the reference steps to zero there, within one encoder step). A loop that
+    comes to rest gives 0 (or a few mm/s of a decaying stick-slip); a sustained oscillation gives a sizable
+    fraction of ``vref``. NaN when the run ends before the window does.
 
 Undefined cases give NaN with a flag instead of a division by zero: ``vref = 0`` (``defined = 0``) and a
 cart that does not reach the end of the run within the duration (``reached = 0``).
@@ -25,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["STARTUP", "DISTANCE", "cart_metrics", "stationary_mask"]
+__all__ = ["STARTUP", "DISTANCE", "STOP_WINDOW", "cart_metrics", "stationary_mask", "stop_rms"]
 
 log = logging.getLogger(__name__)
 
@@ -33,10 +41,12 @@ log = logging.getLogger(__name__)
 STARTUP = 0.3
 #: Length of the run (m).
 DISTANCE = 1.0
+#: Window of the stop phase, in seconds after the cart reaches ``DISTANCE`` (``v_rms_stop``).
+STOP_WINDOW = (0.5, 1.0)
 
 _KEYS = (
     "sigma_u", "mean_u", "std_u", "Ev", "Ev_est", "Ev_jmap", "Ev_jmap0", "Ev_startup", "events_per_tfilter",
-    "reached", "t_reach", "defined", "n_stationary",
+    "Ev_half1", "Ev_half2", "v_rms_stop", "reached", "t_reach", "defined", "n_stationary",
 )
 
 
@@ -48,6 +58,27 @@ def stationary_mask(p: np.ndarray, startup: float = STARTUP, distance: float = D
     mask = np.zeros(len(p), dtype=bool)
     mask[:end] = p[:end] >= startup
     return mask
+
+
+def stop_rms(t: np.ndarray, v: np.ndarray, t_reach: float, window: tuple[float, float] = STOP_WINDOW) -> float:
+    """RMS of ``v`` over ``t_reach + window[0] <= t < t_reach + window[1]`` (NaN if ``t`` ends before the window).
+
+    Parameters
+    ----------
+    t, v
+        Sample times (s) and true velocity (m/s).
+    t_reach
+        When the cart reached the end of the run (s).
+    window
+        Start and end of the window after ``t_reach`` (s).
+    """
+    t = np.asarray(t, dtype=float)
+    if not math.isfinite(t_reach) or t.size == 0 or t[-1] < t_reach + window[1] - 1e-9:
+        return math.nan
+    sel = (t >= t_reach + window[0] - 1e-9) & (t < t_reach + window[1] - 1e-9)
+    vv = np.asarray(v, dtype=float)[sel]
+    vv = vv[np.isfinite(vv)]
+    return float(np.sqrt(np.mean(vv**2))) if vv.size else math.nan
 
 
 def _rms_rel(v: np.ndarray, vref: float) -> float:
@@ -118,6 +149,11 @@ def cart_metrics(
     out["sigma_u"] = out["std_u"] / out["mean_u"] if out["mean_u"] != 0.0 else math.nan
     vv = np.asarray(v, dtype=float)
     out["Ev"] = _rms_rel(vv[mask], vref)
+    pp = p
+    mid = 0.5 * (startup + distance)
+    out["Ev_half1"] = _rms_rel(vv[mask & (pp < mid)], vref)
+    out["Ev_half2"] = _rms_rel(vv[mask & (pp >= mid)], vref)
+    out["v_rms_stop"] = stop_rms(t, vv, out["t_reach"])
     start = (p < startup) & (np.cumsum(p >= startup) == 0)
     out["Ev_startup"] = _rms_rel(vv[start], vref)
     if v_hat is not None:

@@ -48,7 +48,7 @@ def test_breakaway_needs_command_above_friction():
 
 
 def test_friction_varies_faster_at_the_far_end_and_is_reproducible():
-    params = FrictionParams()
+    params = FrictionParams(model="modes6")
     fr = Friction.draw(params, seed=3)
     assert np.array_equal(fr.levels(np.linspace(0, 1, 50)), Friction.draw(params, seed=3).levels(np.linspace(0, 1, 50)))
     assert not np.array_equal(fr.freqs, Friction.draw(params, seed=4).freqs)
@@ -58,6 +58,28 @@ def test_friction_varies_faster_at_the_far_end_and_is_reproducible():
     assert (fr.phase(1 + eps) - fr.phase(1)) / eps == pytest.approx(40.0, rel=1e-4)
     lv = fr.levels(np.linspace(0, 1, 20001))
     assert lv.mean() == pytest.approx(2.0, rel=0.15) and lv.min() >= 0.2 - 1e-12
+
+
+def test_default_friction_is_the_inband_model_inside_the_loop_bandwidth():
+    fr = Friction.draw(FrictionParams(), seed=1)
+    assert fr.params.model == "inband" and fr.params.wavelength == 3.3 and fr.params.modes == 1
+    # omega(p) = 2 pi v f (1 + gamma p) / lambda0 with f in [0.9, 1.1], v = 0.8, gamma = 9, lambda0 = 3.3:
+    # 2 pi 0.8 0.9 3.7 / 3.3 = 5.07 at 0.3 m, 2 pi 0.8 1.1 10 / 3.3 = 16.8 at 1 m
+    lo, hi = fr.omega_range(0.8, 0.3, 1.0)
+    assert 5.07 - 1e-9 <= lo and hi <= 16.8 and hi / lo == pytest.approx(10.0 / 3.7)
+    # the modes6 model varies at 2 pi 0.8 0.5 1.9 / 0.1 = 47.8 rad/s or faster: above every crossover tested
+    assert Friction.draw(FrictionParams(model="modes6"), seed=1).omega_range(0.8, 0.3, 1.0)[0] >= 47.7
+    # one unit-RMS mode: the level's RMS variation along many wavelengths is a = 30 % of F0 = 2
+    p = np.linspace(0.0, 30.0, 300001)
+    assert np.std(fr.levels(p)) == pytest.approx(0.6, rel=0.02)
+
+
+def test_friction_preset_fields_can_be_overridden_and_unknown_models_are_refused():
+    assert FrictionParams(model="modes6", wavelength=0.2).wavelength == 0.2
+    assert FrictionParams(model="modes6").modes == 6
+    assert Friction.draw(FrictionParams(model="constant"), seed=5).levels(np.array([0.1, 0.9])).tolist() == [2.0, 2.0]
+    with pytest.raises(ValueError, match="inband"):
+        FrictionParams(model="sixmodes")
 
 
 class _Constant(CartController):
