@@ -18,6 +18,43 @@ releases, timers, network transmissions, the plant's recording grid) are *call e
 superseded one). They cost no event object and no callback list; simpy events and processes still work
 beside them, in the same order of (time, priority, id). simpy's own ``Environment.step``/``run`` cannot
 process call entries: run the loop with :func:`run_events` (or :meth:`SimEnv.run`).
+
+Same-instant order
+------------------
+Entries due at the same time run by priority (lower first), then in the order they were scheduled. Every
+priority used at one instant is in this one table; kernel, networks and plants import it:
+
+=====================  =  =================================================================================
+:data:`URGENT`         0  set-up at the start of the run (kernel checks, the plant's first grid sample) and
+                          simpy's own process starts and interrupts
+:data:`NORMAL`         1  everything that *happens* at the instant: periodic releases, timers, sleeps ending,
+                          ends of execute segments, ends of transmissions, interface delays, deliveries,
+                          the plant's grid samples; simpy's timeouts and triggered events
+:data:`DISPATCH`       2  the kernel's deferred dispatch (and the end of a periodic-load window): the CPU is
+                          given away once every release of the instant is known
+:data:`ARBITRATE`      3  media deciding who sends (CAN arbitration, CSMA/CD contention, TDMA slot starts,
+                          token visits, priority queues of serial outputs)
+:data:`DEADLINE`       4  deadline checks
+=====================  =  =================================================================================
+
+Why this order:
+
+- Releases before dispatch: a job released at *t* competes for the CPU at *t* (DESIGN.md, section 2).
+- Dispatch before arbitration: a task released at *t* whose code sends a frame at *t* (zero-time code at
+  the start of its segment) has its frame queued when the medium decides at *t* (TrueTime: a frame queued at
+  the instant the bus goes idle takes part in the arbitration; issue 13 B). A transmission ending at *t* is
+  NORMAL, so the frames it leaves waiting take part too.
+- Arbitration before deadline checks: a job finishing at *t* meets a deadline at *t* (response-time
+  analysis counts ``R <= D`` as met), even when it finishes after a message that arrives at *t*.
+- Work created while an instant is processed needs no special care: a new entry at the current time goes
+  into the same heap, so anything a dispatch or an arbitration starts at *t* at a lower priority (a release
+  by a delivery, a further dispatch, a zero-length transmission) still runs before the remaining
+  higher-priority entries of *t*. The medium decides only when nothing of lower priority is left at *t*.
+  The invariant to keep: nothing that can change who competes at *t* may be scheduled at *t* with a
+  priority above the decision that needs it.
+
+URGENT and NORMAL equal simpy's :data:`simpy.events.URGENT` and :data:`simpy.events.NORMAL`, so simpy events
+and call entries interleave by the same table.
 """
 
 from __future__ import annotations
@@ -25,12 +62,28 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass, field
 from heapq import heappop, heappush
-from typing import Any, Callable
+from typing import Any, Callable, Final
 
 import numpy as np
 import simpy
+import simpy.events
 
-__all__ = ["SimEnv", "Recorder", "stream_seed", "schedule_call", "run_events", "CallEntry"]
+
+__all__ = [
+    "SimEnv", "Recorder", "stream_seed", "schedule_call", "run_events", "CallEntry",
+    "URGENT", "NORMAL", "DISPATCH", "ARBITRATE", "DEADLINE",
+]
+
+#: Set-up at the start of the run; simpy's process starts and interrupts (simpy's URGENT).
+URGENT: Final[int] = simpy.events.URGENT
+#: Releases, timers, sleeps, segment ends, transmission ends, deliveries, plant samples (simpy's NORMAL).
+NORMAL: Final[int] = simpy.events.NORMAL
+#: The kernel's deferred dispatch: after every release of the instant.
+DISPATCH: Final[int] = NORMAL + 1
+#: Medium decisions (arbitration, contention, slot starts): after every dispatch of the instant.
+ARBITRATE: Final[int] = DISPATCH + 1
+#: Deadline checks: after everything that can finish a job at the instant.
+DEADLINE: Final[int] = ARBITRATE + 1
 
 #: A call entry: ``(time_ns, priority, event_id, fn, arg)``; ``fn`` is called with the entry itself.
 CallEntry = tuple[int, int, int, Callable[[Any], None], Any]

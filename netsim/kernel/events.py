@@ -1,21 +1,20 @@
-"""Priorities of the kernel's own wake-ups (segment ends, releases, timers, sleeps, dispatches).
+"""Priorities of the kernel's own wake-ups (segment ends, releases, timers, sleeps, dispatches, deadlines).
 
 Each wake-up is a call entry ``(time, priority, id, callback, value)`` on simpy's heap
 (:func:`netsim.env.schedule_call`; hot paths push the tuple inline): no event object, no simpy process.
 The callback receives the entry; ``entry[4]`` is the job, timer or task it concerns, and the entry itself
-tells a superseded wake-up from the current one. The kernel uses three priorities at one instant:
-:data:`NORMAL` (1) for segment ends, releases, timers and sleeps; :data:`DISPATCH` (2) for the deferred
-dispatch, so that every release of an instant is processed before the CPU is given away; :data:`DEADLINE` (3)
-for deadline checks, so that a job finishing exactly at its deadline meets it.
+tells a superseded wake-up from the current one.
+
+The priorities are the run's one same-instant table, defined (and explained) in :mod:`netsim.env` and
+re-exported here for the kernel: :data:`NORMAL` for segment ends, releases, timers and sleeps;
+:data:`DISPATCH` for the deferred dispatch, so that every release of an instant is processed before the CPU
+is given away; :data:`DEADLINE` for deadline checks, so that a job finishing exactly at its deadline meets
+it. Media arbitrate at :data:`~netsim.env.ARBITRATE`, between the two, so that a frame sent by a job
+dispatched at an instant takes part in that instant's arbitration.
 """
 
 from __future__ import annotations
 
-from netsim.env import schedule_call
+from netsim.env import DEADLINE, DISPATCH, NORMAL, URGENT, schedule_call
 
 __all__ = ["schedule_call", "NORMAL", "DISPATCH", "DEADLINE", "URGENT"]
-
-URGENT = 0
-NORMAL = 1
-DISPATCH = 2
-DEADLINE = 3

@@ -94,7 +94,7 @@ class CanBus(Network):
     def _request_arbitration(self) -> None:
         if not self._busy and not self._arb_pending:
             self._arb_pending = True
-            call_later(self.sim, 0, self._arbitrate, None, late=True)
+            call_later(self.sim, 0, self._arbitrate, None, arbitrate=True)
 
     def _arbitrate(self, _: object) -> None:
         self._arb_pending = False

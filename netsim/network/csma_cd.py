@@ -72,7 +72,7 @@ class CsmaCdBus(Network):
     def _request(self) -> None:
         if not self._pending:
             self._pending = True
-            call_later(self.sim, 0, self._contend, None, late=True)
+            call_later(self.sim, 0, self._contend, None, arbitrate=True)
 
     def _contend(self, _: Any) -> None:
         self._pending = False

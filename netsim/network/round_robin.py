@@ -72,7 +72,7 @@ class RoundRobinBus(Network):
             if self._next[0] <= best:
                 return
             self._next[1].cancel()
-        self._next = (best, call_later(self.sim, best[0] - now, self._visit, best_j, late=True))
+        self._next = (best, call_later(self.sim, best[0] - now, self._visit, best_j, arbitrate=True))
 
     def _visit(self, j: int) -> None:
         self._next = None

@@ -20,7 +20,7 @@ from netsim.network.message import Message
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Frame, Network
 from netsim.network.stats import BusyMeter
-from netsim.network.timing import late_event, tx_time_ns
+from netsim.network.timing import arbitration_event, tx_time_ns
 from netsim.registry import register
 from netsim.units import Duration
 
@@ -111,7 +111,7 @@ class TdmaBus(Network):
             s, _ = self.window(node, sim._now)
             if s > sim._now:
                 yield sim.timeout(s - sim._now)
-            yield late_event(sim)  # frames queued at this very instant compete
+            yield arbitration_event(sim)  # frames queued at this very instant compete
             if not len(q):
                 continue
             frame = q.pop(sim._now)

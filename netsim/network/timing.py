@@ -1,28 +1,27 @@
 """Small event helpers shared by the network models: scheduled calls and transmission times.
 
 Networks are driven by call entries on simpy's heap (see :mod:`netsim.env`) rather than by one process per
-message, which keeps the cost per message to one or two heap operations. :data:`LATE` is a simpy event
-priority below ``NORMAL``: an event scheduled with it at time *t* runs after every ordinary event at *t*,
-including those created while *t* is being processed. Media arbitrate at ``LATE`` so that every frame
-queued "in the same instant" takes part (CAN priority arbitration, CSMA/CD collisions of simultaneous
-starts, TDMA slot starts).
+message, which keeps the cost per message to one or two heap operations. Their priorities come from the
+run's one same-instant table (:mod:`netsim.env`): ends of transmissions, interface delays and deliveries
+are ``NORMAL``; media decide who sends at ``ARBITRATE``, which runs after every ordinary event *and every
+kernel dispatch* at *t*, including those created while *t* is being processed. So every frame queued "in
+the same instant" takes part, also one sent by a task released at *t* (CAN priority arbitration, CSMA/CD
+collisions of simultaneous starts, TDMA slot starts, token visits, priority queues of serial outputs).
 """
 
 from __future__ import annotations
 
 import math
 from heapq import heappush
-from typing import Any, Callable, Final
+from typing import Any, Callable
 
 import simpy
-from simpy.events import NORMAL, Event
+from simpy.events import Event
 
+from netsim.env import ARBITRATE, NORMAL
 from netsim.timebase import S
 
-__all__ = ["LATE", "Call", "call_later", "late_event", "tx_time_ns"]
-
-#: simpy priority of end-of-instant events (after URGENT=0 and NORMAL=1).
-LATE: Final[int] = 2
+__all__ = ["Call", "call_later", "arbitration_event", "tx_time_ns"]
 
 
 def _run(entry: tuple) -> None:
@@ -49,12 +48,16 @@ class Call:
 
 
 def call_later(
-    sim: simpy.Environment, delay_ns: int, fn: Callable[[Any], None], arg: Any = None, *, late: bool = False
+    sim: simpy.Environment, delay_ns: int, fn: Callable[[Any], None], arg: Any = None, *, arbitrate: bool = False
 ) -> Call:
-    """Call ``fn(arg)`` after ``delay_ns`` (0: later in this instant); ``late`` runs it at the end of that instant."""
+    """Call ``fn(arg)`` after ``delay_ns`` (0: later in this instant).
+
+    ``arbitrate`` runs it at ``ARBITRATE`` priority: after every release, delivery and dispatch of that
+    instant (see :mod:`netsim.env`), for a medium's decision among the frames queued by then.
+    """
     if delay_ns < 0:
         raise ValueError(f"negative delay {delay_ns} ns")
-    return Call(sim, delay_ns, fn, arg, LATE if late else NORMAL)
+    return Call(sim, delay_ns, fn, arg, ARBITRATE if arbitrate else NORMAL)
 
 
 def tx_time_ns(bits: int, rate_bps: float) -> int:
@@ -71,10 +74,10 @@ def tx_time_ns(bits: int, rate_bps: float) -> int:
     return max(1, math.ceil(bits * S / rate_bps - 1e-6))
 
 
-def late_event(sim: simpy.Environment, delay_ns: int = 0) -> Event:
-    """An event (for a process to yield) processed at the end of the instant ``now + delay_ns``."""
+def arbitration_event(sim: simpy.Environment, delay_ns: int = 0) -> Event:
+    """An event (for a process to yield) processed at ``ARBITRATE`` priority at ``now + delay_ns``."""
     ev = Event(sim)
     ev._ok = True
     ev._value = None
-    sim.schedule(ev, LATE, delay_ns)
+    sim.schedule(ev, ARBITRATE, delay_ns)
     return ev

@@ -1,0 +1,162 @@
+"""Same-instant order through the real kernel: a frame sent at the instant a medium goes idle takes part.
+
+The issue's case (issue 13 B): on CAN, L (id 3) holds the bus until 4.0 ms, M (id 2) waits since 1 ms, and H
+(id 1) is sent at exactly 4.0 ms by a task released then. The arbitration at 4.0 ms must see H: H first.
+The order must not depend on how the task's release at 4.0 ms was scheduled (an entry pushed before or after
+the end of L's frame), so every test runs the sender of the urgent frame in three ways:
+
+``offset``  a periodic task whose first release is at 4.0 ms (its release entry exists before the run);
+``period``  a periodic task of period 2 ms that sends only in its job released at 4.0 ms (that release entry
+            is pushed at 2.0 ms, after the end of L's frame was scheduled);
+``sleep``   a task released at 3.0 ms that sleeps until 4.0 ms, then sends (its wake-up is pushed at 3.0 ms,
+            after every other entry of 4.0 ms: ends of frames, slot starts, token visits).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from netsim.env import SimEnv
+from netsim.kernel import Kernel
+from netsim.network import make_network
+from netsim.timebase import MS, US
+
+ROUTES = ["offset", "period", "sleep"]
+T_IDLE = 4 * MS  # the instant the medium goes idle and the urgent frame is sent
+
+
+def _sender_at(kernel: Kernel, route: str, net: str, to: str, bits: int, priority: int, tag: str) -> None:
+    """A task on ``kernel`` that sends one frame at exactly ``T_IDLE``, released there by ``route``."""
+    if route == "offset":
+        def body(job):
+            yield job.send(net, to, tag, bits, priority=priority, tag=tag)
+
+        kernel.create_task(tag, body, period=100 * MS, offset=T_IDLE, priority=1)
+    elif route == "period":
+        def body(job):
+            if job.now == T_IDLE:
+                yield job.send(net, to, tag, bits, priority=priority, tag=tag)
+
+        kernel.create_task(tag, body, period=2 * MS, priority=1)
+    else:
+        def body(job):
+            yield job.sleep_until(T_IDLE)
+            yield job.send(net, to, tag, bits, priority=priority, tag=tag)
+
+        kernel.create_task(tag, body, period=100 * MS, offset=3 * MS, priority=1)
+
+
+def _send_once(kernel: Kernel, at: int, net: str, to: str, bits: int, priority: int, tag: str) -> None:
+    def body(job):
+        yield job.send(net, to, tag, bits, priority=priority, tag=tag)
+
+    kernel.create_task(tag, body, period=100 * MS, offset=at, priority=2)
+
+
+def _build(net_type: str, nodes: list[str], params: dict[str, Any]) -> tuple[SimEnv, Any, dict[str, Kernel],
+                                                                              list[tuple[int, str]]]:
+    """Kernels on ``nodes`` + a receiving kernel ``rx`` whose task logs (time, tag) of every arrival."""
+    env = SimEnv(seed=1)
+    net = make_network(env, "net", net_type, {"nodes": [*nodes, "rx"], **params})
+    kernels = {n: Kernel(env, n, policy="fp") for n in [*nodes, "rx"]}
+    for n, k in kernels.items():
+        k.attach_network(net)
+        net.attach(n, k)
+    got: list[tuple[int, str]] = []
+
+    def receiver(job):
+        msg = yield job.receive("net")
+        got.append((job.now, msg.tag))
+
+    kernels["rx"].create_task("receive", receiver, priority=1)
+    kernels["rx"].bind_receive("net", "receive")
+    return env, net, kernels, got
+
+
+def _spans(net: Any) -> dict[str, tuple[int, int]]:
+    return {r.tag: (r.tx_start_ns, r.tx_end_ns) for r in net.records}
+
+
+@pytest.mark.parametrize("route", ROUTES)
+def test_can_frame_sent_as_the_bus_goes_idle_wins_the_arbitration(route):
+    # 500 kbit/s: 2 us per bit. L: 2000 bits = 4.0 ms on [0, 4.0]; M (queued at 1 ms): 1000 bits = 2.0 ms;
+    # H (sent at 4.0 ms): 500 bits = 1.0 ms. The arbitration at 4.0 ms sees M and H; H (id 1) beats M (id 2):
+    # H on [4.0, 5.0] ms, then M on [5.0, 7.0] ms (M first would be M [4, 6], H [6, 7]).
+    env, net, k, got = _build("can", ["L", "M", "H"], {"bitrate": "500 kbit/s"})
+    _send_once(k["L"], 0, "net", "rx", 2000, 3, "L")
+    _send_once(k["M"], 1 * MS, "net", "rx", 1000, 2, "M")
+    _sender_at(k["H"], route, "net", "rx", 500, 1, "H")
+    env.run(10 * MS)
+    assert _spans(net) == {"L": (0, 4 * MS), "H": (4 * MS, 5 * MS), "M": (5 * MS, 7 * MS)}
+    assert got == [(4 * MS, "L"), (5 * MS, "H"), (7 * MS, "M")]
+
+
+@pytest.mark.parametrize("route", ROUTES)
+@pytest.mark.parametrize("net_type", ["ethernet", "fdma"])
+def test_priority_queue_of_a_serial_output_sees_a_frame_sent_as_it_goes_idle(net_type, route):
+    # One sender 'a' with a priority sender queue, on its own output (Ethernet uplink; FDMA: a's sub-channel,
+    # half of 2 Mbit/s with two senders 'a' and 'rx' sharing equally). 1 Mbit/s on a's output: 1 us per bit.
+    # 'busy' (4000 bits = 4.0 ms) holds the output on [0, 4.0] ms; 'low' (priority 5, 1000 bits) waits since
+    # 1 ms; 'high' (priority 1, 1000 bits) is sent at 4.0 ms. 'high' goes on [4.0, 5.0], then 'low' [5.0, 6.0].
+    rate = "1 Mbit/s" if net_type == "ethernet" else "2 Mbit/s"
+    params: dict[str, Any] = {"bitrate": rate, "queue_discipline": "priority", "min_frame_bits": 0}
+    if net_type == "ethernet":
+        params["max_frame_bits"] = None
+    env, net, k, got = _build(net_type, ["a"], params)
+    _send_once(k["a"], 0, "net", "rx", 4000, 9, "busy")
+    _send_once(k["a"], 1 * MS, "net", "rx", 1000, 5, "low")
+    _sender_at(k["a"], route, "net", "rx", 1000, 1, "high")
+    env.run(20 * MS)
+    spans = _spans(net)
+    assert spans["busy"][0] == 0 and spans["high"][0] == 4 * MS and spans["low"][0] == 5 * MS
+    assert [tag for _, tag in got] == ["busy", "high", "low"]
+
+
+@pytest.mark.parametrize("route", ROUTES)
+def test_tdma_slot_start_sees_a_frame_sent_at_that_instant(route):
+    # 1 Mbit/s (1 us per bit), slot 2 ms, schedule [a, rx]: a owns [0, 2), [4, 6) ... ms. 'fill' (2000 bits =
+    # 2.0 ms) fills a's slot [0, 2); 'low' (priority 5, 1000 bits = 1.0 ms) waits since 1 ms; a's next slot
+    # starts at 4.0 ms, where 'high' (priority 1, 1000 bits) is sent: 'high' on [4.0, 5.0], 'low' on [5.0, 6.0].
+    env, net, k, got = _build("tdma", ["a"], {"bitrate": "1 Mbit/s", "slot": "2 ms", "schedule": ["a", "rx"],
+                                              "queue_discipline": "priority"})
+    _send_once(k["a"], 0, "net", "rx", 2000, 9, "fill")
+    _send_once(k["a"], 1 * MS, "net", "rx", 1000, 5, "low")
+    _sender_at(k["a"], route, "net", "rx", 1000, 1, "high")
+    env.run(20 * MS)
+    assert _spans(net) == {"fill": (0, 2 * MS), "high": (4 * MS, 5 * MS), "low": (5 * MS, 6 * MS)}
+    assert got == [(2 * MS, "fill"), (5 * MS, "high"), (6 * MS, "low")]
+
+
+@pytest.mark.parametrize("route", ROUTES)
+def test_round_robin_visit_sees_a_frame_sent_as_the_token_arrives(route):
+    # 1 Mbit/s, token_pass 1 ms, token order [a, rx]. 'fill' (2000 bits) goes at 0 on [0, 2.0] ms; the token
+    # reaches rx at 3.0 (rx has nothing) and a again at 4.0 ms, where a holds 'low' (priority 5, queued at 1 ms)
+    # and 'high' (priority 1, 1000 bits = 1.0 ms) is sent: 'high' on [4.0, 5.0]; the token is at rx at 6.0 and
+    # back at a at 7.0 ms: 'low' on [7.0, 8.0].
+    env, net, k, got = _build("round_robin", ["a"], {"bitrate": "1 Mbit/s", "token_pass": "1 ms",
+                                                     "queue_discipline": "priority"})
+    _send_once(k["a"], 0, "net", "rx", 2000, 9, "fill")
+    _send_once(k["a"], 1 * MS, "net", "rx", 1000, 5, "low")
+    _sender_at(k["a"], route, "net", "rx", 1000, 1, "high")
+    env.run(20 * MS)
+    assert _spans(net) == {"fill": (0, 2 * MS), "high": (4 * MS, 5 * MS), "low": (7 * MS, 8 * MS)}
+    assert got == [(2 * MS, "fill"), (5 * MS, "high"), (8 * MS, "low")]
+
+
+@pytest.mark.parametrize("route", ROUTES)
+@pytest.mark.parametrize("window", ["0 s", "1 us"])
+def test_csma_cd_frame_sent_as_the_medium_goes_idle_collides_with_the_waiting_one(window, route):
+    # 1 Mbit/s. L (4000 bits) on [0, 4.0] ms; M (1000 bits, queued at 1 ms) waits for the medium; H sends at
+    # 4.0 ms. M and H both start when the medium goes idle at 4.0 ms, so they collide (TrueTime's model: nodes
+    # waiting for the medium start together): exactly one collision, after which each draws one backoff.
+    # With collision_window 0 only starts at the very same instant collide, so this needs H's frame to be
+    # at the MAC when the medium is contended at 4.0 ms; with 1 us it collides even if M started first.
+    env, net, k, got = _build("csma_cd", ["L", "M", "H"], {"bitrate": "1 Mbit/s", "collision_window": window})
+    _send_once(k["L"], 0, "net", "rx", 4000, 0, "L")
+    _send_once(k["M"], 1 * MS, "net", "rx", 1000, 0, "M")
+    _sender_at(k["H"], route, "net", "rx", 1000, 0, "H")
+    env.run(50 * MS)
+    assert (net.collisions, net.backoffs) == (1, 2)
+    assert sorted(tag for _, tag in got) == ["H", "L", "M"]
