@@ -16,7 +16,9 @@ returns, and writes as CSV into ``out`` (default ``<DIR>/report/``):
 ``tasks``
     One row per case and task (from ``jobs.csv``): ``case, node, task, jobs_count, cpu_time_s,
     cpu_util_ratio`` (CPU time / run duration), ``response_mean_s, response_std_s, response_min_s,
-    response_p95_s, response_max_s, deadline_misses_count, preemptions_count, killed_count``.
+    response_p95_s, response_max_s`` (completed jobs only: killed and unfinished jobs have no response time),
+    ``deadline_misses_count`` (finished late, unfinished past the deadline, or killed), ``preemptions_count,
+    killed_count, pending_count`` (unfinished and not yet due at the end: neither met nor missed).
 ``networks``
     One row per case and network (from ``messages.csv``; one row there per receiver copy):
     ``case, network, messages_count, delivered_count, dropped_count, loss_ratio, bits_total,
@@ -46,6 +48,7 @@ import numpy as np
 import pandas as pd
 
 from netsim.errors import ConfigError
+from netsim.runtime_metrics import job_outcome_counts
 
 __all__ = [
     "report",
@@ -79,7 +82,7 @@ UTILIZATION_COLUMNS: list[tuple[str, str]] = [
 TASK_COLUMNS = [
     "case", "node", "task", "jobs_count", "cpu_time_s", "cpu_util_ratio", "response_mean_s", "response_std_s",
     "response_min_s", "response_p95_s", "response_max_s", "deadline_misses_count", "preemptions_count",
-    "killed_count",
+    "killed_count", "pending_count",
 ]
 NETWORK_COLUMNS = [
     "case", "network", "messages_count", "delivered_count", "dropped_count", "loss_ratio", "bits_total",
@@ -203,19 +206,20 @@ def task_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame
             continue
         duration = _duration_s(folder, _meta(folder))
         for (node, task), g in jobs.groupby(["node", "task"], sort=True):
-            response = pd.to_numeric(g["response_s"], errors="coerce").to_numpy(float)
+            response = pd.to_numeric(g["response_s"], errors="coerce")
+            if "killed" in g:  # folders of older versions gave killed jobs a response time: a killed job has none
+                response = response.where(~_as_bool(g["killed"]))
             cpu = float(pd.to_numeric(g["cpu_time_s"], errors="coerce").fillna(0.0).sum())
-            mean, std, lo, p95, hi = _stats(response)
-            met = _as_bool(g["deadline_met"]) if "deadline_met" in g else pd.Series(True, index=g.index)
-            has_deadline = pd.to_numeric(g.get("deadline_s"), errors="coerce").notna() if "deadline_s" in g else met
+            mean, std, lo, p95, hi = _stats(response.to_numpy(float))
+            counts = job_outcome_counts(g)  # the run's one deadline rule (netsim.kernel.records.deadline_verdict)
             rows.append({
                 "case": case, "node": node, "task": task, "jobs_count": int(len(g)), "cpu_time_s": cpu,
                 "cpu_util_ratio": cpu / duration if duration > 0 else math.nan,
                 "response_mean_s": mean, "response_std_s": std, "response_min_s": lo, "response_p95_s": p95,
-                "response_max_s": hi, "deadline_misses_count": int((~met & has_deadline).sum()),
+                "response_max_s": hi, "deadline_misses_count": counts["missed"] + counts["killed"],
                 "preemptions_count": int(pd.to_numeric(g.get("preemptions"), errors="coerce").fillna(0).sum())
                 if "preemptions" in g else 0,
-                "killed_count": int(_as_bool(g["killed"]).sum()) if "killed" in g else 0,
+                "killed_count": counts["killed"], "pending_count": counts["pending"],
             })
     return pd.DataFrame(rows, columns=TASK_COLUMNS)
 

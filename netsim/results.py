@@ -8,7 +8,11 @@ A :class:`RunResult` holds
     before its first sample.
 ``jobs``
     one row per job: ``node, task, job_id, release_s, start_s, finish_s, response_s, deadline_s,
-    deadline_met, preemptions, cpu_time_s, killed`` (empty cells for jobs unfinished at the end).
+    deadline_met, preemptions, cpu_time_s, killed, outcome`` (empty cells for jobs unfinished at the end;
+    ``response_s`` is empty for killed jobs too). ``deadline_met`` and ``outcome`` follow one rule,
+    :func:`netsim.kernel.records.deadline_verdict`: ``outcome`` is ``met``, ``missed`` (finished late, or
+    unfinished with its deadline at or before the end), ``killed`` (a miss too), ``pending`` (unfinished and
+    not yet due: neither met nor missed) or ``done`` (finished, no deadline).
 ``messages``
     one row per message copy: ``msg_id, network, sender, receiver, tag, bits, priority, sent_s,
     tx_start_s, delivered_s, dropped, drop_reason, delay_s, tx_end_s``.
@@ -70,6 +74,7 @@ JOB_COLUMNS = [
     "preemptions",
     "cpu_time_s",
     "killed",
+    "outcome",
 ]
 MESSAGE_COLUMNS = [
     "msg_id",
@@ -198,8 +203,11 @@ def jobs_table(records: Iterable[Any], node: str | None = None) -> pd.DataFrame:
             "cpu_time_s": _ns_column(col("cpu_time", 0)),
             "killed": [bool(v) for v in col("killed", False)],
         },
-        columns=JOB_COLUMNS,
+        columns=JOB_COLUMNS[:-1],
     )
+    from netsim.kernel.records import job_outcome  # lazily: importing netsim.kernel loads simpy
+
+    frame["outcome"] = [job_outcome(d, k, m) for d, k, m in zip(col("deadline"), frame["killed"], col("deadline_met"))]
     return frame
 
 

@@ -44,10 +44,36 @@ __all__ = [
     "chain_latencies",
     "chain_latencies_ns",
     "compute_metrics",
+    "job_outcome_counts",
     "held_integrals",
     "ControlErrorParams",
     "LatencyParams",
 ]
+
+
+def job_outcome_counts(jobs: pd.DataFrame) -> dict[str, int]:
+    """Jobs per outcome (``met, missed, killed, pending, done``) of a jobs table (this run's or one read back).
+
+    Uses the ``outcome`` column when there is one; for tables written before it existed, derives it from
+    ``deadline_met`` and ``killed`` with the same rule (an empty ``deadline_met`` is pending, not a miss).
+    """
+    from netsim.kernel.records import OUTCOMES, job_outcome
+
+    if "outcome" in jobs:
+        labels = jobs["outcome"].astype(str)
+    else:
+        def _flag(v: Any) -> bool | None:
+            if v is None or (isinstance(v, float) and v != v) or v is pd.NA or str(v).strip() == "":
+                return None
+            return str(v).strip().lower() in {"true", "1", "1.0"}
+
+        killed = jobs["killed"] if "killed" in jobs else pd.Series(False, index=jobs.index)
+        deadline = jobs["deadline_s"] if "deadline_s" in jobs else pd.Series(None, index=jobs.index)
+        met = jobs["deadline_met"] if "deadline_met" in jobs else pd.Series(True, index=jobs.index)
+        labels = pd.Series([job_outcome(None if pd.isna(d) else d, _flag(k) is True, _flag(m))
+                            for d, k, m in zip(deadline, killed, met)], index=jobs.index, dtype=object)
+    counts = labels.value_counts()
+    return {name: int(counts.get(name, 0)) for name in OUTCOMES}
 
 
 def _task_metrics(jobs: pd.DataFrame, t_end_s: float) -> dict[str, float]:
@@ -55,15 +81,14 @@ def _task_metrics(jobs: pd.DataFrame, t_end_s: float) -> dict[str, float]:
     if jobs is None or jobs.empty:
         return out
     for (node, task), grp in jobs.groupby(["node", "task"], sort=True):
-        finished = grp[grp["finish_s"].notna()]
-        met = finished["deadline_met"]
-        misses = int((met.astype(str).str.lower() == "false").sum())
-        unfinished = grp[grp["finish_s"].isna()]
-        misses += int((unfinished["deadline_s"].notna() & (unfinished["deadline_s"] < t_end_s)).sum())
-        resp = finished["response_s"].astype(float)
+        # the kernel applied the one deadline rule (netsim.kernel.records.deadline_verdict) to every record
+        counts = job_outcome_counts(grp)
+        resp = grp["response_s"].dropna().astype(float)  # killed and unfinished jobs have no response time
         key = f"task.{node}.{task}"
         out[f"{key}.jobs"] = float(len(grp))
-        out[f"{key}.deadline_misses"] = float(misses)
+        out[f"{key}.deadline_misses"] = float(counts["missed"] + counts["killed"])
+        out[f"{key}.killed"] = float(counts["killed"])
+        out[f"{key}.pending"] = float(counts["pending"])
         out[f"{key}.max_response_s"] = float(resp.max()) if len(resp) else math.nan
         out[f"{key}.mean_response_s"] = float(resp.mean()) if len(resp) else math.nan
     return out

@@ -6,6 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from netsim.kernel.records import deadline_verdict
 from netsim.errors import ConfigError
 from netsim.results import RunResult, jobs_table, messages_table, signals_table
 from netsim.runtime_metrics import chain_latencies, control_error, generic_metrics, latency
@@ -26,9 +27,10 @@ def test_control_error_integrates_held_values_exactly():
         control_error(res, {"reference": "r", "output": "nope"})
 
 
-def _job(node, task, jid, rel, st, fin, dl):
+def _job(node, task, jid, rel, st, fin, dl, t_end=20 * MS):
+    # deadline_met as the kernel records it at the end of a run that stopped at t_end (one rule for all tables)
     return NS(node=node, task=task, job_id=jid, release=rel, start=st, finish=fin, response=None if fin is None else fin - rel,
-              deadline=dl, deadline_met=None if fin is None else fin <= dl, preemptions=0, cpu_time=0, killed=False)
+              deadline=dl, deadline_met=deadline_verdict(dl, fin, False, t_end), preemptions=0, cpu_time=0, killed=False)
 
 
 def test_generic_task_metrics_count_misses_including_unfinished_overdue_jobs():

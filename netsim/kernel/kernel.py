@@ -52,7 +52,7 @@ from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
 from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.policies import Policy, resolve_policy
-from netsim.kernel.records import JobRecord, busy_time
+from netsim.kernel.records import JobRecord, busy_time, deadline_verdict
 from netsim.kernel.requests import Request
 from netsim.kernel.states import BLOCKED, DONE, NEW, READY, RUNNING
 from netsim.kernel.task import Handler, Task, check_time, did_you_mean
@@ -844,9 +844,14 @@ class Kernel(KernelBuilder):
         task = job._task
         if not job.is_handler:
             deadline = job.deadline
-            self.job_records.append(JobRecord(
-                task.name, self.name, job.job_id, job.release, job.start, now, now - job.release, deadline,
-                True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, killed))
+            if killed:  # never completed: no response time, and a miss (deadline_verdict)
+                self.job_records.append(JobRecord(
+                    task.name, self.name, job.job_id, job.release, job.start, now, None, deadline, False,
+                    job.preemptions, job.cpu_time, True))
+            else:  # deadline_verdict(deadline, now, False), inlined on the hot path
+                self.job_records.append(JobRecord(
+                    task.name, self.name, job.job_id, job.release, job.start, now, now - job.release, deadline,
+                    True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, False))
         if task.queue:
             nxt = task.queue.popleft()
             task.active = nxt
@@ -878,8 +883,8 @@ class Kernel(KernelBuilder):
             job.killed = True
             if not job.is_handler:
                 self.job_records.append(JobRecord(
-                    job.task_name, self.name, job.job_id, job.release, None, now, now - job.release,
-                    job.deadline, True if job.deadline is None else now <= job.deadline, 0, 0, True))
+                    job.task_name, self.name, job.job_id, job.release, None, now, None,
+                    job.deadline, deadline_verdict(job.deadline, now, True), 0, 0, True))
             return
         job._wake = None
         gen = job._gen
@@ -913,10 +918,9 @@ class Kernel(KernelBuilder):
             jobs = ([task.active] if task.active is not None else []) + list(task.queue)
             for job in jobs:
                 cpu = job.cpu_time + (partial if job is running else 0)
-                missed = job.deadline is not None and job.deadline <= t_end
                 rec = JobRecord(task.name, self.name, job.job_id, job.release, job.start, None, None, job.deadline,
-                                False if missed else None, job.preemptions + (windows if job is running else 0),
-                                cpu, False)
+                                deadline_verdict(job.deadline, None, False, t_end),
+                                job.preemptions + (windows if job is running else 0), cpu, False)
                 self._unfinished.append(rec)
         self.job_records.extend(self._unfinished)
         if self.trace:

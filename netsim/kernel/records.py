@@ -9,7 +9,56 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable
 
-__all__ = ["JobRecord", "busy_time"]
+__all__ = ["JobRecord", "busy_time", "deadline_verdict", "job_outcome", "OUTCOMES"]
+
+#: The values of :func:`job_outcome` (the ``outcome`` column of ``jobs.csv``).
+OUTCOMES = ("met", "missed", "killed", "pending", "done")
+
+
+def deadline_verdict(deadline: int | None, finish: int | None, killed: bool, t_end: int | None = None) -> bool | None:
+    """Whether a job met its deadline: the one rule every table of a run uses.
+
+    Parameters
+    ----------
+    deadline
+        Absolute deadline in ns (``None``: the task has none).
+    finish
+        Time the job finished or was killed (``None``: still unfinished when the run ended at ``t_end``).
+    killed
+        The job was killed or aborted: it never completed, so it missed (whatever the time of the kill).
+    t_end
+        End of the run in ns, for unfinished jobs. Every event at ``t_end`` has been processed when the run
+        ends, so a job due at ``t_end`` or earlier that has not finished has missed its deadline.
+
+    Returns
+    -------
+    bool or None
+        True: met (finished at or before the deadline, or finished with no deadline). False: missed
+        (finished late, killed, or unfinished with its deadline at or before ``t_end``). None: pending (unfinished
+        and not yet due at the end of the run, or unfinished without a deadline): neither met nor missed.
+    """
+    if killed:
+        return False
+    if finish is not None:
+        return True if deadline is None else finish <= deadline
+    if deadline is None or t_end is None or deadline > t_end:
+        return None
+    return False
+
+
+def job_outcome(deadline: float | None, killed: bool, met: bool | None) -> str:
+    """The label of a job for the tables: ``met``, ``missed``, ``killed``, ``pending`` or ``done``.
+
+    ``met`` is :func:`deadline_verdict`'s value; ``done``: finished, and the task has no deadline. NaN counts
+    as missing for ``deadline`` and ``met`` (values read back from a CSV).
+    """
+    if killed:
+        return "killed"
+    if met is None or met != met:  # None or NaN/NA: pending
+        return "pending"
+    if not met:
+        return "missed"
+    return "done" if deadline is None or deadline != deadline else "met"
 
 
 @dataclass(slots=True)
@@ -26,13 +75,13 @@ class JobRecord:
         Release time; first time on the CPU (``None`` if it never ran); finish or kill time (``None`` if
         still unfinished when the run ended).
     response
-        ``finish - release`` (``None`` if unfinished).
+        ``finish - release`` (``None`` if unfinished, killed or aborted: such a job never completed).
     deadline
         Absolute deadline (``None``: the task has none).
     deadline_met
-        ``finish <= deadline``; ``True`` without a deadline; for a job unfinished at the end of the run,
-        ``False`` if its deadline had passed, else ``None``. A killed job counts as a miss if it was killed
-        after its deadline.
+        :func:`deadline_verdict`: ``finish <= deadline``; ``True`` without a deadline; ``False`` for a killed
+        job; for a job unfinished at the end of the run, ``False`` if its deadline was at or before the end,
+        else ``None`` (pending).
     preemptions
         Times the job lost the CPU to a more urgent job or handler.
     cpu_time

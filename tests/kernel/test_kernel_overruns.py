@@ -77,7 +77,7 @@ def test_deadline_handler_fires_at_the_deadline_and_can_kill_freeing_the_cpu():
     assert at == [2500 * US]
     rec = {r.task: r for r in k.job_records}
     assert rec["T"].killed and rec["T"].finish == 2500 * US and rec["T"].cpu_time == 2500 * US
-    assert rec["T"].deadline_met is True  # ended (killed) at its deadline, not after
+    assert rec["T"].deadline_met is False and rec["T"].response is None  # killed: never completed, a miss
     assert rec["L"].start == 2500 * US and rec["L"].finish == 3500 * US
 
 
