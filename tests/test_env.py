@@ -1,6 +1,7 @@
 """The simulation environment: named random streams and the signal recorder."""
 
 import numpy as np
+import simpy.events
 
 from netsim.env import SimEnv
 
@@ -123,3 +124,32 @@ def test_an_exception_in_a_call_entry_propagates_unchanged():
         assert exc.code == 42 and env.sim.now == 3
     else:  # pragma: no cover - the loop must raise
         raise AssertionError("the exception did not propagate")
+
+
+def test_same_instant_table_orders_dispatch_before_arbitration_before_deadline():
+    from netsim.env import ARBITRATE, DEADLINE, DISPATCH, NORMAL, URGENT
+
+    # the order the kernel and the media rely on (netsim.env docstring); URGENT/NORMAL are simpy's own
+    assert URGENT < NORMAL < DISPATCH < ARBITRATE < DEADLINE
+    assert (URGENT, NORMAL) == (simpy.events.URGENT, simpy.events.NORMAL)
+
+
+def test_work_created_at_an_instant_runs_before_the_instants_higher_priorities():
+    """A dispatch that releases more work at the same instant: that work (NORMAL, then a new DISPATCH) runs
+    before the instant's arbitration, which was scheduled first; the deadline check comes last."""
+    from netsim.env import ARBITRATE, DEADLINE, DISPATCH, NORMAL, schedule_call
+
+    env = SimEnv(seed=0)
+    sim = env.sim
+    order: list[str] = []
+
+    def dispatch(_e):
+        order.append("dispatch")
+        schedule_call(sim, 0, NORMAL, lambda e: (order.append("release"),
+                                                  schedule_call(sim, 0, DISPATCH, lambda e: order.append("dispatch 2"))))
+
+    schedule_call(sim, 4, DEADLINE, lambda e: order.append("deadline"))
+    schedule_call(sim, 4, ARBITRATE, lambda e: order.append("arbitrate"))
+    schedule_call(sim, 4, DISPATCH, dispatch)
+    env.run(10)
+    assert order == ["dispatch", "release", "dispatch 2", "arbitrate", "deadline"]

@@ -19,7 +19,7 @@ from typing import Any
 import pytest
 
 from netsim.env import SimEnv
-from netsim.kernel import Kernel
+from netsim.kernel import Kernel, Mailbox
 from netsim.network import make_network
 from netsim.timebase import MS, US
 
@@ -160,3 +160,35 @@ def test_csma_cd_frame_sent_as_the_medium_goes_idle_collides_with_the_waiting_on
     env.run(50 * MS)
     assert (net.collisions, net.backoffs) == (1, 2)
     assert sorted(tag for _, tag in got) == ["H", "L", "M"]
+
+
+def test_job_finishing_on_a_frame_that_arrives_at_its_deadline_meets_it():
+    # A zero-length CAN frame (0 bits: 0 ns on the wire) sent at 4.0 ms is arbitrated, ends and is delivered
+    # at 4.0 ms; the receive handler posts to a mailbox and task T (released at 0, deadline 4.0 ms), blocked on
+    # it, finishes at 4.0 ms: response 4.0 ms = deadline, met (R <= D), so the deadline handler must not fire.
+    env = SimEnv(seed=1)
+    net = make_network(env, "net", "can", {"nodes": ["s", "rx"], "bitrate": "500 kbit/s"})
+    kernels = {n: Kernel(env, n, policy="fp") for n in ["s", "rx"]}
+    for n, k in kernels.items():
+        k.attach_network(net)
+        net.attach(n, k)
+    box = Mailbox("box")
+    fired: list[int] = []
+
+    def on_message(job):
+        msg = yield job.receive("net")
+        yield job.post(box, msg.tag)
+
+    def waiter(job):
+        yield job.fetch(box)
+
+    kernels["rx"].create_handler("on_message", on_message)
+    kernels["rx"].bind_receive("net", "on_message")
+    kernels["rx"].create_task("T", waiter, period=100 * MS, deadline=T_IDLE, priority=1,
+                              deadline_handler=lambda job: fired.append(job.now))
+    _send_once(kernels["s"], T_IDLE, "net", "rx", 0, 1, "zero")
+    env.run(10 * MS)
+    assert _spans(net) == {"zero": (T_IDLE, T_IDLE)}
+    rec = next(r for r in kernels["rx"].job_records if r.task == "T")
+    assert (rec.finish, rec.deadline) == (T_IDLE, T_IDLE)
+    assert fired == []
