@@ -34,6 +34,7 @@ __all__ = [
     "to_seconds",
     "from_seconds",
     "format_time",
+    "bare_number_message",
 ]
 
 NS: Final[int] = 1
@@ -79,14 +80,23 @@ def _suggest(unit: str) -> str:
     return close[0] if close else ""
 
 
+def bare_number_message(value: int | float) -> str:
+    """The message refusing a time written without a unit (``5`` -> "add a unit, e.g. '5 ms'")."""
+    if not math.isfinite(value):
+        return f"time must be finite, got {value!r}"
+    example = f"{value:g} {'s' if abs(value) < 1 else 'ms'}"
+    return f"time {value!r} has no unit; add a unit, e.g. '{example}' (units: ns, us, ms, s, min, h)"
+
+
 def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int:
     """Parse a time into integer nanoseconds.
 
     Parameters
     ----------
     value
-        A string with a number and a unit (``"20 us"``, ``"1.5 ms"``, ``"2 s"``, ``"1e-3 s"``), or a plain
-        number, which is read as **seconds** (the unit of the user interface).
+        A string with a number and a unit (``"20 us"``, ``"1.5 ms"``, ``"2 s"``, ``"1e-3 s"``). A bare number
+        is refused (``period: 5`` could mean 5 s or 5 ms: "add a unit, e.g. '5 ms'"), except ``0``, which is
+        zero in every unit.
     allow_negative
         Accept negative values (offsets); durations and periods are non-negative by default.
 
@@ -98,28 +108,23 @@ def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int
     Raises
     ------
     TimeParseError
-        For an unknown unit (with a suggestion), a missing number, a non-finite value, a value that is
-        not a whole number of nanoseconds after rounding by more than 1e-6 ns, or a negative value when
-        not allowed.
+        For a bare number other than 0, an unknown unit (with a suggestion), a missing number or unit, or a
+        negative value when not allowed.
     """
     if isinstance(value, bool):
         raise TimeParseError(f"expected a time such as '1 ms', got {value!r}")
-    if isinstance(value, int):
-        ns = value * S
-    elif isinstance(value, float):
-        if not math.isfinite(value):
-            raise TimeParseError(f"time must be finite, got {value!r}")
-        if not math.isfinite(value * S):
-            raise TimeParseError(f"time {value!r} s is too large to count in nanoseconds")
-        ns = round(value * S)
-    elif isinstance(value, str):
+    if isinstance(value, (int, float)):
+        if value == 0:
+            return 0
+        raise TimeParseError(bare_number_message(value))
+    if isinstance(value, str):
         match = _PATTERN.match(value)
         if match is None:
             raise TimeParseError(f"cannot read {value!r} as a time; write a number and a unit, e.g. '1.5 ms'")
         number, unit = match.group(1), (match.group(2) or "").strip()
         if not unit:
             raise TimeParseError(
-                f"time {value!r} has no unit; write e.g. '{number} ms' (units: ns, us, ms, s, min, h)"
+                f"time {value!r} has no unit; add a unit, e.g. '{number} ms' (units: ns, us, ms, s, min, h)"
             )
         if unit not in UNITS:
             hint = _suggest(unit)

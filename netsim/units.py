@@ -2,7 +2,8 @@
 
 Every plugin (network, program, plant, trigger) describes its parameters as a pydantic model with
 ``extra="forbid"``; time fields use these types so ``"20 us"`` becomes ``20000`` (ns) and a typo such as
-``"20 usec"`` is reported with its YAML path and a suggestion. A bare number is read as seconds.
+``"20 usec"`` is reported with its YAML path and a suggestion. A bare number (``period: 5``) is refused with
+"add a unit, e.g. '5 ms'" (only ``0`` may be written without a unit).
 
 Examples
 --------

@@ -51,7 +51,7 @@ def test_et_control_counts_messages_by_tag_and_compares_with_baseline():
     T = 1.0
     base = _result([0.0, 0.5, 1.0, 1.0], [("y", k + 0.1) for k in range(4)] + [("u", k + 0.2) for k in range(4)])
     run = _result([0.0, 0.5, 0.8, 0.9], [("y", 0.1), ("y", 2.1), ("u", 0.2), ("y", 4.1)])  # 4.1: past N_TTS T
-    m = et_control(run, {"period": T}, base)
+    m = et_control(run, {"period": f"{T} s"}, base)
     assert (m["et.N_TTS"], m["et.Nsc"], m["et.Nca"]) == (4, 2, 1)
     assert m["et.Uc"] == pytest.approx(0.5) and m["et.Ua"] == pytest.approx(0.25)
     assert m["et.ISE"] == pytest.approx(np.sqrt(1 + 0.25))  # the baseline's ISE, eq (23)
@@ -64,9 +64,9 @@ def test_et_control_counts_messages_by_tag_and_compares_with_baseline():
 def test_et_control_reports_unknown_parameters_and_missing_signals():
     run = _result([0.0, 1.0], [])
     with pytest.raises(ConfigError, match="unknown key 'sigma'"):
-        et_control(run, {"period": 1.0, "sigma": 1}, None)
+        et_control(run, {"period": "1 s", "sigma": 1}, None)
     with pytest.raises(ConfigError, match="not recorded"):
-        et_control(run, {"period": 1.0, "output": "zz"}, None)
+        et_control(run, {"period": "1 s", "output": "zz"}, None)
 
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -98,7 +98,8 @@ def test_et_control_period_is_a_time_with_units():
     from netsim.timebase import US
 
     assert EtControlParams.model_validate({"period": "20 us"}).period == 20 * US
-    assert EtControlParams.model_validate({"period": 2e-5}).period == 20 * US  # bare numbers are seconds
+    with pytest.raises(ValueError, match="add a unit"):  # issue 13 C: bare numbers are refused
+        EtControlParams.model_validate({"period": 2e-5})
     with pytest.raises(ValueError):
         EtControlParams.model_validate({"period": "-1 ms"})
 

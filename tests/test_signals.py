@@ -66,7 +66,7 @@ def test_constant_and_nested_params_form():
         ({"type": "square"}, "period"),
         ({"type": "square", "period": "1 s", "duty": 1.5}, "duty"),
         ({"type": "step", "at": "1 sec"}, "at"),
-        ({"type": "table", "times": [0, 1], "values": [1.0]}, "same length"),
+        ({"type": "table", "times": [0, "1 s"], "values": [1.0]}, "same length"),
         ({"type": "step", "colour": 3}, "colour"),
     ],
 )

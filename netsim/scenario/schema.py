@@ -2,7 +2,7 @@
 
 A scenario is a frozen, validated description (the SimSo split: static description here, runtime objects
 in :mod:`netsim.scenario.builder`). Every model forbids unknown keys; every time field accepts ``"1.5 ms"``
-style text (a bare number is seconds) and holds **integer nanoseconds**. Plugin parameters (plant model,
+style text (a bare number other than 0 is refused: "add a unit, e.g. '5 ms'") and holds **integer nanoseconds**. Plugin parameters (plant model,
 programs, networks, signals, metrics) are kept raw here and validated against the plugin's own ``Params``
 model by :mod:`netsim.scenario.validate`; after :func:`netsim.scenario.load_scenario` the validated
 ``Params`` instance of each plugin is available from ``spec.validated_params()``.

@@ -7,7 +7,7 @@ import pytest
 
 from netsim.errors import ConfigError
 from netsim.kernel import ExecTime
-from netsim.timebase import MS, US
+from netsim.timebase import US
 
 
 def rng():
@@ -16,7 +16,8 @@ def rng():
 
 def test_from_spec_constant_string_and_seconds():
     assert ExecTime.from_spec("0.5 ms").draw(rng()) == 500 * US
-    assert ExecTime.from_spec(0.002).draw(rng()) == 2 * MS  # bare numbers are seconds
+    with pytest.raises(ConfigError, match="add a unit"):  # issue 13 C: a bare number is refused, not seconds
+        ExecTime.from_spec(0.002)
     assert ExecTime.from_spec({"dist": "constant", "value": "3 us"}).draw(rng()) == 3 * US
 
 

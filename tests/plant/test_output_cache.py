@@ -59,7 +59,7 @@ def test_set_state_at_the_same_instant_refreshes_the_output():
 def test_disturbance_jump_between_updates_refreshes_the_output():
     # a step disturbance at 2.5 ms: between updates, so only D d changes the output there
     plant = _discrete()
-    plant.add_disturbance(0, make_signal({"type": "step", "at": 2.5e-3, "value": 4.0}))
+    plant.add_disturbance(0, make_signal({"type": "step", "at": "2.5 ms", "value": 4.0}))
     y_before = plant.output(2 * MS + 400 * US)[0]
     assert plant.output(2 * MS + 400 * US)[0] == y_before == pytest.approx(_recomputed(plant, 0.0), abs=1e-15)
     assert plant.output(2 * MS + 500 * US)[0] == pytest.approx(_recomputed(plant, 4.0), abs=1e-15)
