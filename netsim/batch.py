@@ -3,9 +3,9 @@
 ``netsim batch FILE... | DIR`` calls :func:`run_batch`. Each scenario writes its own run folder
 ``<out>/<file stem>/``; ``<out>/summary.csv`` has one row per scenario (in the order given): ``scenario,
 path, status, error, wall_time_s, run_dir`` and then every metric as a column. A scenario that fails (invalid
-file, build error, exception) does not stop the batch: its row carries the error text, and the returned
-failure count is non-zero. A run that diverges is a result, not a failure: its ``status`` says
-``diverged at t = ...`` and it is not counted as failed.
+file, build error, exception) does not stop the batch: its row carries the error text. A run that diverges
+keeps its tables and its row (``status: diverged at t = ...``). Both count as not ok, by the same rule as
+``netsim run`` (:mod:`netsim.status`): the returned count of runs that are not ok is then non-zero.
 
 Default output folder: ``reports/batch/<UTC time stamp>/``.
 """
@@ -22,6 +22,7 @@ from typing import Any, Iterable
 import pandas as pd
 
 from netsim.results import write_csv
+from netsim.status import count_statuses
 from netsim.sweep.check import is_sweep_file
 
 __all__ = ["run_batch", "expand_paths", "SUMMARY_COLUMNS"]
@@ -104,9 +105,10 @@ def run_batch(
 
     Returns
     -------
-    (summary, n_failed)
+    (summary, n_not_ok)
         The summary table (one row per scenario, metrics as columns) and the number of rows whose status
-        is ``error``.
+        is not ``ok`` (diverged or error; :func:`netsim.status.count_statuses` of ``summary["status"]``
+        splits them).
     """
     files = expand_paths(paths)
     folder = Path(out) if out is not None else (
@@ -146,10 +148,11 @@ def run_batch(
 
     summary = _summary([r for r in rows if r is not None])
     write_csv(summary, folder / "summary.csv")
-    n_failed = int((summary["status"] == "error").sum()) if not summary.empty else 0
-    if n_failed:
-        log.warning("%d of %d scenarios failed; see %s", n_failed, len(files), folder / "summary.csv")
-    return summary, n_failed
+    counts = count_statuses(summary["status"] if not summary.empty else [])
+    summary.attrs["path"] = str(folder / "summary.csv")
+    if counts.not_ok:
+        log.warning("%s; see %s", counts.describe("scenario"), folder / "summary.csv")
+    return summary, counts.not_ok
 
 
 def _summary(rows: list[dict[str, Any]]) -> pd.DataFrame:

@@ -4,7 +4,7 @@ Every command catches the errors a user can cause (:class:`~netsim.errors.Netsim
 :class:`~netsim.scenario.ScenarioError`) and prints them without a traceback. Exit codes:
 
 - ``0`` success;
-- ``1`` a run failed, diverged, or some batch/sweep runs failed;
+- ``1`` a run, or any run of a batch or sweep, is not ``ok`` (diverged or error; one rule, :mod:`netsim.status`);
 - ``2`` the scenario or the command line is invalid (nothing ran);
 - ``validate``: the number of problems found (0 when every file is valid), capped at 255;
 - ``130`` interrupted (Ctrl-C).
@@ -45,10 +45,7 @@ LIST_KINDS: dict[str, str] = {
     "reports": "report",
 }
 
-EXIT_OK = 0
-EXIT_FAILED = 1
-EXIT_INVALID = 2
-EXIT_INTERRUPTED = 130
+from netsim.status import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK  # noqa: E402
 
 _MAIN_EPILOG = """\
 examples:
@@ -297,12 +294,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"{scenario.name}: {status}{where}")
     if not args.quiet:
         _print_metrics(getattr(result, "metrics", None))
+    from netsim.status import count_statuses
+
     if status != "ok":
         error = meta.get("error")
         if error:
             _err(str(error))
-        return EXIT_FAILED
-    return EXIT_OK
+    return count_statuses([status]).exit_code()
 
 
 class _RunProgress:
@@ -391,14 +389,16 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     files = _expand_batch(args.paths)
     from netsim.batch import run_batch
 
-    summary, n_failed = run_batch(files, out=args.out, workers=args.workers,
-                                  progress=not (args.no_progress or args.quiet))
-    n = len(files)
-    print(f"{n - n_failed} of {n} scenario{'s' if n != 1 else ''} ok" + (f", {n_failed} failed" if n_failed else ""))
+    from netsim.status import count_statuses
+
+    summary, _ = run_batch(files, out=args.out, workers=args.workers,
+                           progress=not (args.no_progress or args.quiet))
+    counts = count_statuses(summary["status"] if summary is not None and not summary.empty else [])
+    print(counts.describe("scenario"))  # the same status rule as `netsim run` (netsim.status)
     out = getattr(summary, "attrs", {}).get("path") if summary is not None else None
     if out:
         print(f"summary: {out}")
-    return EXIT_FAILED if n_failed else EXIT_OK
+    return counts.exit_code()
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
@@ -420,13 +420,14 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         progress=not (args.no_progress or args.quiet),
     )
     print(result.describe())
+    from netsim.status import count_statuses
+
+    counts = count_statuses(result.summary["status"] if result.summary is not None else [])
     if result.interrupted:
         _err("interrupted: finished runs are kept; run the same command again to resume")
-        return EXIT_INTERRUPTED
-    if result.n_failed:
-        _err(f"{result.n_failed} sweep run{'s' if result.n_failed != 1 else ''} failed (see summary.csv)")
-        return EXIT_FAILED
-    return EXIT_OK
+    elif counts.not_ok:
+        _err(f"{counts.describe('sweep run')} (see summary.csv)")
+    return counts.exit_code(result.interrupted)
 
 
 def _cmd_report(args: argparse.Namespace) -> int:

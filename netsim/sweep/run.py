@@ -89,10 +89,14 @@ class SweepResult:
 
     def describe(self) -> str:
         """One paragraph for the terminal: counts, where the summary is, and the optimum."""
+        from netsim.status import count_statuses
+
+        counts = count_statuses(self.summary["status"]) if self.summary is not None else None
+        told = counts.describe("run") if counts is not None and counts.total == self.n_runs else (
+            f"{self.n_ok} of {self.n_runs} runs ok, {self.n_failed} failed, {self.n_pending} not run")
         text = (
-            f"sweep {self.name}: {self.n_ok} ok, {self.n_failed} failed, {self.n_pending} not run "
-            f"of {self.n_runs} ({self.n_resumed} resumed, {self.n_executed} executed on {self.executor}, "
-            f"{self.wall_time_s:.1f} s)\nsummary: {self.summary_path}"
+            f"sweep {self.name}: {told} ({self.n_resumed} resumed, {self.n_executed} executed on "
+            f"{self.executor}, {self.wall_time_s:.1f} s)\nsummary: {self.summary_path}"
         )
         if self.optimum:
             from netsim.surface import describe_optimum

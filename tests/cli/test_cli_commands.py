@@ -101,7 +101,9 @@ def test_malformed_set_is_a_usage_error(tmp_path, capsys, good):
 
 
 def test_batch_expands_folders_and_skips_sweep_files(tmp_path, monkeypatch, capsys, good):
-    rec = _fake_module(monkeypatch, "batch", "run_batch", (None, 1))
+    import pandas as pd
+
+    rec = _fake_module(monkeypatch, "batch", "run_batch", (pd.DataFrame({"status": ["ok", "ok", "error"]}), 1))
     folder = tmp_path / "sc"
     folder.mkdir()
     write(folder, "b.yaml", good)
@@ -121,8 +123,12 @@ def test_batch_of_a_missing_path_exits_2(tmp_path, capsys):
     assert "file not found" in capsys.readouterr().err
 
 
-def _sweep_result(n_failed=0, interrupted=False):
-    return types.SimpleNamespace(n_failed=n_failed, interrupted=interrupted,
+def _sweep_result(n_failed=0, interrupted=False, n_diverged=0):
+    import pandas as pd
+
+    statuses = ["ok"] * 3 + ["error"] * n_failed + ["diverged at t = 1 s"] * n_diverged
+    return types.SimpleNamespace(n_failed=n_failed + n_diverged, interrupted=interrupted,
+                                 summary=pd.DataFrame({"status": statuses}),
                                  describe=lambda: "sweep s: summary and optimum")
 
 
@@ -141,7 +147,10 @@ def test_sweep_exit_codes_for_failures_and_interruption(tmp_path, monkeypatch, c
     path = write(tmp_path, "sw.yaml", "sweep: s\n")
     _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(n_failed=2))
     assert main(["sweep", str(path)]) == 1
-    assert "2 sweep runs failed" in capsys.readouterr().err
+    assert "3 of 5 sweep runs ok, 2 failed" in capsys.readouterr().err
+    _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(n_diverged=1))
+    assert main(["sweep", str(path)]) == 1  # a diverged point is not ok, as for `netsim run`
+    assert "3 of 4 sweep runs ok, 1 diverged" in capsys.readouterr().err
     _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(interrupted=True))
     assert main(["sweep", str(path)]) == 130
     assert "run the same command again to resume" in capsys.readouterr().err

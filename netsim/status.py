@@ -1,0 +1,107 @@
+"""Run statuses and what they mean for counts and exit codes: one rule for ``run``, ``batch`` and ``sweep``.
+
+A run's status (``meta.json``, the ``status`` column of every summary) is one of
+
+``ok``
+    the run finished normally;
+``diverged at t = ... s``
+    the loop went unstable and the run stopped there (its tables up to that instant are written);
+``error``
+    the run could not be built or raised (the error text is recorded);
+``pending``
+    a sweep run not executed yet (Ctrl-C).
+
+Only ``ok`` is a success. A diverged run is a result worth keeping (it is a point of a surface, a row of a batch),
+but it is not a success: ``netsim run``, ``netsim batch`` and ``netsim sweep`` all exit with
+:data:`EXIT_FAILED` when any run is not ``ok`` (``pending`` runs of an interrupted sweep exit with
+:data:`EXIT_INTERRUPTED`).
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from typing import Iterable
+
+__all__ = [
+    "OK",
+    "ERROR",
+    "PENDING",
+    "EXIT_OK",
+    "EXIT_FAILED",
+    "EXIT_INVALID",
+    "EXIT_INTERRUPTED",
+    "kind_of",
+    "is_ok",
+    "StatusCounts",
+    "count_statuses",
+]
+
+OK = "ok"
+ERROR = "error"
+PENDING = "pending"
+DIVERGED = "diverged"
+
+EXIT_OK = 0
+EXIT_FAILED = 1
+EXIT_INVALID = 2
+EXIT_INTERRUPTED = 130
+
+
+def kind_of(status: object) -> str:
+    """``ok``, ``diverged``, ``pending`` or ``error`` (anything else, including an empty status)."""
+    text = str(status).strip() if status is not None else ""
+    if text == OK:
+        return OK
+    if text.startswith(DIVERGED):
+        return DIVERGED
+    if text == PENDING:
+        return PENDING
+    return ERROR
+
+
+def is_ok(status: object) -> bool:
+    """True only for a run that finished normally."""
+    return kind_of(status) == OK
+
+
+class StatusCounts:
+    """How many runs ended in each kind of status, with the exit code and a one-line summary they imply.
+
+    Parameters
+    ----------
+    statuses
+        The status of every run.
+    """
+
+    def __init__(self, statuses: Iterable[object]) -> None:
+        counts = Counter(kind_of(s) for s in statuses)
+        self.ok = counts[OK]
+        self.diverged = counts[DIVERGED]
+        self.error = counts[ERROR]
+        self.pending = counts[PENDING]
+        self.total = self.ok + self.diverged + self.error + self.pending
+
+    @property
+    def not_ok(self) -> int:
+        """Runs that ran and did not finish normally (diverged or error)."""
+        return self.diverged + self.error
+
+    def exit_code(self, interrupted: bool = False) -> int:
+        """:data:`EXIT_INTERRUPTED` if interrupted, else :data:`EXIT_FAILED` if any run is not ok, else 0."""
+        if interrupted:
+            return EXIT_INTERRUPTED
+        return EXIT_FAILED if self.not_ok else EXIT_OK
+
+    def describe(self, what: str = "run") -> str:
+        """E.g. ``1 of 2 scenarios ok, 1 diverged``."""
+        plural = what if self.total == 1 else f"{what}s"
+        text = f"{self.ok} of {self.total} {plural} ok"
+        for n, word in ((self.diverged, "diverged"), (self.error, "failed"), (self.pending, "not run")):
+            if n:
+                text += f", {n} {word}"
+        return text
+
+
+def count_statuses(statuses: Iterable[object]) -> StatusCounts:
+    """:class:`StatusCounts` of ``statuses``."""
+    return StatusCounts(statuses)
