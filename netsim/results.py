@@ -349,7 +349,10 @@ class RunResult:
         write_csv(self.signals, out / "signals.csv")
         write_csv(self.jobs, out / "jobs.csv")
         write_csv(self.messages, out / "messages.csv")
-        write_csv(self.metrics_frame(), out / "metrics.csv")
+        from netsim.status import ERROR, kind_of
+
+        if kind_of(self.status) != ERROR:  # a run that failed has no metrics: meta.json says why
+            write_csv(self.metrics_frame(), out / "metrics.csv")
         (out / "meta.json").write_text(
             json.dumps(self.meta, indent=2, sort_keys=True, default=_json_default) + "\n", encoding="utf-8"
         )

@@ -10,7 +10,7 @@ Failures are recorded, never lost:
   up to that time are written and ``meta.json`` says ``status: "diverged at t = ... s"``; ``run`` returns
   the result normally (``result.ok`` is False);
 * any other exception during the simulation or the metrics writes what exists with ``status: "error"``
-  and the error text, then re-raises (a :class:`~netsim.errors.NetsimError` carries a user message, anything
+  and the error text, but no ``metrics.csv`` (a run that failed has no metrics), then re-raises (a :class:`~netsim.errors.NetsimError` carries a user message, anything
   else is a bug).
 
 A scenario with ``baseline: {overrides: {...}}`` first runs the baseline (the same scenario with those
@@ -272,7 +272,12 @@ def run(
     result, sim, failure = simulate(scenario, progress)
     result.scenario = scenario.resolved_dict()
     try:
-        result.metrics = pd.Series(_metrics(result, sim, scenario, baseline), dtype=float, name="value")
+        if failure is not None and not isinstance(failure, DivergenceError):
+            # a run that failed has tables up to the failure, but no metrics: numbers computed over a run cut
+            # short by an error would read like results (RunResult.to_csv then writes no metrics.csv)
+            result.metrics = pd.Series(dtype=float, name="value")
+        else:
+            result.metrics = pd.Series(_metrics(result, sim, scenario, baseline), dtype=float, name="value")
     except Exception as exc:  # noqa: BLE001
         if failure is None:
             failure = exc
