@@ -269,6 +269,9 @@ class HddControlParams(StrictModel):
         "none", description="none: Cases 1-2; augmented: NUMRE on eq (3) (Cases 3-5); plant: NUMRE on eq (1) only (Case 6)")
     h: int = Field(100, ge=0, description="future actions per packet (h >= N_max wanted)")
     m: int = Field(2, ge=1, description="MRCI multi-rate ratio")
+    mrci_wiring: Literal["delayed", "own_instant"] = Field(
+        "delayed", description="error fed to slow mode i: 'delayed' = the text of section 3.2.3 (down-sample e at "
+        "k = m j, then delay z^-(i-1)); 'own_instant' = e at the mode's own update instant (netsim before issue 13)")
     w_var: float = Field(1e-7, gt=0, description="Cov(w) assumed by the NUMRE (augmented model)")
     v_var: float = Field(1e-6, gt=0, description="Cov(v) assumed by the NUMRE")
     w_plant_var: float = Field(1e-2, gt=0, description="input-noise Cov assumed by the plant-only NUMRE (DOB case)")
@@ -323,7 +326,7 @@ def hdd_et(design_params: dict | HddControlParams, *, reference, trigger):
     if p.dob and p.estimator == "none":
         raise ConfigError("hdd_et: the DOB works on the NUMRE's estimates; set estimator: plant")
     _m, design, est, dob = _design_parts(p.model_dump_json())
-    return ControlSide(MrciController(design), reference, estimator=est,
+    return ControlSide(MrciController(design, wiring=p.mrci_wiring), reference, estimator=est,
                        dob=None if dob is None else DisturbanceObserver(dob), trigger=trigger)
 
 

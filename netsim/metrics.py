@@ -18,6 +18,7 @@ and the run's own otherwise; ``ISEP`` needs the baseline.
 
 from __future__ import annotations
 
+import logging
 import math
 from typing import Any
 
@@ -45,6 +46,8 @@ __all__ = [
     "LEGACY_METRIC_NAMES",
     "canonical_metric_names",
 ]
+
+log = logging.getLogger(__name__)
 
 #: Scope of the loop-level measures of :func:`et_control` (metric names are ``<scope>.<measure>``).
 ET_PREFIX = "et"
@@ -158,6 +161,13 @@ class EtControlParams(StrictModel):
         ``W1, W2, W3`` of eq (29): three numbers >= 0 summing to 1.
     n_tts
         Number of periods compared (default: the periods in the run).
+    multiplicity
+        Recorded multiplicity signal ``N`` (eq 9, recorded by the controller at arrivals): its largest
+        value in the window is ``et.N_max`` (left out when the signal is not recorded).
+    past_end
+        Recorded per-period flag of the actuator (1: a period played past the end of an ``h >= 1`` packet):
+        its sum over the window is ``et.played_past_packet`` (left out when not recorded). A non-zero
+        value means ``h < N_max`` (the paper asks for ``h >= N_max``) and is logged as a warning.
     """
 
     period: Duration
@@ -169,6 +179,8 @@ class EtControlParams(StrictModel):
     n: int = Field(default=1, ge=0)
     weights: tuple[float, float, float] = (0.45, 0.45, 0.1)
     n_tts: int | None = Field(default=None, gt=0)
+    multiplicity: str = "N"
+    past_end: str = "u_past_end"
 
     @field_validator("weights")
     @classmethod
@@ -205,7 +217,9 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
     ``et.Nsc``, ``et.Nca`` (transmissions sensor->controller and controller->actuator in those periods),
     ``et.Uc``, ``et.Ua`` (eqs 26-27), ``et.CS`` (eq 20), ``et.Cc`` (eq 28), ``et.ISE`` (eq 23, of the TTS
     baseline when there is one), ``et.ISE_own`` (eq 23 of this run), ``et.ISEP`` (eq 24), ``et.NE`` (eq 25)
-    and ``et.GPI`` (eq 29). Eq (23) is a root of a sum over samples, not the time integral ``<y>.ISE`` of
+    and ``et.GPI`` (eq 29); when recorded, ``et.N_max`` (largest multiplicity) and ``et.played_past_packet``
+    (periods the actuator played past its packet's end, i.e. ``h < N_max``), and from the messages table
+    ``et.u_gap_max`` (the longest run of periods one packet had to cover). Eq (23) is a root of a sum over samples, not the time integral ``<y>.ISE`` of
     :func:`netsim.runtime_metrics.control_error`.
     """
     p = _et_params(params)
@@ -241,7 +255,53 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
         res["ISEP"] = 0.0
     res["NE"] = sampling_efficiency(res["ISEP"], res["ISE"])
     res["GPI"] = gpi(uc, ua, res["NE"], p.weights)
+    res.update(_horizon_measures(sig, p, t_k, window_s))
+    gap = _packet_gap_max(result.messages, p, n_tts, window_s)
+    if gap is not None:
+        res["u_gap_max"] = gap
     return {f"{ET_PREFIX}.{k}": v for k, v in res.items()}
+
+
+def _packet_gap_max(messages, p: EtControlParams, n_tts: int, window_s: float) -> float | None:
+    """Longest run of periods one controller->actuator packet had to cover, from the messages table.
+
+    Each packet is placed in the period it was sent (``floor(sent / T)``; the controller sends in the period
+    of its measurement when the loop latency is below ``T``); the run of a packet lasts until the next one,
+    the last one's until the end of the window. A packet with ``h`` future actions covers ``h + 1`` periods,
+    so ``h >= u_gap_max - 1`` plays no period past a packet's end (None when no packet was sent).
+    """
+    if messages is None or len(messages) == 0:
+        return None
+    sel = (messages["tag"].astype(str) == p.actuator_tag) & (messages["sent_s"].to_numpy(float) < window_s)
+    sent_ns = np.round(messages.loc[sel, "sent_s"].to_numpy(float) * S).astype(np.int64)
+    if sent_ns.size == 0:
+        return None
+    k = np.unique(sent_ns // p.period)
+    return float(np.max(np.diff(np.append(k, n_tts))))
+
+
+def _horizon_measures(sig, p: EtControlParams, t_k: np.ndarray, window_s: float) -> dict[str, float]:
+    """``N_max`` and ``played_past_packet`` from the recorded signals (only those that were recorded)."""
+    out: dict[str, float] = {}
+    cols = sig.columns
+    t = sig["time_s"].to_numpy(float)
+
+    def in_window(name: str) -> np.ndarray:
+        v = sig[name].to_numpy(float)
+        return v[~np.isnan(v) & (t < window_s)]
+
+    if p.multiplicity in cols and in_window(p.multiplicity).size:
+        out["N_max"] = float(np.max(in_window(p.multiplicity)))
+    if p.past_end in cols and in_window(p.past_end).size:
+        # the actuator's tick records the flag once per period, a little after k T (the table holds values):
+        # read it at the end of each period, (k + 1) T - 1 ns
+        played = float(np.sum(sample_signal(sig, p.past_end, t_k + (p.period - 1) / S)))
+        out["played_past_packet"] = played
+        if played > 0:
+            log.warning("et_control: the actuator played %d period(s) past the end of its packet (h < N_max%s); "
+                        "raise design_params.h", int(played),
+                        f" = {int(out['N_max'])}" if "N_max" in out else "")
+    return out
 
 
 et_control.Params = EtControlParams  # type: ignore[attr-defined]

@@ -237,8 +237,20 @@ class ControlSide:
             return self._direct(k, y)
         return self._estimated(k, y)
 
-    def _direct(self, k: int, y: float) -> Decision:
-        N = k - self.k_ls if self.k_ls is not None else k + 1
+    def on_period(self, k: int, y: float, k_y: int) -> Decision:
+        """Step the controller at fast instant ``k`` on the last received measurement ``y`` (sensed at ``k_y``).
+
+        The "runs every T" reading of Case 2 (no estimator only): the MRCI steps at every ``k`` and eq (22)
+        is checked at every ``k``; ``Decision.N`` is the age ``k - k_y + 1`` of the measurement used
+        (1 when it was sensed in this period).
+        """
+        if self.est is not None:
+            raise ValueError("ControlSide.on_period is the no-estimator reading; with a NUMRE use on_measurement")
+        return self._direct(k, y, N=k - k_y + 1)
+
+    def _direct(self, k: int, y: float, N: int | None = None) -> Decision:
+        if N is None:
+            N = k - self.k_ls if self.k_ls is not None else k + 1
         self.k_ls = k
         u = self.ctrl.step(k, self.reference(k) - y)
         self.steps += 1

@@ -20,6 +20,20 @@ Conventions (documented choices):
   holds that output until its next update (ZOH);
 * the direct term of ``C(z)`` belongs to the fast part.
 
+Which error a slow mode sees (``wiring``, a reading of section 3.2.3):
+
+``"delayed"`` (default)
+    The text's wiring: "a down-sampling operator (down m) is required at the input of each Cs_i(z^m) to
+    pick up the error signal e_k = r_k - y_k at every m instances of the fast rate, and later, the
+    consequent signal is delayed z^-(i-1)". The down-sampler takes ``e`` at ``k = m j``; mode ``i``
+    (phase ``i - 1``) is updated at ``k = m j + i - 1`` with that sample ``e_{m j}``, i.e. the error of
+    ``i - 1`` fast periods ago (the delay is read at the fast rate: it is what places mode ``i``'s update
+    at ``m j + i - 1``). If the controller does not step at ``k = m j`` (it steps only at arrivals), the
+    last down-sampled error is used.
+``"own_instant"``
+    Mode ``i`` is fed ``e_k`` at its own update instant ``k = m j + i - 1`` (a down-sampler per phase, no
+    delay). This was netsim's only wiring before the option existed.
+
 :func:`decompose` is build-time code; :class:`MrciController` is the per-sample numeric object.
 """
 
@@ -32,7 +46,10 @@ import numpy as np
 
 from netsim.errors import ConfigError
 
-__all__ = ["Section", "MrciDesign", "MrciController", "decompose", "computation_saving"]
+__all__ = ["Section", "MrciDesign", "MrciController", "decompose", "computation_saving", "WIRINGS"]
+
+#: The readings of the interlacing wiring (see the module docstring); the first is the default.
+WIRINGS = ("delayed", "own_instant")
 
 log = logging.getLogger(__name__)
 
@@ -220,11 +237,24 @@ class MrciController:
     """Runtime MRCI: call :meth:`step` once per fast instant ``k`` with the error ``e_k``.
 
     The state is a flat list of floats (per slow section its states then its held output, then the fast
-    states) so that :meth:`snapshot`/:meth:`restore` are cheap copies (the NUMRE cascade needs them).
-    Sections are evaluated with plain float arithmetic (they have one or two states).
+    states, then the last down-sampled error) so that :meth:`snapshot`/:meth:`restore` are cheap copies
+    (the NUMRE cascade needs them). Sections are evaluated with plain float arithmetic (they have one or
+    two states).
+
+    Parameters
+    ----------
+    design
+        The decomposition from :func:`decompose`.
+    wiring
+        ``"delayed"`` (the text of section 3.2.3, default) or ``"own_instant"``: which error a slow mode
+        is fed (see the module docstring).
     """
 
-    def __init__(self, design: MrciDesign) -> None:
+    def __init__(self, design: MrciDesign, wiring: str = "delayed") -> None:
+        if wiring not in WIRINGS:
+            raise ConfigError(f"MRCI: wiring must be one of {', '.join(WIRINGS)}, got {wiring!r}")
+        self.wiring = wiring
+        self._delayed = wiring == "delayed"
         self.design = design
         self.m = design.m
         self.direct = float(design.direct)
@@ -236,13 +266,13 @@ class MrciController:
         self._slow = [flat(s) for s in design.slow_lifted]
         self._fast = [flat(s) for s in design.fast]
         self._phase = [i % design.m for i in range(len(self._slow))]
-        self._size = sum(q + 1 for q, *_ in self._slow) + sum(q for q, *_ in self._fast)
+        self._size = sum(q + 1 for q, *_ in self._slow) + sum(q for q, *_ in self._fast) + 1
         self._x = [0.0] * self._size
         self.updates = 0  # mode updates performed (slow + fast), for cost accounting
 
     @property
     def n_states(self) -> int:
-        return self._size
+        return self._size - 1
 
     def reset(self) -> None:
         self._x = [0.0] * self._size
@@ -260,18 +290,24 @@ class MrciController:
         pos = 0
         ph = k % self.m
         upd = 0
+        if self._delayed:
+            if ph == 0:
+                x[-1] = e  # the down-sampler's sample e_{m j}
+            es = x[-1]
+        else:
+            es = e
         for idx, (q, A, B, C, D) in enumerate(self._slow):
             if ph == self._phase[idx]:
                 upd += 1
                 if q == 1:
                     x0 = x[pos]
-                    x[pos + 1] = C[0] * x0 + D * e
-                    x[pos] = A[0] * x0 + B[0] * e
+                    x[pos + 1] = C[0] * x0 + D * es
+                    x[pos] = A[0] * x0 + B[0] * es
                 else:
                     x0, x1 = x[pos], x[pos + 1]
-                    x[pos + 2] = C[0] * x0 + C[1] * x1 + D * e
-                    x[pos] = A[0] * x0 + A[1] * x1 + B[0] * e
-                    x[pos + 1] = A[2] * x0 + A[3] * x1 + B[1] * e
+                    x[pos + 2] = C[0] * x0 + C[1] * x1 + D * es
+                    x[pos] = A[0] * x0 + A[1] * x1 + B[0] * es
+                    x[pos + 1] = A[2] * x0 + A[3] * x1 + B[1] * es
             u += x[pos + q]
             pos += q + 1
         for q, A, B, C, D in self._fast:

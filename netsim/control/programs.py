@@ -4,16 +4,29 @@
     ``y = analog_in(channel)``; ``execute``; evaluate the sensor trigger (time-triggered, PET eq (6),
     optionally OR the safety condition eq (7) / the reference-change condition eq (8)); if it fires, send
     ``{"k": k, "y": y}`` to ``to`` on ``network`` (tag ``y``).
-``et_controller`` (an aperiodic task released by message arrival)
-    for each received sample: the control side (:class:`~netsim.control.cascade.ControlSide`: NUMRE,
+``et_controller`` (a task released by message arrival, or periodic with ``step_on: every_period``)
+    ``step_on: arrival`` (default): for each received sample: the control side (:class:`~netsim.control.cascade.ControlSide`: NUMRE,
     MRCI, DOB, built by a registered kind ``"controller"`` design such as ``hdd_et``); ``execute`` (the
     algorithm's CPU time); if eq (22) holds, send the packet ``{"k": k, "values": [u_k .. u_k+h]}``
     (tag ``u``, ``header_bits + bits_per_value * (h + 1)`` bits).
+    ``step_on: every_period`` (the other reading of Case 2, no estimator only): the task is released every
+    ``T`` (``release: periodic``, an ``offset`` after the sensor); it takes the messages that arrived (the
+    last one wins), steps the controller on the last received measurement and checks eq (22) at every
+    period. Before the first measurement it does nothing. Both readings count transmissions the same way
+    (messages by tag); the controller's job count (jobs table) differs: every arrival vs every period.
+
+    Which reading is the paper's: the text of section 3.2.4 ("the control signal ... is generated when
+    beta_k = 1 (i.e. when a measurement is received by the control side)") and eq (28)'s
+    ``Cc = Uc (1 - CS)`` (controller computation proportional to the *sensor* utilization) describe a
+    controller that runs at arrivals: ``arrival`` is the default.
 ``playout_actuator`` (two handlers sharing the node's ``shared[key]`` buffer)
     ``mode: receive`` (on message): take the packet into the :class:`~netsim.control.packets.PlayoutBuffer`,
     ``execute``, ``analog_out`` the value for the current period; ``mode: tick`` (timer ``T``):
     ``analog_out`` the buffer's value for the period (current action, then the future ones, then the last
-    one held).
+    one held). The tick also records ``record_past_end`` (default ``u_past_end``): 1 for a period played
+    past the end of a packet that carries future actions (``h >= 1`` and ``j - k > h``: the paper's
+    ``h >= N_max`` is violated), 0 otherwise (a packet of the current action only, ``h = 0``, is held by
+    design and counts 0). The ``et_control`` metric sums it (``et.played_past_packet``).
 
 The fast-period index is ``k = (now - offset) // period``. The requests a program yields at every job with the
 same arguments (``analog_in``, ``receive``, ``execute``) are built once (requests are immutable values).
@@ -137,6 +150,9 @@ class EtController:
         priority: int = 0
         tag: str = "u"
         record: bool = True
+        step_on: Literal["arrival", "every_period"] = Field(
+            "arrival", description="arrival: step at each received measurement (section 3.2.4, eq 28; default); "
+            "every_period: a periodic task stepping every T on the last received measurement (no estimator)")
 
     @staticmethod
     def canonical_params(params: dict) -> dict:
@@ -162,8 +178,12 @@ class EtController:
         T, off = int(p.period), int(p.offset)
         trig = ControllerTrigger(p.sigma_c, p.delta_c, p.norm, enabled=p.controller_et)
         self.side = factory(p.design_params, reference=lambda k: float(r_t(off + k * T)), trigger=trig)
+        if p.step_on == "every_period" and self.side.est is not None:
+            raise BuildError(f"{ctx.node}.{ctx.task}: step_on: every_period is the no-estimator reading of Case 2; "
+                             "with a NUMRE (design_params.estimator) use step_on: arrival")
         self._receive = Request(rq.RECEIVE, p.network)  # job.receive(p.network)
         self._exec = ctx.execute_request  # job.execute(ctx.execution), built once
+        self._last: tuple[int, float] | None = None  # every_period: last received (k, y)
         ctx.env.at_end(self._finish)
 
     def _finish(self, t_end: int) -> None:
@@ -175,27 +195,46 @@ class EtController:
         self.ctx.record("numre_N_max", float(side.N_max), t_end)
 
     def __call__(self, job: Any) -> Body:
-        p = self.p
-        record = self.ctx.record
+        if self.p.step_on == "every_period":
+            yield from self._every_period(job)
+            return
         while True:
             msg = yield self._receive
             if msg is None:
                 return
             payload = msg.payload
             k, y = int(payload["k"]), float(payload["y"])
-            dec = self.side.on_measurement(k, y)
-            if p.record:
-                now = job.now
-                record("N", float(dec.N), now)
-                record("y_hat", dec.y_hat, now)
-                record("d_hat", dec.d_hat, now)
-                record("u_hat", dec.packet.values[0], now)
-            if self._exec is not None:
-                yield self._exec
-            if dec.send:
-                pkt = dec.packet
-                yield job.send(p.network, p.to, {"k": pkt.k, "values": pkt.values},
-                               pkt.bits(p.bits_per_value, p.header_bits), priority=p.priority, tag=p.tag)
+            yield from self._decide(job, self.side.on_measurement(k, y))
+
+    def _every_period(self, job: Any) -> Body:
+        p = self.p
+        while True:
+            msg = yield self._receive
+            if msg is None:
+                break
+            self._last = (int(msg.payload["k"]), float(msg.payload["y"]))
+        if self._last is None:
+            return
+        k = (job.now - p.offset) // p.period
+        k_y, y = self._last
+        yield from self._decide(job, self.side.on_period(k, y, k_y))
+
+    def _decide(self, job: Any, dec: Any) -> Body:
+        """Record the decision, execute, and send the packet when eq (22) lets it go."""
+        p = self.p
+        if p.record:
+            record = self.ctx.record
+            now = job.now
+            record("N", float(dec.N), now)
+            record("y_hat", dec.y_hat, now)
+            record("d_hat", dec.d_hat, now)
+            record("u_hat", dec.packet.values[0], now)
+        if self._exec is not None:
+            yield self._exec
+        if dec.send:
+            pkt = dec.packet
+            yield job.send(p.network, p.to, {"k": pkt.k, "values": pkt.values},
+                           pkt.bits(p.bits_per_value, p.header_bits), priority=p.priority, tag=p.tag)
 
 
 @register("program", "playout_actuator", "actuator: playout buffer of h-step packets; receive (on message) or tick (timer T)")
@@ -211,6 +250,8 @@ class PlayoutActuator:
         key: str = "playout"
         u0: float = 0.0
         record_as: str | None = "u"
+        record_past_end: str | None = Field("u_past_end", description="tick mode: signal set to 1 for a period "
+                                            "played past the end of an h >= 1 packet (0 otherwise)")
 
     def __init__(self, ctx: Any, params: "PlayoutActuator.Params") -> None:
         self.ctx = ctx
@@ -242,7 +283,13 @@ class PlayoutActuator:
         if self._exec is not None:
             yield self._exec
         now = job.now
-        u = self.buf.value((now - p.offset) // p.period)
+        j = (now - p.offset) // p.period
+        buf = self.buf
+        u = buf.value(j)
         yield job.analog_out(p.channel, u)
         if p.record_as:
             self.ctx.record(p.record_as, u, now)
+        if p.mode == "tick" and p.record_past_end:
+            pkt = buf.packet
+            past = pkt is not None and pkt.horizon > 0 and j - pkt.k > pkt.horizon
+            self.ctx.record(p.record_past_end, 1.0 if past else 0.0, now)

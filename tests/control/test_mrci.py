@@ -75,3 +75,34 @@ def test_ratio_not_dividing_the_slow_modes_is_refused():
 def test_computation_saving_formula():
     assert computation_saving(2, 1) == pytest.approx(1 / 3)
     assert computation_saving(3, 2) == pytest.approx(2 / 5)
+
+
+def _two_first_order_modes():
+    # C(z) = 1/(z-1) + 1/(z-0.5), m=2: mode 1 (pole 1) lifted 2/(z^2-1), phase 0 (even k);
+    # mode 2 (pole 0.5) lifted 1.5/(z^2-0.25), phase 1 (odd k).
+    num = np.polyadd([1.0, -0.5], [1.0, -1.0])
+    den = np.polymul([1.0, -1.0], [1.0, -0.5])
+    return decompose(num, den, m=2)
+
+
+def test_delayed_wiring_feeds_mode_two_the_downsampled_error_of_the_even_instant():
+    # Section 3.2.3: down-sample e at k = 2j, delay z^-(i-1). Impulse e = [1, 0, 0, 0, 0], by hand:
+    # mode 1: k0 out 0, x1 = 2; k2 out 2, x1 = 2 (e2 = 0); k4 out 2.
+    # mode 2 (delayed): k1 sees e0 = 1: out 0, x2 = 1.5; k3 sees e2 = 0: out 1.5, x2 = 0.375.
+    # u = mode 1 held + mode 2 held = [0, 0, 2, 3.5, 3.5]
+    ctrl = MrciController(_two_first_order_modes(), wiring="delayed")
+    e = [1.0, 0.0, 0.0, 0.0, 0.0]
+    assert [ctrl.step(k, ek) for k, ek in enumerate(e)] == pytest.approx([0.0, 0.0, 2.0, 3.5, 3.5])
+
+
+def test_own_instant_wiring_feeds_mode_two_its_own_error():
+    # same impulse: mode 2 sees e1 = 0 and e3 = 0, so it never moves: u = mode 1 only = [0, 0, 2, 2, 2]
+    ctrl = MrciController(_two_first_order_modes(), wiring="own_instant")
+    e = [1.0, 0.0, 0.0, 0.0, 0.0]
+    assert [ctrl.step(k, ek) for k, ek in enumerate(e)] == pytest.approx([0.0, 0.0, 2.0, 2.0, 2.0])
+
+
+def test_delayed_wiring_is_the_default_and_unknown_wirings_are_refused():
+    assert MrciController(_two_first_order_modes()).wiring == "delayed"
+    with pytest.raises(ConfigError, match="wiring must be one of"):
+        MrciController(_two_first_order_modes(), wiring="late")

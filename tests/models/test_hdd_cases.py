@@ -49,10 +49,15 @@ def test_numre_cuts_utilization_further_and_restores_performance(cases):
 
 
 def test_numre_reproduces_tts_output_when_every_packet_is_sent():
+    # h = N_TTS covers every gap of the run; its packet (465 x 32 bits) needs jumbo frames, and 10 Gbit/s
+    # to cross the switch within T (at 1 Gbit/s it takes ~30 us > T = 20 us and arrives late)
     res = run(SCEN / "hdd_case3.yaml", write=False,
-              overrides={"nodes.controller.tasks[0].params.controller_et": False})
+              overrides={"nodes.controller.tasks[0].params.controller_et": False,
+                         "nodes.controller.tasks[0].params.design_params.h": 464,
+                         "networks.net.max_frame_bits": 72144, "networks.net.bitrate": "10 Gbit/s"})
     assert _m(res, "et.Uc") < 0.5
-    assert _m(res, "et.NE") < 0.01  # exact model, no noise: only the h-horizon and K(N) corrections remain
+    assert _m(res, "et.played_past_packet") == 0.0
+    assert _m(res, "et.NE") < 0.01  # exact model, no noise, h >= every gap: only K(N) corrections remain
 
 
 def test_noise_and_disturbance_raise_utilization(cases):
