@@ -16,11 +16,47 @@ from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.task import (Handler, HandlerSpec, Task, TaskSpec, check_body, check_time, did_you_mean,
                                 task_error)
 from netsim.kernel.timers import Timer, Trigger
+from netsim.timebase import format_time
 
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.job import Job
 
-__all__ = ["KernelBuilder"]
+__all__ = ["KernelBuilder", "task_spec"]
+
+
+def task_spec(node: str, name: str, *, period: int | None = None, offset: int = 0, deadline: int | None = None,
+              priority: int | float | None = None, wcet: int | None = None, preemptible: bool = True,
+              wcet_handler: Any = None, deadline_handler: Any = None) -> TaskSpec:
+    """The checked :class:`TaskSpec` of a task, as :meth:`KernelBuilder.create_task` makes it (times in ns).
+
+    Every check here depends on the task's description only, so ``netsim validate`` runs this same function
+    on a scenario's tasks before anything is built (then the scheduling policy's ``check``).
+
+    Raises
+    ------
+    BuildError
+        From :func:`~netsim.kernel.task.task_error` (with ``node``, ``task`` and ``field`` attributes).
+    """
+    period_ns = check_time(node, name, "period", period, positive=True, allow_none=True)
+    offset_ns = check_time(node, name, "offset", offset)
+    assert offset_ns is not None
+    if period_ns is None and offset_ns:
+        raise task_error(node, name, "offset", "applies to periodic tasks only; give a period or drop it")
+    deadline_ns = check_time(node, name, "deadline", deadline, positive=True, allow_none=True)
+    if deadline_ns is None:
+        deadline_ns = period_ns
+    if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
+        raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
+    wcet_ns = check_time(node, name, "wcet", wcet, positive=True, allow_none=True)
+    for field, ref in (("wcet_handler", wcet_handler), ("deadline_handler", deadline_handler)):
+        if ref is not None and not isinstance(ref, str) and not callable(ref):
+            raise task_error(node, name, field, f"must be a handler name or a callable fn(job), got {ref!r}")
+    if wcet_handler is not None and wcet_ns is None:
+        raise task_error(node, name, "wcet_handler", "needs a 'wcet' budget to detect overruns; add e.g. "
+                         "'wcet: 2 ms' (the execution budget per job)")
+    if deadline_handler is not None and deadline_ns is None:
+        raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
+    return TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(preemptible))
 
 
 class KernelBuilder:
@@ -87,26 +123,10 @@ class KernelBuilder:
         if name in self.tasks or name in self.handlers:
             raise task_error(node, name, "name", "is already used by another task or handler on this node")
         check_body(node, name, body)
-        period_ns = check_time(node, name, "period", period, positive=True, allow_none=True)
-        offset_ns = check_time(node, name, "offset", offset)
-        assert offset_ns is not None
-        if period_ns is None and offset_ns:
-            raise task_error(node, name, "offset", "applies to periodic tasks only; give a period or drop it")
-        deadline_ns = check_time(node, name, "deadline", deadline, positive=True, allow_none=True)
-        if deadline_ns is None:
-            deadline_ns = period_ns
-        if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
-            raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
-        wcet_ns = check_time(node, name, "wcet", wcet, positive=True, allow_none=True)
-        for field, ref in (("wcet_handler", wcet_handler), ("deadline_handler", deadline_handler)):
-            if ref is not None and not isinstance(ref, str) and not callable(ref):
-                raise task_error(node, name, field, f"must be a handler name or a callable fn(job), got {ref!r}")
-        if wcet_handler is not None and wcet_ns is None:
-            raise task_error(node, name, "wcet_handler", "needs a 'wcet' budget to detect overruns")
-        if deadline_handler is not None and deadline_ns is None:
-            raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
-        spec = TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(preemptible))
+        spec = task_spec(node, name, period=period, offset=offset, deadline=deadline, priority=priority, wcet=wcet,
+                         preemptible=preemptible, wcet_handler=wcet_handler, deadline_handler=deadline_handler)
         self.policy.check(node, spec)
+        period_ns, offset_ns = spec.period, spec.offset
         task = Task(spec, body, data, wcet_handler, deadline_handler)
         self.tasks[name] = task
         if period_ns is not None:
@@ -154,7 +174,7 @@ class KernelBuilder:
         assert start_ns is not None
         now = self._sim.now
         if start_ns < now:
-            raise task_error(node, name, "start", f"{start_ns} ns is in the past (now {now} ns)")
+            raise task_error(node, name, "start", f"{format_time(start_ns)} is in the past (now {format_time(now)})")
         if not isinstance(handler, str):
             raise task_error(node, name, "handler", f"must be a handler name, got {handler!r}")
         timer = Timer(name, handler, period_ns, start_ns, data)
@@ -240,11 +260,12 @@ class KernelBuilder:
         start_ns = check_time(node, name, "start", start)
         assert period_ns is not None and exec_ns is not None and start_ns is not None
         if exec_ns >= period_ns:
-            raise task_error(node, name, "execution", f"{exec_ns} ns must be less than the period ({period_ns} ns); "
+            raise task_error(node, name, "execution", f"{format_time(exec_ns)} must be less than the period "
+                             f"({format_time(period_ns)}); "
                              "the load would take the whole CPU")
         now = self._sim.now
         if start_ns < now:
-            raise task_error(node, name, "start", f"{start_ns} ns is in the past (now {now} ns)")
+            raise task_error(node, name, "start", f"{format_time(start_ns)} is in the past (now {format_time(now)})")
         if handler is not None and not isinstance(handler, str):
             raise task_error(node, name, "handler", f"must be a handler name or None, got {handler!r}")
         load = PeriodicLoad(name, period_ns, exec_ns, start_ns, handler)

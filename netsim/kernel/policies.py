@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from netsim.errors import BuildError, ConfigError
 from netsim.kernel.task import TaskSpec, task_error
 from netsim.registry import entries, lookup, register
+from netsim.timebase import format_time
 
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.job import Job
@@ -88,7 +89,8 @@ class FixedPriority(Policy):
     def check(self, node: str, spec: TaskSpec) -> None:
         if spec.priority is None:
             raise task_error(node, spec.name, "priority",
-                             "is required under policy 'fp' (lower = more urgent), or use policy 'rm'/'dm'/'edf'")
+                             f"is required under policy '{self.name}'; add e.g. 'priority: 1' (lower is more "
+                             "urgent) or use policy 'rm', 'dm' or 'edf'")
 
     def key(self, job: "Job") -> Any:
         return job.spec.priority
@@ -101,8 +103,8 @@ class _Constrained(Policy):
         if spec.period is not None and spec.deadline is not None and spec.deadline > spec.period:
             raise task_error(
                 node, spec.name, "deadline",
-                f"{spec.deadline} ns exceeds the period {spec.period} ns, which policy '{self.name}' "
-                "does not allow; shorten the deadline or use policy 'fp' or 'edf'",
+                f"{format_time(spec.deadline)} exceeds the period {format_time(spec.period)}, which policy "
+                f"'{self.name}' does not allow; shorten the deadline or use policy 'fp' or 'edf'",
             )
 
 

@@ -307,24 +307,58 @@ class _Checker:
             self.error([*at, "period"], "a periodic task needs a period; add e.g. 'period: 10 ms', or set 'release: aperiodic' or 'release: on_message:<network>'")
         if rel is not None and rel != "periodic" and period is not None:
             self.error([*at, "period"], f"only periodic tasks have a period (this one is released '{rel}'); remove 'period' or set 'release: periodic'")
-        offset = _time_or_none(task.get("offset"))
-        if rel is not None and rel != "periodic" and offset:
-            self.error([*at, "offset"], f"only periodic tasks have an offset (this one is released '{rel}'); remove 'offset'")
         if rel is not None and rel.startswith("on_message:"):
             net = rel.split(":", 1)[1]
             if self.network_ref(node_name, net, [*at, "release"]):
                 self.one_receiver(node_name, net, at, [*at, "release"])
-        policy = node.get("policy", "fp")
-        if policy == "fp" and task.get("priority") is None:
-            self.error([*at, "priority"], "policy 'fp' needs a priority for every task; add e.g. 'priority: 1' (lower is more urgent) or use policy rm, dm or edf")
+        refused = self.kernel_checks(node_name, node, task, rel, at)
         p_ns, d_ns = _time_or_none(period), _time_or_none(task.get("deadline"))
-        if p_ns is not None and d_ns is not None and p_ns > 0 and d_ns > p_ns:
-            self.warn([*at, "deadline"], f"deadline {task.get('deadline')} is longer than the period {period}; jobs may overlap (allowed)")
+        if p_ns is not None and d_ns is not None and p_ns > 0 and d_ns > p_ns and "deadline" not in refused:
+            self.warn([*at, "deadline"], f"deadline {format_time(d_ns)} is longer than the period {format_time(p_ns)}; "
+                                         "jobs may overlap (allowed)")
         for key in ("wcet_handler", "deadline_handler"):
             ref = task.get(key)
             if isinstance(ref, str) and ref not in handlers:
                 known = [h for h in handlers if isinstance(h, str)]
                 self.error([*at, key], f"node '{node_name}' has no handler '{ref}'{did_you_mean(ref, known, what='handlers')}")
+
+    def kernel_checks(self, node_name: str, node: dict[str, Any], task: dict[str, Any], rel: str | None,
+                      at: list[PathPart]) -> set[str]:
+        """The kernel's own checks of a task (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
+        ``check``), exactly as ``build`` runs them; returns the fields they refused.
+
+        Skipped for a task whose times the schema refuses (it reports those). Policies that are not built in
+        are not instantiated here (validating must not run a scenario's own code).
+        """
+        from netsim.errors import BuildError
+        from netsim.kernel.building import task_spec
+        from netsim.kernel.policies import BUILTIN_POLICIES as KERNEL_POLICIES
+
+        times: dict[str, int | None] = {}
+        for key in ("period", "offset", "deadline", "wcet"):
+            value = task.get(key)
+            times[key] = _time_or_none(value)
+            if value is not None and (times[key] is None or (key != "offset" and times[key] <= 0)):
+                return set()  # the schema reports it
+        if rel is not None and rel != "periodic":
+            times["period"] = None
+        priority = task.get("priority")
+        if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
+            return set()
+        name = str(task.get("name"))
+        policy_name = node.get("policy", "fp")
+        try:
+            spec = task_spec(node_name, name, period=times["period"], offset=times["offset"] or 0,
+                             deadline=times["deadline"], priority=priority, wcet=times["wcet"],
+                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"))
+            if isinstance(policy_name, str) and policy_name in KERNEL_POLICIES:
+                KERNEL_POLICIES[policy_name]().check(node_name, spec)
+        except BuildError as exc:
+            field = getattr(exc, "field", None)
+            prefix = f"node '{node_name}', task '{name}', field '{field}': "
+            self.error([*at, field] if field else at, exc.message.removeprefix(prefix))
+            return {field} if field else set()
+        return set()
 
     def handler(self, node_name: str, handler: dict[str, Any], at: list[PathPart]) -> None:
         trigger = handler.get("trigger")

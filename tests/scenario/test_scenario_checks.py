@@ -69,8 +69,9 @@ def test_fixed_priority_tasks_need_a_priority(base):
     raw = base()
     del raw["nodes"]["sensor"]["tasks"][0]["priority"]
     assert _problems(raw) == {
-        "nodes.sensor.tasks[0].priority": "policy 'fp' needs a priority for every task; add e.g. 'priority: 1' "
-        "(lower is more urgent) or use policy rm, dm or edf"
+        # the kernel's own check (FixedPriority.check), run by validate
+        "nodes.sensor.tasks[0].priority": "is required under policy 'fp'; add e.g. 'priority: 1' "
+        "(lower is more urgent) or use policy 'rm', 'dm' or 'edf'"
     }
 
 
@@ -114,7 +115,7 @@ def test_the_same_task_name_on_two_nodes_is_fine(base):
 def test_overrun_handlers_must_exist_on_the_node(base):
     raw = base()
     raw["nodes"]["actuator"]["tasks"] = [
-        {"name": "t", "program": "zzt_idle", "priority": 2, "period": "1 s", "wcet_handler": "act",
+        {"name": "t", "program": "zzt_idle", "priority": 2, "period": "1 s", "wcet": "1 ms", "wcet_handler": "act",
          "deadline_handler": "akt"}
     ]
     assert _problems(raw) == {
@@ -390,8 +391,8 @@ def test_offset_on_an_aperiodic_task_is_an_error(base):
     index = len(node["tasks"]) - 1
     node_name = next(iter(raw["nodes"]))
     assert _problems(raw) == {
-        f"nodes.{node_name}.tasks[{index}].offset": "only periodic tasks have an offset (this one is released "
-        "'aperiodic'); remove 'offset'"
+        # the kernel's own check (netsim.kernel.building.task_spec), run by validate
+        f"nodes.{node_name}.tasks[{index}].offset": "applies to periodic tasks only; give a period or drop it"
     }
 
 
