@@ -433,6 +433,8 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 def _cmd_report(args: argparse.Namespace) -> int:
     from netsim.report import report
 
+    if not args.quiet:  # case-study reports log their progress under netsim.progress.<name>
+        logging.getLogger("netsim.progress").setLevel(logging.INFO)
     tables = report(args.target, out=args.out, plots=not args.no_plots)
     for name, frame in (tables or {}).items():
         rows = getattr(frame, "shape", (0,))[0]
