@@ -22,9 +22,10 @@ Reading the printed parameters (choices and evidence)
    ``resonance_gain="printed"``. ("two large resonances": unit-gain modes with zeta = 0.03 and 0.01 peak
    at +24 dB and +34 dB, large indeed.)
 2. **Notch 1** (``alpha_1 = 0.965 < beta_1 = 0.975``): with eq (31) as printed the zeros lie *inside* the
-   poles, so the filter is a +5.8 dB *peak* at 5 kHz, contradicting "these frequency resonances are
-   attenuated by notch filters". We swap them (``notch="attenuating"``: zeros at radius 0.975, poles at
-   0.965, a -5.8 dB notch); ``notch="printed"`` keeps the print.
+   poles, so the filter is a +2.88 dB *peak* at 5 kHz (``|N1(e^{j w T})|`` at ``w = 2 pi 5 kHz``),
+   contradicting "these frequency resonances are attenuated by notch filters". We swap them
+   (``notch="attenuating"``: zeros at radius 0.975, poles at 0.965, a -2.88 dB notch at 5 kHz);
+   ``notch="printed"`` keeps the print.
 3. **Notch 2** (``alpha_2 = beta_2 = 0.3``): numerator equals denominator, i.e. the identity filter. Kept
    as printed (it is what the table says); it adds two cancelling states so the model stays "10th order".
    The cancelled modes (|z| = 0.3) are stable, so the estimator design is unaffected.
@@ -42,9 +43,10 @@ Reading the printed parameters (choices and evidence)
 7. **DOB, eq (18)** (Case 6). Rows 2-3 of the printed ``M`` imply ``u = -C y + q``, so ``M12 = -1`` makes
    the residual ``d - q`` reward doubling the disturbance; the consistent sign is ``+1`` (``q = -d_hat``).
    Even so, problem (17) on this closed-loop LFT only requires the loop through ``C(z)`` and ``G`` to be
-   stable, and its H-infinity solution for this plant is an *unstable* filter (poles up to |z| ~ 13,
-   cancelled only by that exact loop). Inside the NUMRE cascade (MRCI instead of ``C(z)``, restarts at
-   arrivals, packets held by eq (22)) it diverged (NE 4.5). We solve (17) in the estimator form (the DOB's
+   stable, and its H-infinity solution for this plant is an *unstable* filter (largest pole modulus
+   1.97 with the default weights, as the build-time error prints it; cancelled only by that exact
+   loop). Inside the NUMRE cascade (MRCI instead of ``C(z)``, restarts at arrivals, packets held by
+   eq (22)) it diverged (NE 4.5). We solve (17) in the estimator form (the DOB's
    output kept out of its own design loop, i.e. the Youla parameter of eq (18) as a filter on ``u`` and
    ``y``): ``D(z)`` is stable by construction and has ``D1 ~ -1``, ``D2 ~ G^-1`` in band, the structure
    the text describes. Details and the weights in :mod:`netsim.control.dob`; ``dob_form: eq18`` keeps the
