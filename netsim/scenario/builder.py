@@ -33,7 +33,7 @@ from netsim.env import SimEnv, run_events
 from netsim.errors import BuildError, ConfigError, NetsimError
 from netsim.timebase import MS
 
-__all__ = ["Simulation", "build", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
+__all__ = ["Simulation", "build", "make_plant", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
 
 log = logging.getLogger(__name__)
 
@@ -153,19 +153,31 @@ def _make_signals(scenario: Any) -> dict[str, Callable[[int], float]]:
     return out
 
 
+def make_plant(model: str, factory: Any, params: Any) -> Any:
+    """``factory(params)``: the plant object of the scenario's ``plant:`` (``model`` names it in messages).
+
+    ``netsim validate`` calls this too, for registered plants that do not declare their ports, to check the
+    ``io`` channels against the plant's real inputs and outputs.
+
+    Raises
+    ------
+    BuildError
+        At path ``plant`` when the factory refuses its parameters.
+    """
+    try:
+        return factory(params)
+    except NetsimError:
+        raise
+    except Exception as exc:  # noqa: BLE001
+        raise BuildError(f"cannot build plant '{model}': {exc}", path="plant") from exc
+
+
 def _build_plant(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> Any:
     """The plant from its factory, with disturbances (exact at jumps), bound to ``env``, then ``x0``."""
     spec = scenario.plant
     if spec is None:
         return None
-    factory = spec.plugin()
-    params = spec.validated_params()
-    try:
-        plant = factory(params)
-    except NetsimError:
-        raise
-    except Exception as exc:  # noqa: BLE001
-        raise BuildError(f"cannot build plant '{spec.model}': {exc}", path="plant") from exc
+    plant = make_plant(spec.model, spec.plugin(), spec.validated_params())
     if spec.process_noise is not None:
         _set_process_noise(plant, spec.process_noise)
     for port, sig_name in spec.disturbances.items():

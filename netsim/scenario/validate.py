@@ -129,18 +129,25 @@ class _Checker:
         self.problems.append(Problem(format_path(list(parts)), message, severity=WARNING))
 
     def lookup(self, kind: str, name: Any, at: list[PathPart]) -> Any:
-        """The registered plugin or None (after recording a problem)."""
+        """The registered plugin or None (after recording a problem, also when build could not call it)."""
         if not isinstance(name, str) or not name:
             return None  # the schema reports the type problem
         from netsim import registry
+        from netsim.scenario.calls import call_problem
 
         try:
-            return registry.lookup(kind, name)
+            plugin = registry.lookup(kind, name)
         except ConfigError as exc:
             self.error(at, exc.message)
+            return None
         except Exception as exc:  # noqa: BLE001 - importing a user's "module:attr" may raise anything
             self.error(at, f"cannot load {kind} '{name}': {type(exc).__name__}: {exc}")
-        return None
+            return None
+        problem = call_problem(kind, name, plugin) if ":" in name else None  # registered: made for this call
+        if problem is not None:
+            self.error(at, problem)
+            return None
+        return plugin
 
     def params(self, plugin: Any, raw: Any, prefix: list[PathPart], key: str) -> Any:
         """Validate plugin parameters; stores and returns the validated object (None when invalid)."""
@@ -195,11 +202,37 @@ class _Checker:
         factory = self.lookup("plant", plant.get("model"), ["plant", "model"])
         params = self.params(factory, plant.get("params", {}) if plant.get("params") is not None else {}, ["plant", "params"], "plant")
         inputs, outputs = _ports(factory, params)
+        if factory is not None and params is not None and (inputs is None or outputs is None):
+            inputs, outputs = self.built_ports(plant.get("model"), factory, params, inputs, outputs)
         for key, sig in _d(plant.get("disturbances")).items():
             self.port_ref(key, inputs, "input", ["plant", "disturbances", str(key)])
             if isinstance(sig, str) and sig not in self.signals:
                 self.error(["plant", "disturbances", str(key)], f"unknown signal '{sig}'{did_you_mean(sig, self.signals, what='signals')}")
         return outputs, inputs
+
+    def built_ports(self, model: Any, factory: Any, params: Any, inputs: list[Any] | None,
+                    outputs: list[Any] | None) -> tuple[list[Any] | None, list[Any] | None]:
+        """Ports of a registered plant that does not declare them, from the plant ``build`` would make.
+
+        Only registered plants (netsim's own plugin modules, loaded anyway) are built; a ``module:attr`` path
+        from the scenario is not called (validating must not run a scenario's own code). A plant that refuses
+        its parameters is reported as ``build`` would report it.
+        """
+        if not isinstance(model, str) or ":" in model:
+            return inputs, outputs
+        from netsim.scenario.builder import make_plant
+
+        try:
+            built = make_plant(model, factory, params)
+        except ConfigError as exc:
+            self.error(parse_path(exc.path) if exc.path else ["plant"], exc.message)
+            return inputs, outputs
+        names_in, names_out = getattr(built, "input_names", None), getattr(built, "output_names", None)
+        if inputs is None and isinstance(names_in, (list, tuple)):
+            inputs = list(names_in)
+        if outputs is None and isinstance(names_out, (list, tuple)):
+            outputs = list(names_out)
+        return inputs, outputs
 
     def port_ref(self, port: Any, ports: list[Any] | None, what: str, at: list[PathPart]) -> None:
         if ports is None or isinstance(port, bool):

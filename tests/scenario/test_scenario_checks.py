@@ -345,6 +345,9 @@ def test_module_path_plugins_resolve(tmp_path, monkeypatch, base):
             class MyProgram:
                 class Params(StrictModel):
                     gain: float
+
+                def __init__(self, ctx, params):  # build calls cls(ctx, params); validate checks that it can
+                    self.params = params
             """
         )
     )
