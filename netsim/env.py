@@ -32,9 +32,11 @@ priority used at one instant is in this one table; kernel, networks and plants i
                           the plant's grid samples; simpy's timeouts and triggered events
 :data:`DISPATCH`       2  the kernel's deferred dispatch (and the end of a periodic-load window): the CPU is
                           given away once every release of the instant is known
-:data:`ARBITRATE`      3  media deciding who sends (CAN arbitration, CSMA/CD contention, TDMA slot starts,
+:data:`AIR`            3  radio transmissions going on and off the air (after the instant's channel-access
+                          decisions: CCAs, backoff expiries, frames finding the medium idle)
+:data:`ARBITRATE`      4  media deciding who sends (CAN arbitration, CSMA/CD contention, TDMA slot starts,
                           token visits, priority queues of serial outputs)
-:data:`DEADLINE`       4  deadline checks
+:data:`DEADLINE`       5  deadline checks
 =====================  =  =================================================================================
 
 Why this order:
@@ -44,8 +46,15 @@ Why this order:
   the start of its segment) has its frame queued when the medium decides at *t* (TrueTime: a frame queued at
   the instant the bus goes idle takes part in the arbitration; issue 13 B). A transmission ending at *t* is
   NORMAL, so the frames it leaves waiting take part too.
+- Radio decisions before the air changes: a CCA ending or a backoff expiring at *t* (NORMAL), or a frame
+  sent at *t* by a dispatched task, sees the medium as it was just before *t*; carrier sense cannot detect
+  a start at the very instant it senses, so nodes deciding together collide, and a CCA ending as a
+  transmission ends has sensed it.
+- Air changes before arbitration: a radio frame ending at *t* is delivered at *t*, and what a task does
+  with it at *t* (forwarding it on a bus, say) is queued before that bus arbitrates at *t*.
 - Arbitration before deadline checks: a job finishing at *t* meets a deadline at *t* (response-time
-  analysis counts ``R <= D`` as met), even when it finishes after a message that arrives at *t*.
+  analysis counts ``R <= D`` as met), whatever made it finish at *t*: a segment end, a release, or a
+  message delivered by a transmission decided at *t*.
 - Work created while an instant is processed needs no special care: a new entry at the current time goes
   into the same heap, so anything a dispatch or an arbitration starts at *t* at a lower priority (a release
   by a delivery, a further dispatch, a zero-length transmission) still runs before the remaining
@@ -71,7 +80,7 @@ import simpy.events
 
 __all__ = [
     "SimEnv", "Recorder", "stream_seed", "schedule_call", "run_events", "CallEntry",
-    "URGENT", "NORMAL", "DISPATCH", "ARBITRATE", "DEADLINE",
+    "URGENT", "NORMAL", "DISPATCH", "AIR", "ARBITRATE", "DEADLINE",
 ]
 
 #: Set-up at the start of the run; simpy's process starts and interrupts (simpy's URGENT).
@@ -80,8 +89,10 @@ URGENT: Final[int] = simpy.events.URGENT
 NORMAL: Final[int] = simpy.events.NORMAL
 #: The kernel's deferred dispatch: after every release of the instant.
 DISPATCH: Final[int] = NORMAL + 1
-#: Medium decisions (arbitration, contention, slot starts): after every dispatch of the instant.
-ARBITRATE: Final[int] = DISPATCH + 1
+#: Radio transmissions going on and off the air: after the instant's channel-access decisions.
+AIR: Final[int] = DISPATCH + 1
+#: Medium decisions (arbitration, contention, slot starts): after every dispatch and delivery of the instant.
+ARBITRATE: Final[int] = AIR + 1
 #: Deadline checks: after everything that can finish a job at the instant.
 DEADLINE: Final[int] = ARBITRATE + 1
 

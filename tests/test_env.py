@@ -127,10 +127,10 @@ def test_an_exception_in_a_call_entry_propagates_unchanged():
 
 
 def test_same_instant_table_orders_dispatch_before_arbitration_before_deadline():
-    from netsim.env import ARBITRATE, DEADLINE, DISPATCH, NORMAL, URGENT
+    from netsim.env import AIR, ARBITRATE, DEADLINE, DISPATCH, NORMAL, URGENT
 
     # the order the kernel and the media rely on (netsim.env docstring); URGENT/NORMAL are simpy's own
-    assert URGENT < NORMAL < DISPATCH < ARBITRATE < DEADLINE
+    assert URGENT < NORMAL < DISPATCH < AIR < ARBITRATE < DEADLINE
     assert (URGENT, NORMAL) == (simpy.events.URGENT, simpy.events.NORMAL)
 
 

@@ -22,6 +22,7 @@ from typing import Literal
 
 from pydantic import model_validator
 
+from netsim.env import ARBITRATE
 from netsim.network.message import Message
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Frame, Network
@@ -94,7 +95,7 @@ class CanBus(Network):
     def _request_arbitration(self) -> None:
         if not self._busy and not self._arb_pending:
             self._arb_pending = True
-            call_later(self.sim, 0, self._arbitrate, None, arbitrate=True)
+            call_later(self.sim, 0, self._arbitrate, None, priority=ARBITRATE)
 
     def _arbitrate(self, _: object) -> None:
         self._arb_pending = False

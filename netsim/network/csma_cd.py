@@ -15,6 +15,7 @@ from typing import Any
 
 from pydantic import Field
 
+from netsim.env import ARBITRATE
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Frame, Network
 from netsim.network.records import DROP_COLLISIONS, DROP_LOST, DROP_NO_RECEIVER, DROP_QUEUE_FULL, DROP_STALE
@@ -72,7 +73,7 @@ class CsmaCdBus(Network):
     def _request(self) -> None:
         if not self._pending:
             self._pending = True
-            call_later(self.sim, 0, self._contend, None, arbitrate=True)
+            call_later(self.sim, 0, self._contend, None, priority=ARBITRATE)
 
     def _contend(self, _: Any) -> None:
         self._pending = False

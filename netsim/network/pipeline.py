@@ -24,7 +24,7 @@ from heapq import heappush
 from dataclasses import dataclass
 from typing import Any, Callable, ClassVar
 
-from netsim.env import NORMAL, SimEnv
+from netsim.env import ARBITRATE, NORMAL, SimEnv
 from netsim.errors import ConfigError
 from netsim.network.loss import make_loss
 from netsim.network.message import Message, Receiver
@@ -475,7 +475,7 @@ class Transmitter:
         if self.queue.priority:
             # let every frame queued in this instant compete on priority
             self._pending = True
-            call_later(self.sim, 0, self._start, None, arbitrate=True)
+            call_later(self.sim, 0, self._start, None, priority=ARBITRATE)
         else:
             self._start(None)
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from netsim.env import ARBITRATE
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Frame, Network
 from netsim.network.stats import BusyMeter
@@ -72,7 +73,7 @@ class RoundRobinBus(Network):
             if self._next[0] <= best:
                 return
             self._next[1].cancel()
-        self._next = (best, call_later(self.sim, best[0] - now, self._visit, best_j, arbitrate=True))
+        self._next = (best, call_later(self.sim, best[0] - now, self._visit, best_j, priority=ARBITRATE))
 
     def _visit(self, j: int) -> None:
         self._next = None

@@ -2,11 +2,12 @@
 
 Networks are driven by call entries on simpy's heap (see :mod:`netsim.env`) rather than by one process per
 message, which keeps the cost per message to one or two heap operations. Their priorities come from the
-run's one same-instant table (:mod:`netsim.env`): ends of transmissions, interface delays and deliveries
-are ``NORMAL``; media decide who sends at ``ARBITRATE``, which runs after every ordinary event *and every
-kernel dispatch* at *t*, including those created while *t* is being processed. So every frame queued "in
-the same instant" takes part, also one sent by a task released at *t* (CAN priority arbitration, CSMA/CD
-collisions of simultaneous starts, TDMA slot starts, token visits, priority queues of serial outputs).
+run's one same-instant table (:mod:`netsim.env`): ends of wired transmissions, interface delays and
+deliveries are ``NORMAL``; radio transmissions go on and off the air at ``AIR``; media decide who sends at
+``ARBITRATE``, after every ordinary event, every kernel dispatch and every air change at *t*, including
+those created while *t* is being processed. So every frame queued "in the same instant" takes part, also one
+sent by a task released at *t* (CAN priority arbitration, CSMA/CD collisions of simultaneous starts, TDMA
+slot starts, token visits, priority queues of serial outputs).
 """
 
 from __future__ import annotations
@@ -48,16 +49,14 @@ class Call:
 
 
 def call_later(
-    sim: simpy.Environment, delay_ns: int, fn: Callable[[Any], None], arg: Any = None, *, arbitrate: bool = False
+    sim: simpy.Environment, delay_ns: int, fn: Callable[[Any], None], arg: Any = None, *, priority: int = NORMAL
 ) -> Call:
-    """Call ``fn(arg)`` after ``delay_ns`` (0: later in this instant).
-
-    ``arbitrate`` runs it at ``ARBITRATE`` priority: after every release, delivery and dispatch of that
-    instant (see :mod:`netsim.env`), for a medium's decision among the frames queued by then.
-    """
+    """Call ``fn(arg)`` after ``delay_ns`` (0: later in this instant), with a ``priority`` of the
+    same-instant table of :mod:`netsim.env` (``ARBITRATE`` for a medium's decision among the frames queued
+    by then: after every release, delivery and dispatch of that instant)."""
     if delay_ns < 0:
         raise ValueError(f"negative delay {delay_ns} ns")
-    return Call(sim, delay_ns, fn, arg, ARBITRATE if arbitrate else NORMAL)
+    return Call(sim, delay_ns, fn, arg, priority)
 
 
 def tx_time_ns(bits: int, rate_bps: float) -> int:

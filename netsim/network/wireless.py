@@ -24,6 +24,10 @@ The radio (both MACs)
     ``receiver_threshold_dbm``, the receiver did not transmit during it (half duplex), and the ratio of
     its power to the noise plus the largest sum of powers of the other transmissions that overlapped it
     stayed at least ``sinr_threshold_db``.
+    Same instant: transmissions go on and off the air after every channel-access decision of their
+    instant, so a decision at ``t`` (a CCA ending, a backoff expiring, a frame finding the medium idle for
+    DIFS) sees the medium as it was just before ``t``: nodes deciding together transmit together and
+    collide, and a CCA ending as a transmission ends has sensed it.
 
 Acknowledgements
     A unicast frame received correctly is acknowledged by the receiver ``ack_delay`` after its end (SIFS or
@@ -47,6 +51,7 @@ from typing import Any, ClassVar
 
 from pydantic import Field, model_validator
 
+from netsim.env import AIR
 from netsim.errors import ConfigError
 from netsim.network.message import Message
 from netsim.network.params import NetworkParams
@@ -204,7 +209,18 @@ class WirelessMedium(Network):
 
     def _start_tx(self, sender: str, receivers: list[str], duration: int, on_end: Any, arg: Any) -> None:
         """Put a transmission of ``sender`` on the air for ``duration``; ``on_end(arg, ok)`` gets, at its end,
-        the receivers that received it."""
+        the receivers that received it.
+
+        The transmission goes on the air, and later leaves it, at ``AIR`` priority of its instant (see
+        :mod:`netsim.env`): every channel-access decision taken at that instant (a CCA ending, a backoff
+        expiring, a frame finding the medium idle for DIFS) sees the medium as it was just before it. Carrier
+        sense cannot detect a transmission that starts at the very instant it senses, so two nodes deciding
+        at the same instant both transmit and collide; and a CCA ending as a transmission ends has sensed it.
+        """
+        call_later(self.sim, 0, self._on_air, (sender, receivers, duration, on_end, arg), priority=AIR)
+
+    def _on_air(self, item: tuple) -> None:
+        sender, receivers, duration, on_end, arg = item
         now = self.sim._now
         for other in self._active:  # the new transmission interferes with every reception under way
             for rx in other[1]:
@@ -219,7 +235,7 @@ class WirelessMedium(Network):
         if not self._active:
             self._meter.start(now)
         self._active.append(tx)
-        call_later(self.sim, duration, self._end_tx, (tx, on_end, arg))
+        call_later(self.sim, duration, self._end_tx, (tx, on_end, arg), priority=AIR)
         self._on_medium_change()
 
     def _end_tx(self, item: tuple) -> None:

@@ -14,6 +14,7 @@ the end of L's frame), so every test runs the sender of the urgent frame in thre
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import pytest
@@ -192,3 +193,102 @@ def test_job_finishing_on_a_frame_that_arrives_at_its_deadline_meets_it():
     rec = next(r for r in kernels["rx"].job_records if r.task == "T")
     assert (rec.finish, rec.deadline) == (T_IDLE, T_IDLE)
     assert fired == []
+
+
+# ---------------------------------------------------------------------------------------------- wireless
+# The radios decide at instants (a CCA ends, a backoff expires, a frame finds the medium idle for DIFS) while
+# transmissions start and end at instants: a decision at t sees the medium as it was just before t (carrier
+# sense cannot detect a start at the very instant it senses; a CCA ending as a transmission ends sensed it).
+# Positions: a at 0 m, c at 10 m, b at 20 m, so a and b reach c with equal power (neither captures the other).
+
+def _radio(bench: Any, typ: str, **extra: Any) -> Any:
+    return bench(typ, {"nodes": ["a", "b", "c"], "positions": {"a": [0, 0], "c": [10, 0], "b": [20, 0]},
+                       **extra})
+
+
+def test_802154_cca_ending_as_another_transmission_starts_finds_the_channel_idle(bench):
+    # min_be = max_be = 0: no backoff slots. a sends at 0: CCA 128 us, turnaround 192 us -> on air at 320 us
+    # for 192 us + (64 + 88) bits * 4 us = 800 us. b sends at 192 us: its CCA ends at 320 us, as a starts:
+    # idle, so b is on air at 320 + 192 = 512 us, and the two collide at c.
+    b = _radio(bench, "802.15.4", min_be=0, max_be=0, acks=False)
+    b.send_at(0, "a", "c", 64, tag="a")
+    b.send_at(192 * US, "b", "c", 64, tag="b")
+    b.run(10 * MS)
+    ra, rb = b.record("a"), b.record("b")
+    assert (ra.tx_start_ns, rb.tx_start_ns) == (320 * US, 512 * US)
+    assert b.net.busy_ccas == 0
+    assert (ra.drop_reason, rb.drop_reason) == ("interference", "interference")
+
+
+def test_802154_cca_ending_as_another_transmission_ends_finds_the_channel_busy(bench):
+    # a on air [320, 1120] us (as above). b sends at 1120 - 128 = 992 us: its CCA ends at 1120 us, as a's frame
+    # ends: busy (the CCA's 128 us window overlapped it). b backs off 0 slots, its second CCA ends at 1248 us:
+    # idle, on air at 1248 + 192 = 1440 us. (Seeing the end first would put b on air at 1312 us.)
+    b = _radio(bench, "802.15.4", min_be=0, max_be=0, acks=False)
+    b.send_at(0, "a", "c", 64, tag="a")
+    b.send_at(992 * US, "b", "c", 64, tag="b")
+    b.run(10 * MS)
+    assert (b.record("a").tx_start_ns, b.record("b").tx_start_ns) == (320 * US, 1440 * US)
+    assert b.net.busy_ccas == 1
+    assert b.deliveries("c") == [(1120 * US, "a"), (2240 * US, "b")]
+
+
+def test_80211b_frames_arriving_together_on_an_idle_medium_both_go_at_once_and_collide(bench):
+    # The medium has been idle for DIFS: a frame goes at once (DCF basic access). a and b both get one at
+    # 1 ms: both start at 1 ms, collide at c, get no ACK and are retried.
+    b = _radio(bench, "802.11b")
+    b.send_at(1 * MS, "a", "c", 1000, tag="a")
+    b.send_at(1 * MS, "b", "c", 1000, tag="b")
+    b.run(50 * MS)
+    assert (b.record("a").tx_start_ns, b.record("b").tx_start_ns) == (1 * MS, 1 * MS)
+    assert b.net.metrics(50 * MS)["retransmissions"] >= 2
+
+
+def test_80211b_backoffs_expiring_in_the_same_slot_collide(bench):
+    # cw_min = cw_max = 0: every backoff is 0 slots. c broadcasts at 0 (idle medium: at once) for
+    # 192 us + ceil((1000 + 272) bits / 11 Mbit/s) = 192 000 + 115 637 ns. a and b get broadcasts at 100 us,
+    # medium busy: each waits for the medium, then DIFS (10 + 2 * 20 = 50 us) + 0 slots: both expire together
+    # and transmit together; each is lost at c (equal powers), and at the other sender (half duplex).
+    tx_c = 192 * US + math.ceil((1000 + 272) * 1e9 / 11e6)
+    b = _radio(bench, "802.11b", cw_min=0, cw_max=0)
+    b.send_at(0, "c", None, 1000, tag="c")
+    b.send_at(100 * US, "a", None, 1000, tag="a")
+    b.send_at(100 * US, "b", None, 1000, tag="b")
+    b.run(10 * MS)
+    starts = {r.tag: r.tx_start_ns for r in b.net.records}
+    assert starts == {"c": 0, "a": tx_c + 50 * US, "b": tx_c + 50 * US}
+    lost = {(r.tag, r.receiver): r.drop_reason for r in b.net.records if r.tag in "ab"}
+    assert lost == {("a", "c"): "interference", ("a", "b"): "interference",
+                    ("b", "c"): "interference", ("b", "a"): "interference"}
+
+
+def test_radio_frame_ending_as_a_bus_goes_idle_is_forwarded_into_that_arbitration():
+    # A gateway g forwards what it receives on an 802.15.4 radio onto CAN with id 1. Radio (min_be = max_be
+    # = 0, no ACKs): a sends at 0, on air [320, 1120] us (as above), delivered to g at 1120 us. CAN at
+    # 500 kbit/s (2 us per bit): L (560 bits) on [0, 1120] us, M (id 2, 100 bits) waiting since 100 us. The
+    # arbitration at 1120 us sees the forwarded frame (100 bits): 'fwd' on [1120, 1320], M on [1320, 1520] us.
+    env = SimEnv(seed=1)
+    radio = make_network(env, "radio", "802.15.4", {"nodes": ["a", "g"], "positions": {"a": [0, 0], "g": [10, 0]},
+                                                     "min_be": 0, "max_be": 0, "acks": False})
+    can = make_network(env, "can", "can", {"nodes": ["g", "L", "M", "rx"], "bitrate": "500 kbit/s"})
+    kernels = {n: Kernel(env, n, policy="fp") for n in ["a", "g", "L", "M", "rx"]}
+    for net in (radio, can):
+        for n in net.nodes:
+            kernels[n].attach_network(net)
+            net.attach(n, kernels[n])
+
+    def forward(job):
+        msg = yield job.receive("radio")
+        yield job.send("can", "rx", msg.payload, 100, priority=1, tag="fwd")
+
+    def send_radio(job):
+        yield job.send("radio", "g", None, 64, tag="r")
+
+    kernels["g"].create_handler("forward", forward)
+    kernels["g"].bind_receive("radio", "forward")
+    kernels["a"].create_task("s", send_radio, period=100 * MS, priority=1)
+    _send_once(kernels["L"], 0, "can", "rx", 560, 3, "L")
+    _send_once(kernels["M"], 100 * US, "can", "rx", 100, 2, "M")
+    env.run(10 * MS)
+    assert radio.records[0].delivered_ns == 1120 * US
+    assert _spans(can) == {"L": (0, 1120 * US), "fwd": (1120 * US, 1320 * US), "M": (1320 * US, 1520 * US)}
