@@ -32,6 +32,18 @@ def _describe(values: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v!r}" for k, v in values.items())
 
 
+def _line(path: str | Path, where: str | None) -> int | None:
+    """The line of the YAML path ``where`` in the sweep file (None when unknown or unreadable)."""
+    if not where:
+        return None
+    from netsim.scenario.loader import read_yaml
+
+    try:
+        return read_yaml(path)[1].line_of(where)
+    except ConfigError:
+        return None
+
+
 def check_sweep(path: str | Path) -> list[Problem]:
     """Every problem of the sweep file at ``path`` (never raises for user mistakes).
 
@@ -46,7 +58,7 @@ def check_sweep(path: str | Path) -> list[Problem]:
         sweep = load_sweep(path)
     except ConfigError as exc:
         message = exc.message.removeprefix(f"{file}: ")  # the problem line names the file already
-        return [Problem(exc.path or "", message, file=file)]
+        return [Problem(exc.path or "", message, line=_line(path, exc.path), file=file)]
     base_problems = check_scenario(sweep.base_path or sweep.base)
     problems = list(base_problems)
     if any(p.is_error for p in base_problems):

@@ -163,6 +163,24 @@ class SweepSpec(StrictModel):
                     raise ValueError(f"surface.{axis}: '{name}' is not a factor (factors: {', '.join(self.factors)})")
         return self
 
+    def surface_problem(self) -> tuple[str, str] | None:
+        """``(path, message)`` when a surface axis names a factor with non-numeric values, else None.
+
+        The surface is drawn after every point has run; this check lets ``load_sweep`` (so ``netsim validate``
+        and ``netsim sweep``) refuse such a sweep before anything runs.
+        """
+        if self.surface is None:
+            return None
+        for axis in ("x", "y"):
+            name = getattr(self.surface, axis)
+            levels = self.factors[name].levels() if self.mode == "product" else [p[name] for p in self.points or []]
+            bad = [v for v in levels if isinstance(v, bool) or not isinstance(v, (int, float))]
+            if bad:
+                shown = ", ".join(repr(v) for v in bad[:3]) + (", ..." if len(bad) > 3 else "")
+                return (f"surface.{axis}", f"factor '{name}' has non-numeric values ({shown}); a surface needs "
+                        "numbers on both axes: choose a numeric factor or remove 'surface:'")
+        return None
+
 
 def _plain(value: Any) -> Any:
     """numpy scalars and tuples as plain JSON-able Python values."""
@@ -343,6 +361,9 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
         spec = SweepSpec.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(_format_validation(exc, where)) from None
+    surface = spec.surface_problem()
+    if surface is not None:
+        raise ConfigError(f"{where}: {surface[1]}", surface[0])
     base_path: Path | None = None
     if base is None:
         base_path = (path.parent if path else Path.cwd()) / spec.base
