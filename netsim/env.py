@@ -25,11 +25,11 @@ Entries due at the same time run by priority (lower first), then in the order th
 priority used at one instant is in this one table; kernel, networks and plants import it:
 
 =====================  =  =================================================================================
-:data:`URGENT`         0  set-up at the start of the run (kernel checks, the plant's first grid sample) and
-                          simpy's own process starts and interrupts
+:data:`URGENT`         0  set-up at the start of the run (kernel checks) and simpy's own process starts
+                          and interrupts
 :data:`NORMAL`         1  everything that *happens* at the instant: periodic releases, timers, sleeps ending,
-                          ends of execute segments, ends of transmissions, interface delays, deliveries,
-                          the plant's grid samples; simpy's timeouts and triggered events
+                          ends of execute segments, ends of wired transmissions, interface delays,
+                          deliveries; simpy's timeouts and triggered events
 :data:`DISPATCH`       2  the kernel's deferred dispatch (and the end of a periodic-load window): the CPU is
                           given away once every release of the instant is known
 :data:`AIR`            3  radio transmissions going on and off the air (after the instant's channel-access
@@ -37,6 +37,7 @@ priority used at one instant is in this one table; kernel, networks and plants i
 :data:`ARBITRATE`      4  media deciding who sends (CAN arbitration, CSMA/CD contention, TDMA slot starts,
                           token visits, priority queues of serial outputs)
 :data:`DEADLINE`       5  deadline checks
+:data:`RECORD`         6  the plant's ``record_grid`` samples
 =====================  =  =================================================================================
 
 Why this order:
@@ -55,6 +56,9 @@ Why this order:
 - Arbitration before deadline checks: a job finishing at *t* meets a deadline at *t* (response-time
   analysis counts ``R <= D`` as met), whatever made it finish at *t*: a segment end, a release, or a
   message delivered by a transmission decided at *t*.
+- Recording last: a grid sample at *t* records the outputs once every event of *t* is done, inputs set at
+  *t* included (the held input is right-continuous; it matters only for a plant with direct feedthrough),
+  and the first sample, at the start, sees the actuations of time 0 like every later one.
 - Work created while an instant is processed needs no special care: a new entry at the current time goes
   into the same heap, so anything a dispatch or an arbitration starts at *t* at a lower priority (a release
   by a delivery, a further dispatch, a zero-length transmission) still runs before the remaining
@@ -80,7 +84,7 @@ import simpy.events
 
 __all__ = [
     "SimEnv", "Recorder", "stream_seed", "schedule_call", "run_events", "CallEntry",
-    "URGENT", "NORMAL", "DISPATCH", "AIR", "ARBITRATE", "DEADLINE",
+    "URGENT", "NORMAL", "DISPATCH", "AIR", "ARBITRATE", "DEADLINE", "RECORD",
 ]
 
 #: Set-up at the start of the run; simpy's process starts and interrupts (simpy's URGENT).
@@ -95,6 +99,8 @@ AIR: Final[int] = DISPATCH + 1
 ARBITRATE: Final[int] = AIR + 1
 #: Deadline checks: after everything that can finish a job at the instant.
 DEADLINE: Final[int] = ARBITRATE + 1
+#: The plant's grid samples: the outputs once everything of the instant (actuations included) is done.
+RECORD: Final[int] = DEADLINE + 1
 
 #: A call entry: ``(time_ns, priority, event_id, fn, arg)``; ``fn`` is called with the entry itself.
 CallEntry = tuple[int, int, int, Callable[[Any], None], Any]

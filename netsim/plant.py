@@ -43,7 +43,7 @@ from typing import Any, Callable, ClassVar, Iterable, Sequence
 
 import numpy as np
 
-from netsim.env import NORMAL, URGENT, schedule_call
+from netsim.env import NORMAL, RECORD, schedule_call
 from netsim.errors import BuildError, ConfigError, DivergenceError, SimulationError
 from netsim.timebase import format_time, to_seconds
 
@@ -427,7 +427,7 @@ class Plant(abc.ABC):
             grid = int(record_grid_ns)
             if grid <= 0:
                 raise ConfigError(f"plant {self.name}: record_grid must be positive, got {record_grid_ns}")
-            schedule_call(env.sim, 0, URGENT, _grid_tick, (self, grid, [grid_prefix + n for n in self.output_names]))
+            schedule_call(env.sim, 0, RECORD, _grid_tick, (self, grid, [grid_prefix + n for n in self.output_names]))
         env.at_end(self._finish)
         return self
 
@@ -698,12 +698,11 @@ class Plant(abc.ABC):
 
 def _grid_tick(entry: tuple) -> None:
     """One sample of the ``record_grid`` (a call entry of :mod:`netsim.env`; ``entry[4]`` is ``(plant, grid,
-    names)``), then the entry of the next sample, ``grid`` ns later, with NORMAL priority (the first one, at bind
-    time, is URGENT); the priorities are the same-instant table of :mod:`netsim.env`.
+    names)``), then the entry of the next sample, ``grid`` ns later. Every sample runs at ``RECORD`` priority
+    (:mod:`netsim.env`), after everything else of its instant.
 
     An exception while sampling (e.g. :class:`~netsim.errors.DivergenceError`) is raised by an entry scheduled
-    now, after the events already due at this instant (where a failing simpy process raised it), so the run
-    stops at the same point.
+    now (NORMAL: it runs next), as a failing simpy process would raise it.
     """
     value = entry[4]
     plant = value[0]
@@ -713,7 +712,7 @@ def _grid_tick(entry: tuple) -> None:
     except BaseException as exc:  # noqa: BLE001 - handed to the event loop, as a failing process would
         heappush(sim._queue, (sim._now, NORMAL, next(sim._eid), _raise, exc))
         return
-    heappush(sim._queue, (entry[0] + value[1], NORMAL, next(sim._eid), _grid_tick, value))
+    heappush(sim._queue, (entry[0] + value[1], RECORD, next(sim._eid), _grid_tick, value))
 
 
 def _raise(entry: tuple) -> None:
