@@ -512,10 +512,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     func: Callable[[argparse.Namespace], int] = args.func
     from netsim.errors import ConfigError, NetsimError
 
+    previous = _terminate_as_interrupt()
     try:
         return func(args)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         _err("interrupted")
+        _partial_folder(exc)
         return EXIT_INTERRUPTED
     except ConfigError as exc:
         problems = getattr(exc, "problems", None)
@@ -537,6 +539,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:  # a bug: the traceback is wanted, and where the partial results are
         _partial_folder(exc)
         raise
+    finally:
+        if previous is not None:
+            import signal
+
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _terminate_as_interrupt() -> Any:
+    """Make SIGTERM stop a command like Ctrl-C (what was simulated is kept); returns the previous handler.
+
+    Only in the main thread (signal handlers cannot be set elsewhere); returns None where it was not set.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def _raise(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    try:
+        return signal.signal(signal.SIGTERM, _raise)
+    except (ValueError, OSError):
+        return None
 
 
 def _partial_folder(exc: BaseException) -> None:

@@ -95,7 +95,14 @@ _MAX_PLOTTED = 40
 
 # --------------------------------------------------------------------------------------------- finding runs
 def _is_run(folder: Path) -> bool:
-    return (folder / "metrics.csv").exists() or (folder / "meta.json").exists() and (folder / "jobs.csv").exists()
+    """A complete run folder: ``meta.json`` is written last (:meth:`netsim.results.RunResult.to_csv`)."""
+    return (folder / "meta.json").exists() and ((folder / "metrics.csv").exists() or (folder / "jobs.csv").exists())
+
+
+def _is_incomplete_run(folder: Path) -> bool:
+    """Run-folder files without the ``meta.json`` that marks the folder complete (a run killed while writing)."""
+    return not (folder / "meta.json").exists() and any(
+        (folder / name).exists() for name in ("metrics.csv", "jobs.csv", "signals.csv", "messages.csv"))
 
 
 def find_runs(folder: Path) -> tuple[str, list[tuple[str, Path, dict[str, Any]]]]:
@@ -118,6 +125,11 @@ def find_runs(folder: Path) -> tuple[str, list[tuple[str, Path, dict[str, Any]]]
         return "sweep", runs
     if _is_run(folder):
         return "run", [(_case_name(folder), folder, {})]
+    if _is_incomplete_run(folder):
+        raise ConfigError(f"'{folder}' is an incomplete run folder (no meta.json: the run was stopped while its "
+                          "files were written); run the scenario again")
+    for sub in sorted(p for p in folder.iterdir() if p.is_dir() and _is_incomplete_run(p)):
+        log.warning("skipping incomplete run folder %s (no meta.json: stopped while writing)", sub)
     subs = sorted(p for p in folder.iterdir() if p.is_dir() and _is_run(p))
     if not subs:
         raise ConfigError(

@@ -265,12 +265,41 @@ def schedule_table(node: str, intervals: Iterable[Any]) -> pd.DataFrame:
 
 
 def write_csv(frame: pd.DataFrame, path: Path) -> None:
-    """Write ``frame`` with the run folder's fixed float format and ``\\n`` line ends."""
+    """Write ``frame`` atomically with the run folder's fixed float format and ``\\n`` line ends.
+
+    Values use :data:`FLOAT_FORMAT`; the time columns (:data:`TIME_COLUMNS`, all integer nanoseconds divided by
+    1e9) use the shortest text that reads back as the same float, which is the exact decimal of the
+    nanosecond count for any time below about 10^6 s (``100000.0000005``, where ``%.12g`` wrote
+    ``100000.000001``). The file is written under a temporary name and renamed
+    (:func:`netsim.safe_write.write_atomic`): never half a file, never through a planted symlink.
+    """
     text = _float_csv(frame)
-    if text is not None:
-        Path(path).write_text(text, encoding="utf-8", newline="")
-        return
-    frame.to_csv(path, index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+    if text is None:
+        times = [c for c in frame.columns if c in TIME_COLUMNS and frame[c].dtype == np.float64]
+        if times:
+            frame = frame.copy()
+            for c in times:
+                frame[c] = [_time_text(v) for v in frame[c].tolist()]
+        text = frame.to_csv(index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+    from netsim.safe_write import write_atomic
+
+    write_atomic(path, text)
+
+
+#: Columns that hold times (integer ns / 1e9): written with full precision (see :func:`write_csv`).
+TIME_COLUMNS = frozenset({
+    "time_s", "release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s", "sent_s",
+    "tx_start_s", "delivered_s", "delay_s", "tx_end_s", "end_s",
+})
+
+
+def _time_text(v: float) -> str:
+    """A time in seconds as the shortest text that reads back as the same float (empty for NaN)."""
+    if v != v:
+        return ""
+    if v == int(v) and abs(v) < 1e15:
+        return "%d" % v
+    return repr(v)
 
 
 def _float_csv(frame: pd.DataFrame) -> str | None:
@@ -287,8 +316,17 @@ def _float_csv(frame: pd.DataFrame) -> str | None:
         return None
     fmt = FLOAT_FORMAT
     lines = [",".join(names)]
-    for row in frame.to_numpy(dtype=np.float64).tolist():
-        lines.append(",".join("" if v != v else fmt % v for v in row))
+    timed = [n in TIME_COLUMNS for n in names]
+    if not any(timed):
+        for row in frame.to_numpy(dtype=np.float64).tolist():
+            lines.append(",".join("" if v != v else fmt % v for v in row))
+    else:
+        def value(v: float) -> str:
+            return "" if v != v else fmt % v
+
+        cells = [_time_text if t else value for t in timed]
+        for row in frame.to_numpy(dtype=np.float64).tolist():
+            lines.append(",".join([f(v) for f, v in zip(cells, row)]))
     return "\n".join(lines) + "\n"
 
 
@@ -336,26 +374,34 @@ class RunResult:
         return pd.DataFrame({"metric": list(self.metrics.index), "value": list(self.metrics.to_numpy(dtype=float))})
 
     def to_csv(self, out_dir: str | Path) -> Path:
-        """Write the run folder into ``out_dir`` (created if needed); returns the folder."""
+        """Write the run folder into ``out_dir`` (created if needed); returns the folder.
+
+        Every file is written atomically (:func:`netsim.safe_write.write_atomic`) and ``meta.json`` last: a
+        folder without ``meta.json`` is incomplete (a run killed while writing), and ``netsim report`` and
+        ``netsim sweep`` treat it so.
+        """
+        from netsim.safe_write import write_atomic
+
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
+        stale = out / "meta.json"
+        if stale.exists() or stale.is_symlink():
+            stale.unlink()  # rewriting a folder: it is incomplete until the new meta.json is written
         if self.scenario is not None:
             import yaml
 
             dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter: ~4x faster
-            (out / "scenario.yaml").write_text(
-                yaml.dump(self.scenario, Dumper=dumper, sort_keys=False, allow_unicode=True), encoding="utf-8"
-            )
+            write_atomic(out / "scenario.yaml",
+                         yaml.dump(self.scenario, Dumper=dumper, sort_keys=False, allow_unicode=True))
         write_csv(self.signals, out / "signals.csv")
         write_csv(self.jobs, out / "jobs.csv")
         write_csv(self.messages, out / "messages.csv")
-        from netsim.status import ERROR, kind_of
+        from netsim.status import ERROR, INTERRUPTED, kind_of
 
-        if kind_of(self.status) != ERROR:  # a run that failed has no metrics: meta.json says why
+        if kind_of(self.status) not in (ERROR, INTERRUPTED):  # a failed or cut run has no metrics: see meta.json
             write_csv(self.metrics_frame(), out / "metrics.csv")
-        (out / "meta.json").write_text(
-            json.dumps(self.meta, indent=2, sort_keys=True, default=_json_default) + "\n", encoding="utf-8"
-        )
+        # meta.json last: its presence marks the folder complete (a folder without it is incomplete)
+        write_atomic(out / "meta.json", json.dumps(self.meta, indent=2, sort_keys=True, default=_json_default) + "\n")
         self.out_dir = out
         return out
 

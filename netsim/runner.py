@@ -10,7 +10,10 @@ Failures are recorded, never lost:
   up to that time are written and ``meta.json`` says ``status: "diverged at t = ... s"``; ``run`` returns
   the result normally (``result.ok`` is False);
 * any other exception during the simulation or the metrics writes what exists with ``status: "error"``
-  and the error text, but no ``metrics.csv`` (a run that failed has no metrics), then re-raises (a :class:`~netsim.errors.NetsimError` carries a user message, anything
+  and the error text, but no ``metrics.csv`` (a run that failed has no metrics), then re-raises;
+* Ctrl-C (``KeyboardInterrupt``; the CLI turns SIGTERM into one) during the simulation writes the tables up to
+  that instant with ``status: "interrupted at t = ... s"`` and no ``metrics.csv``, then re-raises. A process
+  killed outright (SIGKILL) cannot write anything: a folder without ``meta.json`` is incomplete (a :class:`~netsim.errors.NetsimError` carries a user message, anything
   else is a bug).
 
 A scenario with ``baseline: {overrides: {...}}`` first runs the baseline (the same scenario with those
@@ -92,14 +95,12 @@ def _package_versions() -> dict[str, str]:
 
 
 def default_out_dir(name: str, scenario_hash: str, root: str | Path = "reports") -> Path:
-    """``reports/<name>/<UTC stamp>-<hash8>``; a numeric suffix keeps two runs in one second apart."""
+    """``reports/<name>/<UTC stamp>-<hash8>``, created exclusively: a numeric suffix keeps two runs that start
+    in the same second apart, also when they run at the same time (:func:`netsim.safe_write.make_unique_dir`)."""
+    from netsim.safe_write import make_unique_dir
+
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
-    base = Path(root) / name / f"{stamp}-{scenario_hash[:8]}"
-    out, k = base, 1
-    while out.exists():
-        k += 1
-        out = base.with_name(f"{base.name}-{k}")
-    return out
+    return make_unique_dir(Path(root) / name / f"{stamp}-{scenario_hash[:8]}")
 
 
 def _mark_folder(exc: BaseException, folder: Path) -> None:
@@ -155,6 +156,10 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
         t_end = int(getattr(exc, "time_ns", sim.env.now))
         status = f"diverged at t = {t_end / S:.9g} s"
         error = str(exc)
+        failure = exc
+    except KeyboardInterrupt as exc:  # Ctrl-C (or SIGTERM, which the CLI turns into one): keep what was simulated
+        t_end = sim.env.now
+        status, error = f"interrupted at t = {t_end / S:.9g} s", "interrupted by the user (Ctrl-C or SIGTERM)"
         failure = exc
     except Exception as exc:  # noqa: BLE001 - recorded, then re-raised by run()
         t_end = sim.env.now
@@ -265,6 +270,7 @@ def run(
     if write:
         folder = check_out_dir(out if out is not None else (
             scenario.output.dir if scenario.output.dir else default_out_dir(scenario.name, digest)))
+        folder.mkdir(parents=True, exist_ok=True)  # before the run: incomplete (no meta.json) until written
 
     base_sc = scenario.baseline_scenario()
     baseline = _baseline(base_sc) if base_sc is not None else None
@@ -309,6 +315,9 @@ def run(
     if failure is not None and not isinstance(failure, DivergenceError):
         if folder is not None:
             _mark_folder(failure, folder)
+            if isinstance(failure, KeyboardInterrupt):
+                log.warning("%s: %s; the run folder %s holds the run up to then", scenario.name, result.status,
+                            folder)
         raise failure
     if not result.ok:
         log.warning("%s: %s", scenario.name, result.status)

@@ -8,6 +8,8 @@ A run's status (``meta.json``, the ``status`` column of every summary) is one of
     the loop went unstable and the run stopped there (its tables up to that instant are written);
 ``error``
     the run could not be built or raised (the error text is recorded);
+``interrupted at t = ... s``
+    Ctrl-C or SIGTERM stopped the run; its tables up to that instant are written, without metrics;
 ``pending``
     a sweep run not executed yet (Ctrl-C).
 
@@ -26,6 +28,8 @@ __all__ = [
     "OK",
     "ERROR",
     "PENDING",
+    "DIVERGED",
+    "INTERRUPTED",
     "EXIT_OK",
     "EXIT_FAILED",
     "EXIT_INVALID",
@@ -40,6 +44,7 @@ OK = "ok"
 ERROR = "error"
 PENDING = "pending"
 DIVERGED = "diverged"
+INTERRUPTED = "interrupted"
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -48,12 +53,14 @@ EXIT_INTERRUPTED = 130
 
 
 def kind_of(status: object) -> str:
-    """``ok``, ``diverged``, ``pending`` or ``error`` (anything else, including an empty status)."""
+    """``ok``, ``diverged``, ``interrupted``, ``pending`` or ``error`` (anything else, including an empty status)."""
     text = str(status).strip() if status is not None else ""
     if text == OK:
         return OK
     if text.startswith(DIVERGED):
         return DIVERGED
+    if text.startswith(INTERRUPTED):
+        return INTERRUPTED
     if text == PENDING:
         return PENDING
     return ERROR
@@ -79,12 +86,13 @@ class StatusCounts:
         self.diverged = counts[DIVERGED]
         self.error = counts[ERROR]
         self.pending = counts[PENDING]
-        self.total = self.ok + self.diverged + self.error + self.pending
+        self.interrupted = counts[INTERRUPTED]
+        self.total = self.ok + self.diverged + self.error + self.pending + self.interrupted
 
     @property
     def not_ok(self) -> int:
-        """Runs that ran and did not finish normally (diverged or error)."""
-        return self.diverged + self.error
+        """Runs that ran and did not finish normally (diverged, error or interrupted)."""
+        return self.diverged + self.error + self.interrupted
 
     def exit_code(self, interrupted: bool = False) -> int:
         """:data:`EXIT_INTERRUPTED` if interrupted, else :data:`EXIT_FAILED` if any run is not ok, else 0."""
@@ -96,7 +104,8 @@ class StatusCounts:
         """E.g. ``1 of 2 scenarios ok, 1 diverged``."""
         plural = what if self.total == 1 else f"{what}s"
         text = f"{self.ok} of {self.total} {plural} ok"
-        for n, word in ((self.diverged, "diverged"), (self.error, "failed"), (self.pending, "not run")):
+        for n, word in ((self.diverged, "diverged"), (self.error, "failed"), (self.interrupted, "interrupted"),
+                        (self.pending, "not run")):
             if n:
                 text += f", {n} {word}"
         return text

@@ -87,6 +87,7 @@ def test_a_killed_job_has_no_response_time_and_counts_as_killed_and_missed(tmp_p
     folder.mkdir()
     jobs.to_csv(folder / "jobs.csv", index=False)
     pd.DataFrame({"metric": [], "value": []}).to_csv(folder / "metrics.csv", index=False)
+    (folder / "meta.json").write_text('{"status": "ok", "duration_s": 0.025}')
     row = report(folder, plots=False)["tasks"].iloc[0]
     assert (row["killed_count"], row["deadline_misses_count"]) == (3, 3) and math.isnan(row["response_max_s"])
 
@@ -119,6 +120,7 @@ def test_report_reads_older_jobs_tables_with_the_same_rule(tmp_path: Path):
         "cpu_time_s": [0.002, 0.002, 0.0], "killed": [False, True, False],
     }).to_csv(folder / "jobs.csv", index=False)
     pd.DataFrame({"metric": [], "value": []}).to_csv(folder / "metrics.csv", index=False)
+    (folder / "meta.json").write_text('{"status": "ok", "duration_s": 0.03}')
     row = report(folder, plots=False)["tasks"].iloc[0]
     assert (row["deadline_misses_count"], row["killed_count"], row["pending_count"]) == (1, 1, 1)
     assert row["response_max_s"] == pytest.approx(0.002)

@@ -3,14 +3,24 @@
 import numpy as np
 import pandas as pd
 
-from netsim.results import FLOAT_FORMAT, write_csv
+from netsim.results import FLOAT_FORMAT, TIME_COLUMNS, write_csv
 
 EDGE = [0.0, -0.0, 1.0, -1.5, np.nan, np.inf, -np.inf, 1e-300, 5e-324, 1.7976931348623157e308,
         123456789012345.0, 0.1, 2.0 / 3, 1e21, -1e-7]
 
 
+def _time_cell(v: float) -> str:
+    # the rule for time columns: integers as integers (as %.12g writes them), others as Python's shortest
+    # round-trip repr, NaN empty
+    return "" if v != v else ("%d" % v if float(v).is_integer() else repr(float(v)))
+
+
 def _both(frame: pd.DataFrame, tmp_path) -> tuple[bytes, bytes]:
-    frame.to_csv(tmp_path / "pandas.csv", index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+    ref = frame.copy()
+    for c in ref.columns:
+        if c in TIME_COLUMNS and ref[c].dtype == np.float64:
+            ref[c] = [_time_cell(v) for v in ref[c]]
+    ref.to_csv(tmp_path / "pandas.csv", index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
     write_csv(frame, tmp_path / "ours.csv")
     return (tmp_path / "pandas.csv").read_bytes(), (tmp_path / "ours.csv").read_bytes()
 
@@ -33,3 +43,13 @@ def test_empty_and_non_float_tables_still_match_pandas(tmp_path):
     quoted = pd.DataFrame({"a,b": [1.0, 2.0]})  # a name that needs quoting goes through pandas too
     p, o = _both(quoted, tmp_path)
     assert p == o
+
+
+def test_times_late_in_a_long_run_keep_their_nanoseconds(tmp_path):
+    # 100000 s + 0.5 us: %.12g wrote 100000.000001 (0.5 us off); the time column must read back exactly
+    ns = [100_000 * 10**9 + 500, 3 * 10**9 + 1, 7]
+    frame = pd.DataFrame({"time_s": [n / 1e9 for n in ns], "y": [1.0, 2.0, 3.0]})
+    write_csv(frame, tmp_path / "t.csv")
+    back = pd.read_csv(tmp_path / "t.csv")
+    assert [round(v * 1e9) for v in back["time_s"]] == ns
+    assert "100000.0000005" in (tmp_path / "t.csv").read_text()

@@ -1,0 +1,69 @@
+"""Writing run-folder files so that nothing finished is lost and nothing outside the folder is touched.
+
+:func:`write_atomic` writes a file under a temporary name created exclusively (``O_EXCL``, and ``O_NOFOLLOW``
+where the platform has it: a symlink planted under that name is never followed) and then renames it over the
+final name. ``os.replace`` replaces a symlink planted at the final name by the file itself: its target is never
+written. A reader therefore sees either the previous file or the whole new one, never half a CSV.
+
+:func:`make_unique_dir` creates a new folder exclusively, adding ``-2``, ``-3`` ... to the name when it exists:
+two runs started in the same second never share a folder.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+__all__ = ["write_atomic", "make_unique_dir"]
+
+_FLAGS = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
+
+
+def write_atomic(path: str | Path, data: str | bytes, encoding: str = "utf-8") -> Path:
+    """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename).
+
+    Parameters
+    ----------
+    path
+        Final file path; its folder must exist.
+    data
+        Text (encoded with ``encoding``, line ends written as given) or bytes.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
+    final = Path(path)
+    payload = data.encode(encoding) if isinstance(data, str) else data
+    tmp = final.with_name(f".{final.name}.{os.getpid()}.tmp")
+    try:
+        fd = os.open(tmp, _FLAGS, 0o644)
+    except FileExistsError:  # a stale temporary (or a planted link) of the same name: remove it, never follow it
+        os.unlink(tmp)
+        fd = os.open(tmp, _FLAGS, 0o644)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(payload)
+        os.replace(tmp, final)  # no fsync: a killed process leaves the old file or the new one (not power loss)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return final
+
+
+def make_unique_dir(base: str | Path) -> Path:
+    """Create ``base`` (or ``base-2``, ``base-3``, ... if taken) exclusively, with its parents; returns it."""
+    base = Path(base)
+    base.parent.mkdir(parents=True, exist_ok=True)
+    out, k = base, 1
+    while True:
+        try:
+            out.mkdir()
+            return out
+        except FileExistsError:
+            k += 1
+            out = base.with_name(f"{base.name}-{k}")
