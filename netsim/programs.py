@@ -22,6 +22,10 @@ once per job: ``instance(job)`` returns the job's generator. The numerics live i
     one-node loop: ``analog_in``, PID, ``execute``, ``analog_out`` (TrueTime's ``pid_code1``).
 
 Message payloads are floats; messages carry ``tag`` (``"y"``/``"u"`` by default) for the messages table.
+
+Destinations: a program that sends on ``network`` needs ``to``, the receiving node's name, or ``to: all``
+(:data:`BROADCAST`) for every other node on the network. Leaving ``to`` out is an error (it used to broadcast
+silently, releasing every node that consumes that network's messages).
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from netsim.registry import register
 from netsim.units import StrictModel, Time
 
 __all__ = [
+    "BROADCAST",
     "ProgramContext",
     "Sampler",
     "Controller",
@@ -48,6 +53,21 @@ __all__ = [
 ]
 
 log = logging.getLogger(__name__)
+
+#: The ``to:`` value that sends a message to every other node on the network.
+BROADCAST = "all"
+
+
+def _check_destination(network: str | None, to: str | None) -> None:
+    """A sender on ``network`` names its destination: a node, or ``all`` to broadcast."""
+    if network is not None and to is None:
+        raise ValueError(f"'to' is missing: name the node that receives on '{network}', or write "
+                         f"'to: {BROADCAST}' to broadcast to every node on it")
+
+
+def _destination(to: str | None) -> str | None:
+    """The kernel's destination for ``to`` (``None`` broadcasts)."""
+    return None if to == BROADCAST else to
 
 
 @dataclass
@@ -173,6 +193,11 @@ class Sampler:
         after_send: Time = 0
         record_as: str | None = None
 
+        @model_validator(mode="after")
+        def _to(self) -> "Sampler.Params":
+            _check_destination(self.network, self.to)
+            return self
+
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
         self.p = params
@@ -184,7 +209,7 @@ class Sampler:
             self.ctx.record(p.record_as, y, job.now)
         yield from _run(self.ctx, job)
         if p.network is not None:
-            yield job.send(p.network, p.to, float(y), p.bits, priority=p.priority, tag=p.tag)
+            yield job.send(p.network, _destination(p.to), float(y), p.bits, priority=p.priority, tag=p.tag)
         else:
             job.shared[p.key] = float(y)
         if p.after_send:
@@ -210,6 +235,7 @@ class _ControllerParams(PIDParams):
             raise ValueError("give 'network' (and 'to') to send the control signal, or 'output_channel' to write it")
         if self.network is not None and self.output_channel is not None:
             raise ValueError("give either 'network' or 'output_channel' for the control signal, not both")
+        _check_destination(self.network, self.to)
         return self
 
 
@@ -251,7 +277,7 @@ class Controller:
         if p.output_channel is not None:
             yield job.analog_out(p.output_channel, u)
         else:
-            yield job.send(p.network, p.to, u, p.bits, priority=p.priority, tag=p.tag)
+            yield job.send(p.network, _destination(p.to), u, p.bits, priority=p.priority, tag=p.tag)
         if p.record_as:
             self.ctx.record(p.record_as, u, job.now)
 
@@ -283,7 +309,14 @@ class Actuator:
 
 @register("program", "interference", "dummy frames of `bits` on `network`: per job with probability, or at a rate")
 class Interference:
-    """Interfering traffic (TrueTime's interference node)."""
+    """Interfering traffic (TrueTime's interference node).
+
+    ``netsim validate`` warns when its frames reach a node that consumes messages of that network (a task or
+    handler released ``on_message``): TrueTime's interference node sends to itself.
+    """
+
+    #: Marks a source of interfering traffic for ``netsim validate``.
+    interference_source = True
 
     class Params(StrictModel):
         network: str
@@ -300,6 +333,7 @@ class Interference:
                 raise ValueError(f"share is a probability in [0, 1], got {self.share}")
             if self.rate is not None and not self.rate > 0:
                 raise ValueError(f"rate (frames per second) must be positive, got {self.rate}")
+            _check_destination(self.network, self.to)
             return self
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
@@ -312,7 +346,7 @@ class Interference:
         if p.rate is None:
             yield from _newest(job, p.network)  # discard frames addressed to this node
             if p.share >= 1.0 or self.rng.random() < p.share:
-                yield job.send(p.network, p.to, 0.0, p.bits, priority=p.priority, tag=p.tag)
+                yield job.send(p.network, _destination(p.to), 0.0, p.bits, priority=p.priority, tag=p.tag)
             yield from _run(self.ctx, job)
             return
         from netsim.timebase import from_seconds
@@ -321,7 +355,7 @@ class Interference:
             gap = max(1, from_seconds(float(self.rng.exponential(1.0 / p.rate))))
             yield job.sleep(gap)
             yield from _newest(job, p.network)
-            yield job.send(p.network, p.to, 0.0, p.bits, priority=p.priority, tag=p.tag)
+            yield job.send(p.network, _destination(p.to), 0.0, p.bits, priority=p.priority, tag=p.tag)
 
 
 class _PeriodicControllerParams(PIDParams):

@@ -15,7 +15,9 @@ What is checked
   task has a priority. A deadline longer than the period is allowed (TrueTime semantics: jobs continue and
   may queue up) but reported as a **warning**.
 - Program parameter naming conventions: ``network``/``*_network`` (and ``networks``/``*_networks``) name a
-  network the node is on; ``to`` names a node on that network (null = broadcast); ``channel``/``*_channel``
+  network the node is on; ``to`` names a node on that network, or ``all`` to broadcast (netsim's own programs
+  refuse a missing ``to``); a source of interfering traffic (program attribute ``interference_source``) whose
+  frames reach a node that consumes that network's messages is a **warning**; ``channel``/``*_channel``
   (and plurals) name an ``io`` channel; ``signal``, ``reference``, ``*_signal`` (and plurals) name a signal.
 - I/O channel plant ports lie within the plant's inputs/outputs when the plant factory declares them
   (``ports(params) -> (input_names, output_names)``, or attributes ``input_names``/``output_names`` or
@@ -329,6 +331,8 @@ class _Checker:
                 model = self.params(program, raw, [*at, "params"], format_path(at))
                 values = _values(model) if model is not None else _d(raw)
                 self.conventions(name, values, [*at, "params"])
+                if getattr(program, "interference_source", False) is True:
+                    self.interference(name, values, [*at, "params"])
 
     def task(self, node_name: str, node: dict[str, Any], task: dict[str, Any], at: list[PathPart], handlers: list[Any]) -> None:
         period = task.get("period")
@@ -417,6 +421,36 @@ class _Checker:
             self.error([*at, "execution"], f"latency + execution ({format_time(cost)}) must be shorter than the "
                                            f"periodic_load period ({format_time(period)})")
 
+    def consumers(self, net: str) -> dict[str, str]:
+        """Nodes whose task or handler is released by every message on ``net``: node -> that item's path."""
+        out: dict[str, str] = {}
+        for node_name, node in _d(self.raw.get("nodes")).items():
+            for kind in ("tasks", "handlers"):
+                for i, item in enumerate(_l(_d(node).get(kind))):
+                    item = _d(item)
+                    release = item.get("release")
+                    trigger = _d(item.get("trigger")).get("on_message")
+                    if (isinstance(release, str) and release.replace(" ", "") == f"on_message:{net}") or trigger == net:
+                        out.setdefault(str(node_name), format_path(["nodes", str(node_name), kind, i]))
+        return out
+
+    def interference(self, node: str, values: dict[str, Any], at: list[PathPart]) -> None:
+        """Warn when interfering frames reach a node that consumes the network's messages."""
+        from netsim.programs import BROADCAST
+
+        net, to = values.get("network"), values.get("to")
+        if not isinstance(net, str) or net not in self.networks:
+            return
+        members = [n for n in _l(_d(self.networks[net]).get("nodes")) if isinstance(n, str)]
+        reached = [n for n in members if n != node] if to in (None, BROADCAST) else [to]
+        consumers = self.consumers(net)
+        hit = [n for n in reached if n in consumers and n != node]
+        if hit:
+            which = ", ".join(f"'{n}' ({consumers[n]})" for n in hit)
+            self.warn([*at, "to"], f"interfering frames on '{net}' reach {which}, released by every message on "
+                                   f"'{net}'; send them where nothing consumes them (TrueTime's interference node "
+                                   f"sends to itself: 'to: {node}')")
+
     def one_receiver(self, node: str, net: str, owner: list[PathPart], at: list[PathPart]) -> None:
         """A node has one receiver (task or handler) per network: the kernel binds each network once."""
         if net in self.receivers:
@@ -454,7 +488,9 @@ class _Checker:
             self.error(at, f"unknown {what} '{value}'{did_you_mean(value, known, what=what + 's')}")
 
     def to_ref(self, node: str, to: Any, net: Any, at: list[PathPart]) -> None:
-        if to is None or not isinstance(to, str):
+        from netsim.programs import BROADCAST
+
+        if to is None or not isinstance(to, str) or to == BROADCAST:
             return
         if to not in self.nodes:
             self.error(at, f"unknown node '{to}'{did_you_mean(to, self.nodes, what='nodes')}")

@@ -62,7 +62,7 @@ def test_timer_handler_runs_at_its_period_and_reads_the_shared_adc_with_x0():
 def test_on_message_bindings_release_task_and_invoke_handler():
     sc = _base(nodes={
         "s": {"tasks": [{"name": "send", "program": "sampler", "period": "4 ms", "priority": 1, "execution": "1 ms",
-                         "params": {"channel": "y", "network": "net", "to": None, "bits": 8}}]},
+                         "params": {"channel": "y", "network": "net", "to": "all", "bits": 8}}]},
         "t": {"tasks": [{"name": "got", "program": "test_builder_probe", "release": "on_message:net",
                          "priority": 1, "params": {"label": "task_rx"}}]},
         "h": {"handlers": [{"name": "rx", "program": "test_builder_probe", "trigger": {"on_message": "net"},
