@@ -13,10 +13,11 @@ varying along the track, faster at the far end, drawn from the stream ``plant.ca
 
 Integration is exact in closed form (:mod:`models.cart.dynamics`): the friction *level* is held on a fixed
 time grid (``friction_step``, 1 ms by default, i.e. the control period: the cart moves < 1 mm per step at
-0.8 m/s while the shortest friction wavelength is 25 mm), the sign follows the velocity exactly, stops
-and breakaway are handled analytically. Because the level is tied to the grid and not to the instants at
-which the plant happens to be sampled, polling and exact encoders see the same trajectory. The plant
-implements ``predict_exit`` so the exact-mode encoder can sleep until the next edge.
+0.8 m/s while the shortest friction wavelength is 0.33 m in the default model, 17 mm in ``modes6``), the
+sign follows the velocity exactly, stops and breakaway are handled analytically. Because the level is
+tied to the grid and not to the instants at which the plant happens to be sampled, polling and exact
+encoders see the same trajectory. The plant implements ``predict_exit`` so the exact-mode encoder can sleep
+until the next edge.
 
 Why not ``NonlinearPlant``: its ``solve_ivp`` steps cost about a millisecond per input change (1000 per
 simulated second here) while the closed form costs tens of microseconds, which decides whether the Fig. 2

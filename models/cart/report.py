@@ -13,6 +13,8 @@ from __future__ import annotations
 import logging
 import math
 import os
+import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -20,11 +22,19 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from models.cart.claims import claims as make_claims
+from models.cart.claims import fmt as _fmt
+from models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool_sigma, pooling_difference
+from models.cart.metrics import STOP_WINDOW
 from netsim.registry import register
 
-__all__ = ["cart_report", "run_point", "fig2_points", "quant_points"]
+__all__ = ["cart_report", "run_point", "fig2_points", "quant_points", "sensitivity_points", "FRICTIONS"]
 
 log = logging.getLogger(__name__)
+#: Progress messages of the report (the CLI shows this logger at INFO level).
+progress_log = logging.getLogger("netsim.progress.cart")
+
+Progress = Callable[[int, int, str], None]
 
 _ROOT = Path(__file__).resolve().parents[2]
 SCENARIO = _ROOT / "scenarios" / "cart.yaml"
@@ -37,23 +47,54 @@ CONTROLLERS = ("pure_pi", "observer_pi", "basic_event", "position_prediction", "
 WCS = (5, 10, 20, 40, 80)
 SEEDS_FIG2 = (1, 2, 3)
 SEEDS_QUANT = (1, 2)
+#: Friction models of the sensitivity table: label -> the scenario's ``plant.params.friction`` (``None``:
+#: the scenario's own, the ``inband`` default). ``inband_10_20`` is the in-band model moved to 10-20 rad/s.
+FRICTIONS: dict[str, dict[str, Any] | None] = {
+    "inband": None,
+    "modes6": {"model": "modes6"},
+    "constant": {"model": "constant"},
+    "inband_10_20": {"model": "inband", "wavelength": 1.0, "speedup": 3.0},
+}
+WCS_SENS = (20, 40, 80)
+#: Simulated time of a run: reaching 1 m (1.9 s at most, at wc = 5) plus the stop-phase window (2 s).
+DURATION_FIG2 = 4.0
+#: vref = 0.4: 1 m takes ~2.6 s; the stop phase is not evaluated in the quantization study.
+DURATION_QUANT = 3.2
 
 
-def fig2_points() -> list[dict[str, Any]]:
+def fig2_points(seeds: tuple[int, ...] = SEEDS_FIG2) -> list[dict[str, Any]]:
     """The Fig. 2 grid: five controllers x five crossover frequencies x friction realizations."""
-    return [dict(controller=c, wc=w, q=6, vref=0.8, seed=s) for c in CONTROLLERS for w in WCS for s in SEEDS_FIG2]
+    return [dict(controller=c, wc=w, q=6, vref=0.8, seed=s, friction="inband") for c in CONTROLLERS for w in WCS
+            for s in seeds]
 
 
-def quant_points() -> list[dict[str, Any]]:
+def quant_points(seeds: tuple[int, ...] = SEEDS_QUANT) -> list[dict[str, Any]]:
     """The Figs. 3-4 grid (Basic Event excluded, as in the paper)."""
-    return [dict(controller=c, wc=40, q=q, vref=0.4, seed=s) for c in CONTROLLERS if c != "basic_event"
-            for q in range(7) for s in SEEDS_QUANT]
+    return [dict(controller=c, wc=40, q=q, vref=0.4, seed=s, friction="inband") for c in CONTROLLERS
+            if c != "basic_event" for q in range(7) for s in seeds]
+
+
+def sensitivity_points(seeds: tuple[int, ...] = SEEDS_FIG2) -> list[dict[str, Any]]:
+    """The Fig. 2 grid at wc = 20, 40, 80 under every non-default friction model of :data:`FRICTIONS`."""
+    return [dict(controller=c, wc=w, q=6, vref=0.8, seed=s, friction=f) for f in FRICTIONS if FRICTIONS[f]
+            for c in CONTROLLERS for w in WCS_SENS for s in seeds]
 
 
 def run_point(point: dict[str, Any], engine: str = "netsim") -> dict[str, Any]:
-    """Run one point; returns the point with its metrics (names without the ``cart.`` prefix)."""
+    """Run one point; returns the point with its metrics (names without the ``cart.`` prefix) and ``wall_s``."""
+    t0 = time.perf_counter()
+    row = _run_point(point, engine)
+    row["wall_s"] = time.perf_counter() - t0
+    return row
+
+
+def _run_point(point: dict[str, Any], engine: str) -> dict[str, Any]:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    duration = 2.2 if point["vref"] >= 0.6 else 3.2  # time to 1 m at wc = 5 plus margin
+    duration = DURATION_FIG2 if point["vref"] >= 0.6 else DURATION_QUANT
+    label = point.get("friction", "inband")
+    if label not in FRICTIONS:
+        raise ValueError(f"unknown friction label '{label}'; use one of {', '.join(FRICTIONS)}")
+    friction = FRICTIONS[label]
     if engine == "numpy":
         from models.cart.controllers import make_controller
         from models.cart.encoding import Quantizer
@@ -62,8 +103,9 @@ def run_point(point: dict[str, Any], engine: str = "netsim") -> dict[str, Any]:
         from models.cart.sim import simulate
 
         ctrl = make_controller(point["controller"], point["wc"], Quantizer.from_bits(point["q"], rounding="floor"))
-        run = simulate(ctrl, Friction.draw(FrictionParams(), seed=point["seed"]), vref=point["vref"],
-                       q=point["q"], duration=duration, delay_ns=CONTROL_DELAY_NS, rounding="floor")
+        fp = FrictionParams.model_validate(friction or {})
+        run = simulate(ctrl, Friction.draw(fp, seed=point["seed"]), vref=point["vref"], q=point["q"],
+                       duration=duration, tail=duration, delay_ns=CONTROL_DELAY_NS, rounding="floor")
         m = cart_metrics(run.t, run.p, run.v, run.u, point["vref"], v_hat=run.v_hat, edge_times=run.edge_times,
                          tfilter=ctrl.tuning.Tfilter, counts_full=np.floor(run.p / 5e-5 + 0.5))
         return {**point, **m, "status": "ok"}
@@ -71,136 +113,48 @@ def run_point(point: dict[str, Any], engine: str = "netsim") -> dict[str, Any]:
 
     ov = {f"{CTRL}.controller": point["controller"], f"{CTRL}.wc": point["wc"], f"{CTRL}.vref": point["vref"],
           f"{ISR}.q": point["q"], "duration": f"{duration} s"}
+    if friction:
+        ov["plant.params.friction"] = dict(friction)
     res = run(str(SCENARIO), write=False, seed=point["seed"], overrides=ov)
     m = {k[5:]: float(v) for k, v in res.metrics.items() if k.startswith("cart.")}
     m["cpu_utilization"] = float(res.metrics.get("cpu.cart.utilization", math.nan))
     return {**point, **m, "status": res.status}
 
 
-def _run_all(points: list[dict[str, Any]], engine: str, workers: int | None) -> pd.DataFrame:
+def log_progress(done: int, total: int, what: str) -> None:
+    """The default progress callback: one INFO line on ``netsim.progress.cart`` every ~10 % of the runs."""
+    step = max(1, total // 10)
+    if done == total or done % step == 0:
+        progress_log.info("cart report: %s: %d/%d runs", what, done, total)
+
+
+def _run_all(points: list[dict[str, Any]], engine: str, workers: int | None, progress: Progress | None = None,
+             what: str = "runs") -> pd.DataFrame:
     workers = workers or min(len(points), os.cpu_count() or 1)
+    rows: list[dict[str, Any]] = []
     if workers <= 1:
-        rows = [run_point(p, engine) for p in points]
+        it = (run_point(p, engine) for p in points)
+        pool = None
     else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            rows = list(pool.map(run_point, points, [engine] * len(points), chunksize=2))
+        pool = ProcessPoolExecutor(max_workers=workers)
+        it = pool.map(run_point, points, [engine] * len(points), chunksize=2)
+    try:
+        for row in it:
+            rows.append(row)
+            if progress is not None:
+                progress(len(rows), len(points), what)
+    finally:
+        if pool is not None:
+            pool.shutdown()
     return pd.DataFrame(rows)
 
 
-def _pool_sigma(df: pd.DataFrame) -> pd.DataFrame:
-    """sigma_u with the paper's normalisation: the mean command over all runs with the same vref."""
-    df = df.copy()
-    pooled = df.groupby("vref")["mean_u"].transform("mean")
-    df["sigma_u_pooled"] = df["std_u"] / pooled
-    return df
-
-
 def _agg(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
-    cols = ["sigma_u", "sigma_u_pooled", "Ev", "Ev_jmap", "Ev_jmap0", "Ev_est", "events_per_tfilter", "reached"]
-    return df.groupby(by)[cols].mean().reset_index()
-
-
-def _fmt(x: float, nd: int = 3) -> str:
-    return "nan" if x is None or not math.isfinite(float(x)) else f"{float(x):.{nd}g}"
-
-
-def _claims(f2: pd.DataFrame, fq: pd.DataFrame, f2_all: pd.DataFrame) -> list[dict[str, str]]:
-    a = _agg(f2, ["controller", "wc"]).set_index(["controller", "wc"])
-    out: list[dict[str, str]] = []
-
-    def s(c: str, w: int, col: str = "sigma_u") -> float:
-        return float(a.loc[(c, w), col])
-
-    # 1. event-based sigma_u far below LTI at high wc
-    lti = min(s("pure_pi", 80), s("observer_pi", 80))
-    ev = max(s("basic_event", 80), s("position_prediction", 80), s("full_event", 80))
-    lti40, ev40 = min(s("pure_pi", 40), s("observer_pi", 40)), max(s(c, 40) for c in CONTROLLERS[2:])
-    out.append(dict(
-        claim="Event-based sigma_u far below LTI at high wc",
-        verdict="reproduced" if lti > 3 * ev and lti40 > 3 * ev40 else "not reproduced",
-        numbers=f"wc=80: best LTI {_fmt(lti)} vs worst event {_fmt(ev)} (x{_fmt(lti / ev, 2)}); wc=40: "
-                f"{_fmt(lti40)} vs {_fmt(ev40)} (x{_fmt(lti40 / ev40, 2)}); Full Event vs Pure PI at 80: "
-                f"{_fmt(s('full_event', 80))} vs {_fmt(s('pure_pi', 80))}",
-        why=""))
-    # 2. break point near one event per Tfilter
-    brk = None
-    for w in WCS:
-        if s("basic_event", w) < s("pure_pi", w):
-            brk = w
-            break
-    ept = {w: s("pure_pi", w, "events_per_tfilter") for w in WCS}
-    out.append(dict(
-        claim="Break point (event-based sigma_u < LTI) near one event per Tfilter, between wc = 5 and 10",
-        verdict=("partly reproduced" if brk in (5, 10) else "not reproduced"),
-        numbers=f"first wc with Basic Event sigma_u < Pure PI: {brk}; events/Tfilter of the Pure PI: "
-                + ", ".join(f"wc={w}: {_fmt(ept[w])}" for w in WCS)
-                + f"; sigma_u at wc=5: PI {_fmt(s('pure_pi', 5))}, Basic {_fmt(s('basic_event', 5))}, "
-                  f"wc=10: PI {_fmt(s('pure_pi', 10))}, Basic {_fmt(s('basic_event', 10))}",
-        why="With the paper's own numbers (0.8 m/s, 3.2 mm, Tfilter = 1/(3 wc)) there are 0.8/0.0032 = 250 "
-            "events/s, i.e. 16.7 events per Tfilter at wc = 5 and 8.3 at 10, not the 1.7 the paper states "
-            "(a factor 10 apart; one event per Tfilter is only reached at wc = 80). The break point in wc "
-            "can agree while the 'one event per Tfilter' reading cannot, with these parameters."))
-    # 3. instability of the two simplified estimators at wc = 80
-    inst = {c: (float(a.loc[(c, 80), "reached"]), s(c, 80, "Ev"), s(c, 40, "Ev")) for c in
-            ("basic_event", "position_prediction")}
-    unstable = any(r < 1 or e80 > 3 * e40 for r, e80, e40 in inst.values())
-    out.append(dict(
-        claim="Basic Event and Position Prediction become unstable at wc = 80",
-        verdict="reproduced" if unstable else "not reproduced",
-        numbers="; ".join(f"{c}: reached 1 m in {_fmt(100 * r, 3)} % of runs, Ev(80) {_fmt(e80)} vs Ev(40) "
-                          f"{_fmt(e40)}" for c, (r, e80, e40) in inst.items()),
-        why="" if unstable else "Our simulated cart has no unmodelled dynamics: no motor electrical/"
-            "mechanical lag (Td, backlash, PWM), no encoder noise beyond quantization, no timing jitter "
-            "beyond the 10 us stamp grid, and the friction model is smooth. The instability in the "
-            "experiment most plausibly came from such effects that the high gain K = 80 /s excites "
-            "(the 1 ms period and 0.126 ms computation delay alone leave enough phase margin)."))
-    # 4. Full Event best tracking at high bandwidth
-    best = {w: min(CONTROLLERS, key=lambda c: s(c, w, "Ev")) for w in (40, 80)}
-    best_j = {w: min(CONTROLLERS, key=lambda c: s(c, w, "Ev_jmap")) for w in (40, 80)}
-    ok4 = all(b == "full_event" for b in best.values())
-    out.append(dict(
-        claim="Full Event controller has the best tracking (lowest Ev) at high bandwidth",
-        verdict="reproduced" if ok4 else ("partly reproduced" if "full_event" in best.values() else "not reproduced"),
-        numbers="; ".join(f"wc={w}: best by true Ev {best[w]} ({_fmt(s(best[w], w, 'Ev'))}), Full Event "
-                          f"{_fmt(s('full_event', w, 'Ev'))}, Pure PI {_fmt(s('pure_pi', w, 'Ev'))}; best by "
-                          f"JMAP Ev {best_j[w]}" for w in (40, 80)),
-        why="" if ok4 else "Position Prediction and Full Event are close; the difference is within the "
-            "spread over friction realizations."))
-    if fq.empty:
-        return out
-    q = _agg(fq, ["controller", "q"]).set_index(["controller", "q"])
-
-    def sq(c: str, qq: int, col: str = "sigma_u") -> float:
-        return float(q.loc[(c, qq), col])
-
-    # 5. Observer-PI gentler in q
-    r_pi = sq("pure_pi", 6) / sq("pure_pi", 0)
-    r_ob = sq("observer_pi", 6) / sq("observer_pi", 0)
-    out.append(dict(
-        claim="LTI sigma_u decreases only gradually with finer quantization, the Observer PI more gently",
-        verdict="reproduced" if r_ob < r_pi else "not reproduced",
-        numbers=f"sigma_u(q=6)/sigma_u(q=0): Pure PI {_fmt(r_pi)} ({_fmt(sq('pure_pi', 0))} -> "
-                f"{_fmt(sq('pure_pi', 6))}), Observer PI {_fmt(r_ob)} ({_fmt(sq('observer_pi', 0))} -> "
-                f"{_fmt(sq('observer_pi', 6))})",
-        why="" if r_ob < r_pi else "With Ti' = Ti/4 (floored at 3/80 s) the Observer PI has a higher "
-            "integral gain than the Pure PI, and in our model it reacts to each quantization step at least "
-            "as strongly; the paper may have used the Ti/2, 2 Tfilter variant for this experiment."))
-    # 6. minima at q = 4-5
-    am = {c: int(min(range(7), key=lambda qq, c=c: sq(c, qq))) for c in ("position_prediction", "full_event")}
-    ok6 = am["full_event"] in (4, 5, 6) and am["position_prediction"] in (3, 4, 5)
-    ev5 = sq("full_event", 5, "Ev") / min(sq("full_event", qq, "Ev") for qq in range(7))
-    out.append(dict(
-        claim="Full Event has minimum sigma_u at q = 5 (Position Prediction at q = 4); tracking nearly best at q = 5",
-        verdict="reproduced" if ok6 else "not reproduced",
-        numbers=f"argmin_q sigma_u: Full Event q={am['full_event']}, Position Prediction "
-                f"q={am['position_prediction']}; Full Event sigma_u by q: "
-                + ", ".join(_fmt(sq("full_event", qq)) for qq in range(7))
-                + f"; Ev(q=5)/min Ev = {_fmt(ev5)}",
-        why="" if ok6 else "At fine quantization the events come every control period and the dt >= "
-            "Tfilter limit turns the estimator into the LTI first-order filter; whether sigma_u then rises "
-            "(the paper's 'performs best with some extra quantization') depends on how much timing noise "
-            "the edge stamps carry, which is only the 10 us grid here."))
-    return out
+    cols = ["sigma_u_pooled", "sigma_u", "Ev_jmap", "Ev", "Ev_jmap0", "Ev_est", "Ev_half1", "Ev_half2",
+            "v_rms_stop", "events_per_tfilter", "reached"]
+    d = df.copy()
+    d["oscillating"] = oscillating(d).astype(float)
+    return d.groupby(by)[cols + ["oscillating"]].mean().reset_index()
 
 
 def _plots(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, trace: dict[str, Any]) -> None:
@@ -213,15 +167,16 @@ def _plots(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, trace: dict[str, Any])
     fig, ax = plt.subplots(figsize=(7, 5))
     for c in CONTROLLERS:
         d = a[a.controller == c].sort_values("wc")
-        ax.plot(d.Ev, d.sigma_u, "o-", label=c)
+        ax.plot(d.Ev_jmap, d.sigma_u_pooled, "o-", label=c)
         for _, r in d.iterrows():
-            ax.annotate(str(int(r.wc)), (r.Ev, r.sigma_u), fontsize=7, xytext=(3, 3), textcoords="offset points")
+            ax.annotate(str(int(r.wc)), (r.Ev_jmap, r.sigma_u_pooled), fontsize=7, xytext=(3, 3),
+                        textcoords="offset points")
         raw = f2[f2.controller == c]
-        ax.plot(raw.Ev, raw.sigma_u, ".", color=ax.lines[-1].get_color(), alpha=0.4)
+        ax.plot(raw.Ev_jmap, raw.sigma_u_pooled, ".", color=ax.lines[-1].get_color(), alpha=0.4)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("Ev (true velocity, RMS of v/vref - 1)")
-    ax.set_ylabel("sigma_u = std(u)/mean(u)")
+    ax.set_xlabel("Ev (JMAP reconstruction, RMS of v/vref - 1)")
+    ax.set_ylabel("sigma_u = std(u)/mean(u), mean over the runs")
     ax.set_title("Fig. 2: q = 6, vref = 0.8 m/s (numbers: wc in rad/s)")
     ax.legend(fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
@@ -229,8 +184,8 @@ def _plots(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, trace: dict[str, Any])
     plt.close(fig)
     if not fq.empty:
         b = _agg(fq, ["controller", "q"])
-        for col, name, title in (("Ev", "fig3_ev_vs_q.png", "Fig. 3: Ev vs q (wc = 40, vref = 0.4)"),
-                                 ("sigma_u", "fig4_sigma_vs_q.png", "Fig. 4: sigma_u vs q (wc = 40, vref = 0.4)")):
+        for col, name, title in (("Ev_jmap", "fig3_ev_vs_q.png", "Fig. 3: JMAP Ev vs q (wc = 40, vref = 0.4)"),
+                                 ("sigma_u_pooled", "fig4_sigma_vs_q.png", "Fig. 4: sigma_u vs q (wc = 40, vref = 0.4)")):
             fig, ax = plt.subplots(figsize=(6, 4))
             for c in b.controller.unique():
                 d = b[b.controller == c].sort_values("q")
@@ -271,25 +226,89 @@ def _fig1_traces() -> dict[str, Any]:
                         tail=0.2) for c in ("pure_pi", "full_event")}
 
 
-def _readme(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, claims: list[dict[str, str]], engine: str,
-            wall: float) -> str:
+def _friction_ranges(seeds: tuple[int, ...]) -> dict[str, tuple[float, float, float, float]]:
+    """Per friction label: the variation's frequency range (rad/s at vref = 0.8) at 0.3 m and at 1 m, over the
+    realizations of ``seeds`` (min at 0.3 m, max at 0.3 m, min at 1 m, max at 1 m)."""
+    from models.cart.friction import Friction, FrictionParams
+
+    out = {}
+    for label, fr in FRICTIONS.items():
+        fp = FrictionParams.model_validate(fr or {})
+        r0 = [Friction.draw(fp, seed=s).omega_range(0.8, 0.3, 0.3) for s in seeds]
+        r1 = [Friction.draw(fp, seed=s).omega_range(0.8, 1.0, 1.0) for s in seeds]
+        out[label] = (min(a for a, _ in r0), max(b for _, b in r0), min(a for a, _ in r1), max(b for _, b in r1))
+    return out
+
+
+_SENS_COLS = (
+    ("pi_over_full_40", "Pure PI / Full Event sigma_u, wc=40"),
+    ("pi_over_full_80", "Pure PI / Full Event sigma_u, wc=80"),
+    ("lti_over_event_40", "best LTI / worst event sigma_u, wc=40"),
+    ("lti_over_event_80", "best LTI / worst event sigma_u, wc=80"),
+    ("evj_full_over_pi_40", "Full Event / Pure PI JMAP Ev, wc=40"),
+    ("evj_full_over_pi_80", "Full Event / Pure PI JMAP Ev, wc=80"),
+    ("osc_simplified_80", "Basic + PosPred oscillating at wc=80"),
+    ("osc_others", "others oscillating"),
+    ("half2_over_half1_20", "later / first half Ev, wc=20"),
+)
+
+
+def sensitivity_table(f2: pd.DataFrame, sens: pd.DataFrame) -> pd.DataFrame:
+    """The headline ratios (:func:`models.cart.claims.headline`) under each friction model, one row per model.
+
+    ``f2`` holds the default model's runs, ``sens`` the others' (``sigma_u`` pooled within each model).
+    """
+    rows = []
+    both = pd.concat([f2[f2.wc.isin(WCS_SENS)], sens], ignore_index=True) if not sens.empty else f2
+    for label in FRICTIONS:
+        d = both[both.friction == label]
+        if d.empty:
+            continue
+        rows.append({"friction": label, "runs": len(d), **headline(d)})
+    return pd.DataFrame(rows)
+
+
+def _readme(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, claims: list[dict[str, str]], sens: pd.DataFrame,
+            engine: str, wall: float, n_runs: int, run_time: float) -> str:
     a = _agg(f2, ["controller", "wc"])
+    seeds = tuple(sorted(int(x) for x in f2.seed.unique()))
+    ranges = _friction_ranges(seeds)
+    r_in = ranges["inband"]
+    r_m6 = ranges["modes6"]
+    pool_f2 = pooling_difference(f2)
+    pool_q = pooling_difference(fq) if not fq.empty else math.nan
     lines = [
         "# Cart study: LTI vs event-based control with quantized position (Henningsson & Cervin)",
         "",
-        f"Generated by `netsim report cart` (engine: {engine}, {len(f2) + len(fq)} runs, {wall:.0f} s wall).",
+        f"Generated by `netsim report cart` (engine: {engine}, {n_runs} runs, {wall:.0f} s wall on "
+        f"{os.cpu_count()} CPUs; the runs themselves took {run_time:.0f} s summed, i.e. about "
+        f"{run_time / max(1, os.cpu_count() or 1) / 60:.0f} min on this many idle CPUs; progress is logged every "
+        "~10 % of the runs).",
         "Scenario `scenarios/cart.yaml` (sweeps `cart_fig2.yaml`, `cart_quant.yaml`): cart p'' = Ku sat(uV) - "
-        "F(p) sign(v), Ku = 25.5 m/s^2, Coulomb friction with mean 2 m/s^2 and 30 % RMS variation along the "
-        "track, wavelength 10 cm at the start shrinking to 2.5 cm at 1 m (a model of our own: the paper gives "
-        "no friction numbers; each seed draws a realization). Encoder 5e-5 m with q bits dropped, 10 us ISR "
-        "with time stamps (2 us per tick: 20 % of the CPU, modelled as a periodic load of the exact encoder), "
-        "controller at 1 kHz with 100 us execution time, i.e. a 126 us response once the ISR's interference "
-        "is included.",
+        "F(p) sign(v), Ku = 25.5 m/s^2. Encoder 5e-5 m with q bits dropped, 10 us ISR with time stamps (2 us "
+        "per tick: 20 % of the CPU, modelled as a periodic load of the exact encoder), controller at 1 kHz "
+        "with 100 us execution time, i.e. a 126 us response once the ISR's interference is included. Each "
+        f"run: reference step to vref at t = 0, back to 0 after 1 m, {DURATION_FIG2:g} s simulated "
+        f"({DURATION_QUANT:g} s at vref = 0.4).",
         "",
-        "Ev is computed from the true velocity (`Ev`), from the paper's JMAP reconstruction of the "
-        "full-resolution encoder with the one-sample timing relaxation (`Ev_jmap`) and without it "
-        "(`Ev_jmap0`). sigma_u uses the run's own mean command; `sigma_u_pooled` divides by the mean over all "
-        "runs with the same vref, as the paper did (the two differ by < 2 % here since the friction sets the mean).",
+        "Friction (the paper gives no numbers; it says the friction varies faster at the far end and degrades "
+        "the tracking in the later half at wc = 20): Coulomb, mean 2 m/s^2, 30 % RMS variation along the "
+        "track, one realization per seed from the stream `plant.cart.friction`. Default `friction: {model: "
+        f"inband}}`: one cosine whose frequency at 0.8 m/s rises from {_fmt(r_in[0], 2)}-{_fmt(r_in[1], 2)} "
+        f"rad/s at 0.3 m to {_fmt(r_in[2], 2)}-{_fmt(r_in[3], 2)} rad/s at 1 m (these seeds), inside the "
+        "loop bandwidth; the earlier six-mode model (`model: modes6`, "
+        f"{_fmt(r_m6[0], 2)}-{_fmt(r_m6[3], 3)} rad/s, above every crossover) and `constant` (no variation) "
+        "are options; the sensitivity table below gives the headline ratios under each.",
+        "",
+        "Measures, as in the paper: sigma_u = std(u)/mean(u) with the mean over all runs with the same vref "
+        "(`sigma_u_pooled`, the one in every table and verdict; the per-run `sigma_u` differs from it by up to "
+        f"{_fmt(100 * pool_f2, 2)} % in the Fig. 2 runs and {_fmt(100 * pool_q, 2)} % in the Figs. 3-4 runs); "
+        "Ev from the offline JMAP reconstruction of the full-resolution encoder with the one-sample timing "
+        "relaxation (`Ev_jmap`, the verdicts' measure), beside the true-velocity `Ev` (not measurable in an "
+        "experiment) and the JMAP without relaxation (`Ev_jmap0`). Stop phase: `v_rms_stop` = RMS true "
+        f"velocity {STOP_WINDOW[0]:g}-{STOP_WINDOW[1]:g} s after the cart reaches 1 m; a run oscillates when it "
+        f"exceeds {100 * OSC_THRESHOLD:g} % of vref (threshold chosen after seeing the runs: see the instability "
+        "verdict for the margin).",
         "",
         "## Claims of the paper",
         "",
@@ -298,19 +317,36 @@ def _readme(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, claims: list[dict[str
     ]
     for c in claims:
         lines.append(f"| {c['claim']} | **{c['verdict']}** | {c['numbers']} | {c['why']} |")
+    if not sens.empty:
+        lines += ["", "## Sensitivity to the friction model (wc = 20, 40, 80; seeds " + ", ".join(map(str, seeds))
+                  + ")", "", "| friction | runs | " + " | ".join(t for _, t in _SENS_COLS) + " |",
+                  "|---|---|" + "---|" * len(_SENS_COLS)]
+        for _, r in sens.iterrows():
+            lines.append(f"| {r.friction} | {int(r.runs)} | " + " | ".join(_fmt(r[k]) for k, _ in _SENS_COLS) + " |")
+        lines += ["", "`inband_10_20`: the in-band model with wavelength 1 m / (1 + 3 p) "
+                  f"({_fmt(ranges['inband_10_20'][0], 2)}-{_fmt(ranges['inband_10_20'][3], 2)} rad/s). Oscillating: "
+                  "fraction of runs. Later / first half: Pure PI and Full Event, true-velocity Ev over 0.65-1 m "
+                  "divided by that over 0.3-0.65 m (above 1: the later half tracks worse, as in the paper's Fig. 1)."]
     lines += ["", "## Fig. 2 table (means over friction realizations)", "",
-              "| controller | wc | sigma_u | Ev | Ev_jmap | Ev_jmap0 | events/Tfilter | reached |", "|---|---|---|---|---|---|---|---|"]
+              "| controller | wc | sigma_u (pooled) | sigma_u (per run) | Ev_jmap | Ev | Ev_jmap0 | Ev 2nd/1st half "
+              "| v_rms_stop (m/s) | oscillating | events/Tfilter | reached |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for _, r in a.iterrows():
-        lines.append(f"| {r.controller} | {int(r.wc)} | {_fmt(r.sigma_u)} | {_fmt(r.Ev)} | {_fmt(r.Ev_jmap)} | "
-                     f"{_fmt(r.Ev_jmap0)} | {_fmt(r.events_per_tfilter)} | {_fmt(r.reached)} |")
+        lines.append(f"| {r.controller} | {int(r.wc)} | {_fmt(r.sigma_u_pooled)} | {_fmt(r.sigma_u)} | "
+                     f"{_fmt(r.Ev_jmap)} | {_fmt(r.Ev)} | {_fmt(r.Ev_jmap0)} | {_fmt(r.Ev_half2 / r.Ev_half1)} | "
+                     f"{_fmt(r.v_rms_stop)} | {_fmt(r.oscillating)} | {_fmt(r.events_per_tfilter)} | "
+                     f"{_fmt(r.reached)} |")
     if not fq.empty:
         b = _agg(fq, ["controller", "q"])
         lines += ["", "## Figs. 3-4 table (wc = 40, vref = 0.4)", "",
-                  "| controller | q | sigma_u | Ev | Ev_jmap0 |", "|---|---|---|---|---|"]
+                  "| controller | q | sigma_u (pooled) | sigma_u (per run) | Ev_jmap | Ev | Ev_jmap0 |",
+                  "|---|---|---|---|---|---|---|"]
         for _, r in b.iterrows():
-            lines.append(f"| {r.controller} | {int(r.q)} | {_fmt(r.sigma_u)} | {_fmt(r.Ev)} | {_fmt(r.Ev_jmap0)} |")
+            lines.append(f"| {r.controller} | {int(r.q)} | {_fmt(r.sigma_u_pooled)} | {_fmt(r.sigma_u)} | "
+                         f"{_fmt(r.Ev_jmap)} | {_fmt(r.Ev)} | {_fmt(r.Ev_jmap0)} |")
     lines += ["", "Figures: `fig1_time.png`, `fig2_sigma_vs_ev.png`, `fig3_ev_vs_q.png`, `fig4_sigma_vs_q.png`. "
-              "Tables: `fig2.csv`, `quant.csv` (one row per run), `claims.csv`.", "",
+              "Tables: `fig2.csv`, `quant.csv`, `sensitivity_runs.csv` (one row per run), `sensitivity.csv`, "
+              "`claims.csv`.", "",
               "Absolute sigma_u values depend on our friction level (sigma_u ~ 1/mean(u)); the paper gives no "
               "numbers for them, so only ratios and trends are compared. Nothing was tuned toward the paper's "
               "figures.", ""]
@@ -321,22 +357,50 @@ def _readme(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, claims: list[dict[str
 
 @register("report", "cart", "Henningsson & Cervin cart: Fig. 2 and Figs. 3-4 studies, claims table")
 def cart_report(out_dir: Path | None = None, plots: bool = True, *, engine: str = "netsim",
-                workers: int | None = None, quant: bool = True) -> dict[str, pd.DataFrame]:
-    """Run both studies and write ``reports/cart`` (or ``out_dir``); returns the tables by name."""
-    import time
+                workers: int | None = None, quant: bool = True, sensitivity: bool = True,
+                seeds: tuple[int, ...] | None = None,
+                progress: Progress | None = log_progress) -> dict[str, pd.DataFrame]:
+    """Run the studies and write ``reports/cart`` (or ``out_dir``); returns the tables by name.
 
+    Parameters
+    ----------
+    out_dir
+        Output folder (default ``reports/cart``).
+    plots
+        Write the figures.
+    engine
+        ``"netsim"`` (the scenario through :func:`netsim.runner.run`) or ``"numpy"`` (the reference loop).
+    workers
+        Parallel processes (default: one per CPU).
+    quant, sensitivity
+        Also run the Figs. 3-4 study and the friction sensitivity grid.
+    seeds
+        Friction realizations of the Fig. 2 and sensitivity grids (default ``SEEDS_FIG2``; the Figs. 3-4
+        grid uses ``SEEDS_QUANT``), e.g. ``(1,)`` for a quick check.
+    progress
+        Called as ``progress(done, total, study)`` after each run (default: :func:`log_progress`); ``None``
+        for silence.
+    """
     t0 = time.perf_counter()
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "cart"
     out.mkdir(parents=True, exist_ok=True)
-    f2 = _pool_sigma(_run_all(fig2_points(), engine, workers))
-    fq = _pool_sigma(_run_all(quant_points(), engine, workers)) if quant else pd.DataFrame()
+    sd = tuple(seeds) if seeds else SEEDS_FIG2
+    f2 = pool_sigma(_run_all(fig2_points(sd), engine, workers, progress, "Fig. 2"))
+    fq = pool_sigma(_run_all(quant_points(), engine, workers, progress, "Figs. 3-4")) if quant else pd.DataFrame()
+    sr = (pool_sigma(_run_all(sensitivity_points(sd), engine, workers, progress, "friction sensitivity"),
+                     by=("friction", "vref")) if sensitivity else pd.DataFrame())
     f2.to_csv(out / "fig2.csv", index=False)
     if quant:
         fq.to_csv(out / "quant.csv", index=False)
-    claims = _claims(f2, fq, f2)
+    sens = sensitivity_table(f2, sr) if sensitivity else pd.DataFrame()
+    if sensitivity:
+        sr.to_csv(out / "sensitivity_runs.csv", index=False)
+        sens.to_csv(out / "sensitivity.csv", index=False)
+    claims = make_claims(f2, fq)
     cl = pd.DataFrame(claims)
     cl.to_csv(out / "claims.csv", index=False)
     if plots:
         _plots(out, f2, fq, _fig1_traces())
-    _readme(out, f2, fq, claims, engine, time.perf_counter() - t0)
-    return {"fig2": f2, "quant": fq, "claims": cl}
+    run_time = float(sum(d["wall_s"].sum() for d in (f2, fq, sr) if "wall_s" in d))
+    _readme(out, f2, fq, claims, sens, engine, time.perf_counter() - t0, len(f2) + len(fq) + len(sr), run_time)
+    return {"fig2": f2, "quant": fq, "sensitivity": sens, "claims": cl}
