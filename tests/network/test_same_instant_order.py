@@ -95,13 +95,14 @@ def test_can_frame_sent_as_the_bus_goes_idle_wins_the_arbitration(route):
 
 
 @pytest.mark.parametrize("route", ROUTES)
-@pytest.mark.parametrize("net_type", ["ethernet", "fdma"])
+@pytest.mark.parametrize("net_type", ["ethernet", "fdma", "link"])
 def test_priority_queue_of_a_serial_output_sees_a_frame_sent_as_it_goes_idle(net_type, route):
-    # One sender 'a' with a priority sender queue, on its own output (Ethernet uplink; FDMA: a's sub-channel,
-    # half of 2 Mbit/s with two senders 'a' and 'rx' sharing equally). 1 Mbit/s on a's output: 1 us per bit.
+    # One sender 'a' with a priority sender queue, on its own output (Ethernet uplink; link with a bit rate;
+    # FDMA: a's sub-channel, half of 2 Mbit/s shared equally by 'a' and 'rx'). 1 Mbit/s on a's output: 1 us
+    # per bit.
     # 'busy' (4000 bits = 4.0 ms) holds the output on [0, 4.0] ms; 'low' (priority 5, 1000 bits) waits since
     # 1 ms; 'high' (priority 1, 1000 bits) is sent at 4.0 ms. 'high' goes on [4.0, 5.0], then 'low' [5.0, 6.0].
-    rate = "1 Mbit/s" if net_type == "ethernet" else "2 Mbit/s"
+    rate = "2 Mbit/s" if net_type == "fdma" else "1 Mbit/s"
     params: dict[str, Any] = {"bitrate": rate, "queue_discipline": "priority", "min_frame_bits": 0}
     if net_type == "ethernet":
         params["max_frame_bits"] = None
