@@ -13,7 +13,7 @@ the ``summary.csv`` columns in :mod:`netsim.sweep.summary`.
 
 from __future__ import annotations
 
-from netsim.sweep.executor import SchedulerUnreachable
+from netsim.sweep.executor import SchedulerLost, SchedulerUnreachable
 from netsim.sweep.run import SweepResult, run_sweep
 from netsim.sweep.spec import Point, Sweep, SweepSpec, derive_seed, expand_points, load_sweep
 
@@ -27,4 +27,5 @@ __all__ = [
     "expand_points",
     "derive_seed",
     "SchedulerUnreachable",
+    "SchedulerLost",
 ]

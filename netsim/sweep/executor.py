@@ -9,6 +9,12 @@ A worker runs each point with the *point function* (``netsim.runner.run_point`` 
 another picklable module-level function with the same signature ``fn(raw, out, seed) -> metrics``) and
 writes the point's record ``point.json`` into the point's folder as soon as the point is done, so an
 interrupted sweep keeps every finished point.
+
+Faults on a Dask cluster: a worker that dies mid-point has its tasks rescheduled on the others by the
+scheduler (the points are pure: the same point gives the same record); a scheduler that goes away ends
+the sweep (:class:`SchedulerLost`, raised by :func:`netsim.sweep.run_sweep` after ``summary.csv`` is
+written). Worker processes of a local cluster ignore Ctrl-C (:func:`dask_setup`, as pool workers do): the
+sweep's own process stops the sweep, so one Ctrl-C gives one message, not a traceback per worker.
 """
 
 from __future__ import annotations
@@ -30,6 +36,9 @@ __all__ = [
     "PointFn",
     "SerialExecutor",
     "SchedulerUnreachable",
+    "SchedulerLost",
+    "DaskExecutor",
+    "dask_setup",
     "open_executor",
     "run_chunk",
     "read_record",
@@ -51,6 +60,129 @@ _SINGLE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_
 
 class SchedulerUnreachable(NetsimError):
     """The Dask scheduler named by the user did not answer in time."""
+
+
+class SchedulerLost(NetsimError):
+    """The Dask scheduler went away mid-sweep; finished runs are kept, ``summary.csv`` is written.
+
+    Attributes
+    ----------
+    result
+        The :class:`~netsim.sweep.SweepResult` of what finished (``None`` until the summary is written).
+    out_dir
+        The sweep's output folder (also named in the message).
+    """
+
+    def __init__(self, message: str, result: Any = None, out_dir: Path | None = None) -> None:
+        super().__init__(message)
+        self.result = result
+        self.out_dir = out_dir
+
+
+class DaskExecutor(Executor):
+    """The executor of a ``dask.distributed.Client`` that can tell when its scheduler is gone.
+
+    ``client.get_executor()`` alone keeps accepting work after the scheduler died (the futures then never
+    finish, and the sweep would wait forever); :meth:`scheduler_lost` lets the sweep stop instead.
+    """
+
+    def __init__(self, client: Any) -> None:
+        self.client = client
+        self._inner = client.get_executor(pure=False)
+
+    def scheduler_lost(self) -> bool:
+        """True once the client lost its scheduler (reconnecting, or closed after failing to)."""
+        return scheduler_lost_client(self.client)
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:  # noqa: D102
+        if self.scheduler_lost():
+            raise SchedulerLost("the Dask scheduler went away")
+        return self._inner.submit(fn, *args, **kwargs)
+
+
+def scheduler_lost(executor: Executor) -> bool:
+    """True when ``executor`` runs on a Dask scheduler that has gone away (never for the pool or serial)."""
+    return isinstance(executor, DaskExecutor) and executor.scheduler_lost()
+
+
+def dask_setup(worker: Any) -> None:  # noqa: ARG001 - the Dask preload hook's signature
+    """Dask preload hook (``preload=["netsim.sweep.executor"]``): the worker process ignores Ctrl-C.
+
+    A terminal's Ctrl-C reaches every process of the foreground group, local Dask workers included; the
+    sweep's own process handles it (cancels, writes ``summary.csv``) and closes the cluster.
+    """
+    with contextlib.suppress(ValueError):  # not the main thread: leave it
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+#: Loggers of Dask and its network layer, quietened during a Dask sweep (the sweep reports faults itself).
+_DASK_LOGGERS = ("distributed", "tornado")
+
+
+@contextlib.contextmanager
+def _quiet_dask_logs() -> Iterator[None]:
+    """Dask's own log lines (tracebacks of a closed connection, "reconnecting", "worker killed") are
+    silenced unless netsim logs at DEBUG (``-vv``): the sweep says in one line what happened.
+
+    Dask's logging configuration gives several child loggers their own level and handler
+    (``distributed.client``, ``tornado.application`` ...), so each existing logger is set, not just the parents.
+    """
+    import distributed  # noqa: F401 - configures its loggers on import; they must exist to be quietened
+
+    if logging.getLogger("netsim").isEnabledFor(logging.DEBUG):
+        yield
+        return
+    names = [name for name in list(logging.root.manager.loggerDict)
+             if any(name == p or name.startswith(p + ".") for p in _DASK_LOGGERS)]
+    loggers = [logging.getLogger(name) for name in {*names, *_DASK_LOGGERS}]
+    old = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for lg, level in zip(loggers, old):
+            lg.setLevel(level)
+
+
+def _local_cluster(workers: int | None, scratch: Path | None, dashboard: str | None,
+                   cluster_kwargs: Mapping[str, Any] | None) -> Any:
+    """A ``LocalCluster`` whose worker processes ignore Ctrl-C and whose scheduler serves no HTTP unless
+    ``dashboard`` names an address.
+
+    ``dashboard_address=None`` alone does not do that: the scheduler still serves its HTTP pages (worker
+    info, JSON, Prometheus) on port 8787. With ``dashboard=None`` it is started on an ephemeral loopback
+    port with no routes and stopped at once, so nothing listens.
+    """
+    import dask
+    from distributed import LocalCluster
+
+    kwargs: dict[str, Any] = {
+        "n_workers": workers or os.cpu_count() or 1,
+        "threads_per_worker": 1,
+        "dashboard_address": dashboard if dashboard is not None else "127.0.0.1:0",
+    }
+    if scratch is not None:
+        scratch.mkdir(parents=True, exist_ok=True)
+        kwargs["local_directory"] = str(scratch)
+    if (cluster_kwargs or {}).get("processes", True):
+        kwargs["preload"] = [__name__]
+    kwargs.update(cluster_kwargs or {})
+    if dashboard is not None:
+        return LocalCluster(**kwargs)
+    with dask.config.set({"distributed.scheduler.http.routes": []}):
+        cluster = LocalCluster(**kwargs)
+
+    async def stop_http(scheduler: Any) -> None:
+        scheduler.http_server.stop()
+        scheduler.services.pop("dashboard", None)
+
+    try:
+        cluster.sync(stop_http, cluster.scheduler)
+    except BaseException:
+        cluster.close()
+        raise
+    return cluster
 
 
 def default_point_fn(raw: Mapping[str, Any], out: Path, seed: int) -> dict[str, float]:
@@ -128,6 +260,7 @@ def open_executor(
     scratch: Path | None = None,
     connect_timeout: float = 5.0,
     cluster_kwargs: Mapping[str, Any] | None = None,
+    dashboard: str | None = None,
 ) -> Iterator[tuple[Executor, int, str]]:
     """Open the executor the options name; yield ``(executor, n_workers, description)``.
 
@@ -141,9 +274,12 @@ def open_executor(
     local_dask
         Start a Dask ``LocalCluster`` (scratch files in ``scratch``).
     connect_timeout
-        Seconds to wait for the scheduler to answer.
+        Seconds to wait for the scheduler to answer (and to reconnect to it before the sweep gives up).
     cluster_kwargs
         Extra ``LocalCluster`` arguments (e.g. ``{"processes": False}`` for an in-process cluster).
+    dashboard
+        Address of the local cluster's dashboard (e.g. ``"127.0.0.1:8787"``); ``None`` (default): no
+        dashboard, nothing listens for HTTP.
 
     Raises
     ------
@@ -152,33 +288,31 @@ def open_executor(
     """
     os.environ.update(_SINGLE_THREAD_ENV)  # inherited by workers started from here
     if scheduler or local_dask:
-        from distributed import Client, LocalCluster
+        with _quiet_dask_logs():
+            from distributed import Client
 
-        cluster = None
-        if scheduler:
-            _probe_scheduler(scheduler, connect_timeout)
-            client = Client(scheduler, timeout=connect_timeout)
-            desc = f"dask scheduler {scheduler}"
-        else:
-            kwargs: dict[str, Any] = {
-                "n_workers": workers or os.cpu_count() or 1,
-                "threads_per_worker": 1,
-                "dashboard_address": None,
-            }
-            if scratch is not None:
-                scratch.mkdir(parents=True, exist_ok=True)
-                kwargs["local_directory"] = str(scratch)
-            kwargs.update(cluster_kwargs or {})
-            cluster = LocalCluster(**kwargs)
-            client = Client(cluster, timeout=connect_timeout)
-            desc = f"local dask cluster ({kwargs['n_workers']} workers)"
-        try:
-            n = sum(client.nthreads().values()) or 1
-            yield client.get_executor(pure=False), n, desc
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+            cluster = None
+            try:
+                if scheduler:
+                    _probe_scheduler(scheduler, connect_timeout)
+                    client = Client(scheduler, timeout=connect_timeout)
+                    desc = f"dask scheduler {scheduler}"
+                else:
+                    cluster = _local_cluster(workers, scratch, dashboard, cluster_kwargs)
+                    client = Client(cluster, timeout=connect_timeout)
+                    n_local = len(cluster.workers)
+                    desc = f"local dask cluster ({n_local} workers)"
+                    if dashboard is not None:
+                        desc += f", dashboard {cluster.dashboard_link}"
+            except BaseException:
+                if cluster is not None:
+                    cluster.close()
+                raise
+            try:
+                n = 1 if scheduler_lost_client(client) else (sum(client.nthreads().values()) or 1)
+                yield DaskExecutor(client), n, desc
+            finally:
+                _close_quietly(client, cluster)
         return
     n = workers or os.cpu_count() or 1
     if n <= 1:
@@ -192,6 +326,26 @@ def open_executor(
         yield pool, n, f"process pool ({n} workers)"
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def scheduler_lost_client(client: Any) -> bool:
+    """True when the Dask ``client`` is not connected to its scheduler."""
+    return str(getattr(client.status, "value", client.status)) not in ("running", "newly-created")
+
+
+def _close_quietly(client: Any, cluster: Any) -> None:
+    """Close the client (and the local cluster); a lost scheduler or a second Ctrl-C does not stop the
+    closing of the local cluster's worker processes."""
+    try:
+        if scheduler_lost_client(client):
+            client.close(timeout=2)
+        else:
+            client.close()
+    except Exception:  # noqa: BLE001 - a client whose scheduler died may fail to close cleanly; nothing to keep
+        log.debug("closing the Dask client failed", exc_info=True)
+    finally:
+        if cluster is not None:
+            cluster.close()
 
 
 def _write_json(path: Path, data: Any) -> None:

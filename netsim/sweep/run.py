@@ -11,9 +11,11 @@ Output folder layout::
 A run is *finished* when its ``point.json`` says ``ok`` with the same seed and the same scenario hash
 (:func:`netsim.scenario.scenario_hash` of the point's scenario with its seed, as in the run's
 ``meta.json``) as now; running the sweep again skips those
-and runs the rest (failed runs are retried). Ctrl-C stops the sweep: runs in progress are abandoned,
-finished ones are kept, ``summary.csv`` is written with ``status = pending`` for the rest, and the returned
-result has ``interrupted = True``.
+and runs the rest (failed runs are retried). Ctrl-C stops the sweep, whatever the executor and whenever it
+comes (while a local Dask cluster starts, runs or closes): runs in progress are abandoned, finished ones
+are kept, ``summary.csv`` is written with ``status = pending`` for the rest, and the returned result has
+``interrupted = True``. A Dask worker that dies costs only time (the scheduler reruns its runs elsewhere);
+a Dask scheduler that goes away stops the sweep the same way, then :class:`SchedulerLost` is raised.
 """
 
 from __future__ import annotations
@@ -22,13 +24,22 @@ import json
 import logging
 import shutil
 import time
-from concurrent.futures import FIRST_COMPLETED, Future, wait
+from concurrent.futures import FIRST_COMPLETED, CancelledError, Executor, Future, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
 from netsim.errors import ConfigError
-from netsim.sweep.executor import PointFn, default_point_fn, open_executor, point_hash, read_record, run_chunk
+from netsim.sweep.executor import (
+    PointFn,
+    SchedulerLost,
+    default_point_fn,
+    open_executor,
+    point_hash,
+    read_record,
+    run_chunk,
+    scheduler_lost,
+)
 from netsim.sweep.spec import Point, Sweep, load_sweep
 from netsim.sweep.summary import write_summary
 
@@ -244,6 +255,10 @@ class _Progress:
             self.bar.stop()
 
 
+#: How often (seconds) the sweep loop wakes up to check that the Dask scheduler is still there.
+_POLL_S = 0.5
+
+
 def _execute(
     sweep: Sweep,
     todo: list[tuple[Point, dict[str, Any]]],
@@ -257,49 +272,89 @@ def _execute(
     chunk_size: int | None,
     connect_timeout: float,
     cluster_kwargs: Mapping[str, Any] | None,
-) -> tuple[bool, str]:
-    """Run ``todo`` (point, raw) on the chosen executor; return ``(interrupted, executor description)``."""
-    interrupted = False
-    with open_executor(
-        workers=workers,
-        scheduler=scheduler,
-        local_dask=local_dask,
-        scratch=out / "dask-scratch",
-        connect_timeout=connect_timeout,
-        cluster_kwargs=cluster_kwargs,
-    ) as (executor, n_workers, desc):
-        planner = ChunkPlanner(n_workers, chunk_size)
-        log.info("sweep %s: %d runs on %s", sweep.name, len(todo), desc)
-        in_flight: dict[Future, list[dict[str, Any]]] = {}
-        limit = 2 * n_workers
-        pos = 0
-        with _Progress(progress, len(todo), f"{sweep.name}") as bar:
+    dashboard: str | None = None,
+) -> tuple[str, str]:
+    """Run ``todo`` (point, raw) on the chosen executor; return ``(outcome, executor description)``.
+
+    ``outcome`` is ``"done"``, ``"interrupted"`` (Ctrl-C, at any moment: while the executor starts, runs or
+    closes) or ``"lost"`` (the Dask scheduler went away; the runs it held are left pending, not failed).
+    """
+    outcome, desc = "done", "not started"
+    try:
+        with open_executor(
+            workers=workers,
+            scheduler=scheduler,
+            local_dask=local_dask,
+            scratch=out / "dask-scratch",
+            connect_timeout=connect_timeout,
+            cluster_kwargs=cluster_kwargs,
+            dashboard=dashboard,
+        ) as (executor, n_workers, desc):
             try:
-                while True:
-                    while pos < len(todo) and len(in_flight) < limit:
-                        size = planner.next_size(len(todo) - pos)
-                        chunk = [_task(sweep, p, out, raw) for p, raw in todo[pos : pos + size]]
-                        pos += size
-                        in_flight[executor.submit(run_chunk, point_fn, chunk)] = chunk
-                    if not in_flight:
-                        break
-                    done, _ = wait(list(in_flight), return_when=FIRST_COMPLETED)
-                    for fut in done:
-                        chunk = in_flight.pop(fut)
-                        try:
-                            records = fut.result()
-                        except KeyboardInterrupt:
-                            raise
-                        except BaseException as exc:  # noqa: BLE001 - a lost chunk fails its points, not the sweep
-                            records = [_lost(task, exc) for task in chunk]
-                        planner.observe(sum(float(r.get("elapsed_s", 0.0)) for r in records), len(records))
-                        bar.advance(records)
+                outcome = _drive(sweep, todo, out, point_fn, executor, n_workers, desc, progress, chunk_size)
             except KeyboardInterrupt:
-                interrupted = True
-                log.warning("sweep %s interrupted; finished runs are kept, run it again to resume", sweep.name)
-                for fut in in_flight:
-                    fut.cancel()
-    return interrupted, desc
+                outcome = "interrupted"
+                raise
+    except KeyboardInterrupt:
+        outcome = "interrupted"
+    if outcome == "interrupted":
+        log.warning("sweep %s interrupted; finished runs are kept, run it again to resume", sweep.name)
+    return outcome, desc
+
+
+def _drive(
+    sweep: Sweep,
+    todo: list[tuple[Point, dict[str, Any]]],
+    out: Path,
+    point_fn: PointFn,
+    executor: Executor,
+    n_workers: int,
+    desc: str,
+    progress: bool,
+    chunk_size: int | None,
+) -> str:
+    """Submit chunks, collect records; return ``"done"`` or ``"lost"`` (Ctrl-C propagates, after the
+    runs still in flight are cancelled)."""
+    planner = ChunkPlanner(n_workers, chunk_size)
+    log.info("sweep %s: %d runs on %s", sweep.name, len(todo), desc)
+    in_flight: dict[Future, list[dict[str, Any]]] = {}
+    limit = 2 * n_workers
+    pos = 0
+    root = out.resolve()  # workers (other machines, other working directories) get absolute folders
+    with _Progress(progress, len(todo), f"{sweep.name}") as bar:
+        try:
+            while True:
+                if scheduler_lost(executor):
+                    return "lost"
+                while pos < len(todo) and len(in_flight) < limit:
+                    size = planner.next_size(len(todo) - pos)
+                    chunk = [_task(sweep, p, root, raw) for p, raw in todo[pos : pos + size]]
+                    try:
+                        fut = executor.submit(run_chunk, point_fn, chunk)
+                    except SchedulerLost:
+                        return "lost"
+                    pos += size
+                    in_flight[fut] = chunk
+                if not in_flight:
+                    return "done"
+                done, _ = wait(list(in_flight), timeout=_POLL_S, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    chunk = in_flight.pop(fut)
+                    try:
+                        records = fut.result()
+                    except KeyboardInterrupt:
+                        raise
+                    except CancelledError:  # only Dask cancels on its own: its scheduler went away
+                        if scheduler_lost(executor):
+                            return "lost"
+                        records = [_lost(task, RuntimeError("the executor cancelled the run")) for task in chunk]
+                    except BaseException as exc:  # noqa: BLE001 - a lost chunk fails its points, not the sweep
+                        records = [_lost(task, exc) for task in chunk]
+                    planner.observe(sum(float(r.get("elapsed_s", 0.0)) for r in records), len(records))
+                    bar.advance(records)
+        finally:
+            for fut in in_flight:
+                fut.cancel()
 
 
 def _lost(task: dict[str, Any], exc: BaseException) -> dict[str, Any]:
@@ -354,6 +409,7 @@ def run_sweep(
     chunk_size: int | None = None,
     connect_timeout: float = 5.0,
     cluster_kwargs: Mapping[str, Any] | None = None,
+    dashboard: str | None = None,
 ) -> SweepResult:
     """Run a sweep file; write the point folders, ``summary.csv`` and the surface; resume when re-run.
 
@@ -382,6 +438,9 @@ def run_sweep(
         Seconds to wait for the Dask scheduler.
     cluster_kwargs
         Extra ``LocalCluster`` arguments for ``local_dask`` (e.g. ``{"processes": False}``).
+    dashboard
+        Address for the local Dask cluster's dashboard (e.g. ``"127.0.0.1:8787"``); default: none, and
+        the cluster listens on no HTTP port.
 
     Raises
     ------
@@ -390,6 +449,10 @@ def run_sweep(
         "did you mean", empty factors ...), an invalid base scenario, or a factor level that gives an invalid
         scenario (each level is checked once); also for an output folder that holds another sweep, or a
         scheduler that does not answer.
+    SchedulerLost
+        When the Dask scheduler goes away mid-sweep: the finished runs are kept and ``summary.csv`` is
+        written (the rest ``pending``) before it is raised; ``.result`` holds the :class:`SweepResult`.
+        Running the sweep again resumes.
     """
     t0 = time.perf_counter()
     if scheduler and local_dask:
@@ -410,9 +473,9 @@ def run_sweep(
     if resumed:
         log.info("sweep %s: %d of %d runs already finished, %d to run", sweep.name, resumed, len(raws), len(todo))
 
-    interrupted, desc = False, "nothing to run"
+    outcome, desc = "done", "nothing to run"
     if todo:
-        interrupted, desc = _execute(
+        outcome, desc = _execute(
             sweep,
             todo,
             folder,
@@ -424,8 +487,18 @@ def run_sweep(
             chunk_size=chunk_size,
             connect_timeout=connect_timeout,
             cluster_kwargs=cluster_kwargs,
+            dashboard=dashboard,
         )
-    return _collect(sweep, folder, len(todo), resumed, interrupted, desc, time.perf_counter() - t0)
+    result = _collect(sweep, folder, len(todo), resumed, outcome != "done", desc, time.perf_counter() - t0)
+    if outcome == "lost":
+        raise SchedulerLost(
+            f"the Dask scheduler {scheduler or '(local)'} went away mid-sweep; {result.n_ok} of {result.n_runs} "
+            f"runs finished and are kept in {folder} (summary.csv written, {result.n_pending} pending); start "
+            "the scheduler and workers again and rerun the same command to resume",
+            result=result,
+            out_dir=folder,
+        )
+    return result
 
 
 def _collect(
