@@ -255,8 +255,8 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
         res["ISEP"] = 0.0
     res["NE"] = sampling_efficiency(res["ISEP"], res["ISE"])
     res["GPI"] = gpi(uc, ua, res["NE"], p.weights)
-    res.update(_horizon_measures(sig, p, t_k, window_s))
     gap = _packet_gap_max(result.messages, p, n_tts, window_s)
+    res.update(_horizon_measures(sig, p, t_k, window_s, gap))
     if gap is not None:
         res["u_gap_max"] = gap
     return {f"{ET_PREFIX}.{k}": v for k, v in res.items()}
@@ -280,7 +280,8 @@ def _packet_gap_max(messages, p: EtControlParams, n_tts: int, window_s: float) -
     return float(np.max(np.diff(np.append(k, n_tts))))
 
 
-def _horizon_measures(sig, p: EtControlParams, t_k: np.ndarray, window_s: float) -> dict[str, float]:
+def _horizon_measures(sig, p: EtControlParams, t_k: np.ndarray, window_s: float,
+                      gap: float | None = None) -> dict[str, float]:
     """``N_max`` and ``played_past_packet`` from the recorded signals (only those that were recorded)."""
     out: dict[str, float] = {}
     cols = sig.columns
@@ -298,9 +299,9 @@ def _horizon_measures(sig, p: EtControlParams, t_k: np.ndarray, window_s: float)
         played = float(np.sum(sample_signal(sig, p.past_end, t_k + (p.period - 1) / S)))
         out["played_past_packet"] = played
         if played > 0:
-            log.warning("et_control: the actuator played %d period(s) past the end of its packet (h < N_max%s); "
-                        "raise design_params.h", int(played),
-                        f" = {int(out['N_max'])}" if "N_max" in out else "")
+            log.warning("et_control: the actuator played %d period(s) past the end of its packet (h is shorter "
+                        "than the longest run one packet had to cover%s); raise design_params.h", int(played),
+                        f", {int(gap)} periods" if gap is not None else "")
     return out
 
 
