@@ -167,6 +167,13 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
         failure = exc
     wall = time.perf_counter() - t0
     result = _collect(sim, t_end)
+    if failure is None:
+        from netsim.divergence import find_divergence
+
+        hit = find_divergence(result, sim.env.recorder, scenario.metrics)
+        if hit is not None:  # unstable on its own scale though the plant's absolute bound was not reached
+            status = f"diverged at t = {hit[0]:.9g} s"
+            error = hit[1]
     warnings = _unrecorded(scenario, sim.env.recorder)
     for text in warnings:
         log.warning("%s: %s", scenario.name, text)

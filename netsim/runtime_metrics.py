@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from pydantic import ValidationError
+from pydantic import Field, ValidationError
 
 from netsim.errors import ConfigError
 from netsim.registry import lookup, register
@@ -153,13 +153,18 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
 
 # ----------------------------------------------------------------------------------------------- control_error
 class ControlErrorParams(StrictModel):
-    """Parameters of the ``control_error`` metric."""
+    """Parameters of the ``control_error`` metric.
+
+    ``diverged_above``: the run's status becomes ``diverged at t = ...`` when ``|reference - output|`` passes this
+    many times the loop's scale (:mod:`netsim.divergence`; ``null``: never).
+    """
 
     reference: str | None = None
     output: str
     name: str | None = None
     t0: Time = 0
     t1: Time | None = None
+    diverged_above: float | None = Field(1000.0, gt=0, allow_inf_nan=False)
 
 
 def _column(result: Any, name: str) -> np.ndarray:
