@@ -151,8 +151,9 @@ def _local_cluster(workers: int | None, scratch: Path | None, dashboard: str | N
     ``dashboard`` names an address.
 
     ``dashboard_address=None`` alone does not do that: the scheduler still serves its HTTP pages (worker
-    info, JSON, Prometheus) on port 8787. With ``dashboard=None`` it is started on an ephemeral loopback
-    port with no routes and stopped at once, so nothing listens.
+    info, JSON, Prometheus) on port 8787. With ``dashboard=None`` the scheduler's HTTP server is started
+    on an ephemeral loopback port with no routes and stopped at once (nothing listens), and the workers'
+    HTTP servers (always started by Dask, on an ephemeral loopback port) serve no routes either.
     """
     import dask
     from distributed import LocalCluster
@@ -161,6 +162,8 @@ def _local_cluster(workers: int | None, scratch: Path | None, dashboard: str | N
         "n_workers": workers or os.cpu_count() or 1,
         "threads_per_worker": 1,
         "dashboard_address": dashboard if dashboard is not None else "127.0.0.1:0",
+        # the worker processes' own Dask log lines (e.g. "task cancelled" when Ctrl-C closes them)
+        "silence_logs": logging.DEBUG if logging.getLogger("netsim").isEnabledFor(logging.DEBUG) else logging.CRITICAL,
     }
     if scratch is not None:
         scratch.mkdir(parents=True, exist_ok=True)
@@ -170,7 +173,7 @@ def _local_cluster(workers: int | None, scratch: Path | None, dashboard: str | N
     kwargs.update(cluster_kwargs or {})
     if dashboard is not None:
         return LocalCluster(**kwargs)
-    with dask.config.set({"distributed.scheduler.http.routes": []}):
+    with dask.config.set({"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}):
         cluster = LocalCluster(**kwargs)
 
     async def stop_http(scheduler: Any) -> None:
@@ -279,7 +282,7 @@ def open_executor(
         Extra ``LocalCluster`` arguments (e.g. ``{"processes": False}`` for an in-process cluster).
     dashboard
         Address of the local cluster's dashboard (e.g. ``"127.0.0.1:8787"``); ``None`` (default): no
-        dashboard, nothing listens for HTTP.
+        dashboard, the scheduler listens for no HTTP at all (see :func:`_local_cluster`).
 
     Raises
     ------

@@ -1,0 +1,304 @@
+"""Sweeps on a real Dask cluster, with faults: a worker killed, the scheduler killed, Ctrl-C.
+
+The cluster is what a user starts on several machines: ``dask scheduler`` and two ``dask worker`` processes
+(separate process groups, on localhost, ports chosen by the scheduler itself: ``--port 0`` with a
+``--scheduler-file``). Every process a test starts is killed (its whole process group) by a finalizer, also
+when the test fails. The sweep runs the real point function (``netsim.runner.run_point``) on a small
+DC-servo sweep whose points take a fraction of a second each, so a fault injected after the first point
+finished is mid-sweep; each test waits on observable progress (``points/*/point.json``), not on sleeps.
+
+The expected ``summary.csv`` is never produced by the code under test's Dask path: it is the same sweep run
+serially in this process (``workers=1``), byte for byte (the ``folder`` column holds paths relative to the
+output folder, so two output folders give the same bytes).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Callable, Iterator
+
+import pytest
+import yaml
+
+from netsim.sweep import SchedulerLost, run_sweep
+
+pytestmark = pytest.mark.slow  # about 1.5-3 minutes: `.ci/run` runs it as its own step
+
+REPO = Path(__file__).resolve().parents[1]
+BIN = Path(sys.executable).parent
+N_POINTS = 8
+WAIT_S = 120.0  # upper bound for any one wait (a loaded CI machine); a hang fails the test, it never blocks
+
+
+# ---------------------------------------------------------------------------------------------- helpers
+def _dask_command() -> str:
+    found = BIN / "dask"
+    if found.exists():
+        return str(found)
+    which = shutil.which("dask")
+    if which is None:
+        pytest.fail("the `dask` command is missing: install netsim with its dask[distributed] dependency")
+    return which
+
+
+def _write_sweep(folder: Path) -> Path:
+    base = yaml.safe_load((REPO / "scenarios" / "dc_servo_ideal.yaml").read_text())
+    base["name"] = "dask_faults_base"
+    base["duration"] = "3 s"
+    (folder / "base.yaml").write_text(yaml.safe_dump(base, sort_keys=False))
+    levels = [round(0.5 + 0.1 * i, 1) for i in range(N_POINTS)]
+    path = folder / "sweep.yaml"
+    path.write_text(
+        "sweep: dask_faults\nbase: base.yaml\nseed: 7\nfactors:\n  K:\n"
+        f"    paths: [nodes.computer.tasks[0].params.K]\n    values: {levels}\n"
+    )
+    return path
+
+
+def _wait_for(what: str, ready: Callable[[], bool], timeout: float = WAIT_S, proc: subprocess.Popen | None = None) -> None:
+    deadline = time.monotonic() + timeout
+    while not ready():
+        if proc is not None and proc.poll() is not None:
+            raise AssertionError(f"the process ended (exit {proc.returncode}) before {what}")
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+        time.sleep(0.05)
+
+
+def _finished(out: Path) -> list[Path]:
+    return sorted(out.glob("points/*/point.json"))
+
+
+def _group_alive(pgid: int) -> bool:
+    """True while a process of group ``pgid`` runs (zombies waiting for their reaper do not count)."""
+    proc = Path("/proc")
+    if not proc.is_dir():  # pragma: no cover - not Linux: ask the kernel, zombies included
+        try:
+            os.killpg(pgid, 0)
+        except (ProcessLookupError, PermissionError):
+            return False
+        return True
+    for stat in proc.glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":  # fields after the name: state, ppid, pgrp
+            return True
+    return False
+
+
+def _all_ended(pgids: list[int], timeout: float = 30.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while any(_group_alive(g) for g in pgids):
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.1)
+    return True
+
+
+def _kill_group(proc: subprocess.Popen) -> None:
+    """SIGKILL the process group ``proc`` leads (a dask worker's nanny and its worker process) and reap it."""
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    try:
+        proc.wait(timeout=30)
+    except subprocess.TimeoutExpired:  # pragma: no cover - SIGKILL cannot be ignored
+        pass
+
+
+def _statuses(summary: Path) -> dict[str, str]:
+    with summary.open(newline="") as f:
+        return {row["folder"]: row["status"] for row in csv.DictReader(f)}
+
+
+class Cluster:
+    """``dask scheduler`` + ``dask worker`` x 2 as separate process groups; ``close()`` kills them all."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.procs: list[subprocess.Popen] = []
+        self.scheduler: subprocess.Popen | None = None
+        self.workers: list[subprocess.Popen] = []
+        self.address = ""
+
+    def _start(self, args: list[str], log: str) -> subprocess.Popen:
+        with (self.folder / log).open("w") as f:
+            proc = subprocess.Popen([_dask_command(), *args], stdout=f, stderr=subprocess.STDOUT,
+                                    stdin=subprocess.DEVNULL, start_new_session=True, cwd=self.folder)
+        self.procs.append(proc)
+        return proc
+
+    def start(self, n_workers: int = 2) -> "Cluster":
+        info = self.folder / "scheduler.json"
+        # --idle-timeout: a scheduler orphaned by a killed test run ends by itself
+        self.scheduler = self._start(["scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                                      "--scheduler-file", str(info), "--idle-timeout", "300s"], "scheduler.log")
+        _wait_for("the scheduler file", lambda: info.exists() and info.stat().st_size > 0, proc=self.scheduler)
+        _wait_for("the scheduler address", lambda: "address" in _read_json(info), proc=self.scheduler)
+        self.address = _read_json(info)["address"]
+        for i in range(n_workers):
+            self.workers.append(self._start(
+                ["worker", self.address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
+                 "--name", f"w{i}", "--local-directory", str(self.folder / f"w{i}"),
+                 "--death-timeout", "60s"], f"worker{i}.log"))
+        from distributed import Client
+
+        with Client(self.address, timeout=WAIT_S) as client:
+            client.wait_for_workers(n_workers, timeout=WAIT_S)
+        return self
+
+    def close(self) -> None:
+        for proc in self.procs:
+            _kill_group(proc)
+
+
+def _read_json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+@pytest.fixture()
+def cluster(tmp_path: Path) -> Iterator[Cluster]:
+    folder = tmp_path / "cluster"
+    folder.mkdir()
+    c = Cluster(folder)
+    try:
+        yield c.start()
+    finally:
+        c.close()
+    assert _all_ended([p.pid for p in c.procs]), "a cluster process outlived the test"
+
+
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, bytes]:
+    """The sweep file and the bytes of its ``summary.csv`` run serially in this process."""
+    folder = tmp_path_factory.mktemp("dask_faults")
+    path = _write_sweep(folder)
+    res = run_sweep(path, out=folder / "serial", workers=1, progress=False)
+    assert res.n_ok == N_POINTS, res.summary
+    return path, res.summary_path.read_bytes()
+
+
+def _in_thread(fn: Callable[[], object], timeout: float = WAIT_S) -> object:
+    """``fn()`` in a thread with a hang guard: its result, or its exception re-raised here."""
+    box: list[tuple[bool, object]] = []
+
+    def target() -> None:
+        try:
+            box.append((True, fn()))
+        except BaseException as exc:  # noqa: BLE001 - handed to the test
+            box.append((False, exc))
+
+    t = threading.Thread(target=target, daemon=True)
+    t.start()
+    t.join(timeout)
+    assert not t.is_alive(), f"the sweep hung (no return after {timeout:g} s)"
+    ok, value = box[0]
+    if not ok:
+        raise value  # type: ignore[misc]
+    return value
+
+
+def _sweep_cli(args: list[str]) -> subprocess.Popen:
+    """``netsim sweep ...`` in its own process group (as a terminal runs it), output captured."""
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    return subprocess.Popen([str(BIN / "netsim"), "sweep", *args, "--no-progress"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True, env=env,
+                            start_new_session=True)
+
+
+# ---------------------------------------------------------------------------------------------- faults
+def test_worker_killed_mid_sweep_still_gives_the_serial_summary(cluster: Cluster, serial, tmp_path: Path) -> None:
+    path, expected = serial
+    out = tmp_path / "out"
+    victim = cluster.workers[0]
+    seen_at_kill: list[int] = []
+
+    def killer() -> None:
+        _wait_for("the first finished run", lambda: bool(_finished(out)))
+        seen_at_kill.append(len(_finished(out)))
+        _kill_group(victim)
+
+    thread = threading.Thread(target=killer, daemon=True)
+    thread.start()
+    res = _in_thread(lambda: run_sweep(path, out=out, scheduler=cluster.address, progress=False))
+    thread.join(5)
+    assert seen_at_kill and seen_at_kill[0] < N_POINTS, "the worker was not killed mid-sweep"
+    assert victim.poll() is not None and _all_ended([victim.pid])
+    assert res.n_ok == N_POINTS and not res.interrupted  # type: ignore[attr-defined]
+    assert (out / "summary.csv").read_bytes() == expected
+
+
+def test_scheduler_killed_mid_sweep_stops_with_one_line_and_a_rerun_resumes(
+    cluster: Cluster, serial, tmp_path: Path
+) -> None:
+    path, expected = serial
+    out = tmp_path / "out"
+    proc = _sweep_cli([str(path), "--out", str(out), "--scheduler", cluster.address])
+    try:
+        _wait_for("the first finished run", lambda: bool(_finished(out)), proc=proc)
+        assert cluster.scheduler is not None
+        _kill_group(cluster.scheduler)
+        stdout, stderr = proc.communicate(timeout=WAIT_S)  # before the fix: waited forever
+    finally:
+        _kill_group(proc)
+    for worker in cluster.workers:  # freeze the folder: no late run finishes during the checks below
+        _kill_group(worker)
+
+    assert proc.returncode == 1, (proc.returncode, stderr)
+    assert "Traceback" not in stderr and "Traceback" not in stdout, stderr
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("netsim: error: the Dask scheduler"), stderr
+    assert "went away mid-sweep" in lines[0] and "rerun the same command to resume" in lines[0]
+
+    statuses = _statuses(out / "summary.csv")
+    kept = {folder: (out / folder / "point.json").read_bytes() for folder, st in statuses.items() if st == "ok"}
+    assert kept and len(kept) < N_POINTS
+    assert set(statuses.values()) <= {"ok", "pending"}  # the runs the scheduler held are not "failed"
+
+    res = run_sweep(path, out=out, workers=1, progress=False)
+    assert res.n_resumed >= len(kept) and res.n_ok == N_POINTS
+    for folder, record in kept.items():  # finished before the fault: skipped, not run again
+        assert (out / folder / "point.json").read_bytes() == record
+    assert (out / "summary.csv").read_bytes() == expected
+
+
+def test_ctrl_c_of_a_local_dask_sweep_is_clean_and_a_rerun_resumes(serial, tmp_path: Path) -> None:
+    path, expected = serial
+    out = tmp_path / "out"
+    proc = _sweep_cli([str(path), "--out", str(out), "--dask-local", "--workers", "2"])
+    try:
+        _wait_for("the first finished run", lambda: bool(_finished(out)), proc=proc)
+        os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole foreground group
+        stdout, stderr = proc.communicate(timeout=WAIT_S)  # "once ignored": a hang fails here
+        assert _all_ended([proc.pid]), "a local Dask worker process outlived the sweep"
+    finally:
+        _kill_group(proc)
+
+    assert proc.returncode == 130, (proc.returncode, stderr)
+    assert "Traceback" not in stderr, stderr  # "three worker tracebacks on screen"
+    assert "interrupted" in stderr and "run the same command again to resume" in stderr
+    assert (out / "summary.csv").exists()  # "no summary.csv although the README promises one"
+    statuses = _statuses(out / "summary.csv")
+    kept = {folder: (out / folder / "point.json").read_bytes() for folder, st in statuses.items() if st == "ok"}
+    assert kept and "pending" in statuses.values()
+
+    res = run_sweep(path, out=out, workers=1, progress=False)
+    assert res.n_resumed >= len(kept) and res.n_ok == N_POINTS
+    for folder, record in kept.items():
+        assert (out / folder / "point.json").read_bytes() == record
+    assert (out / "summary.csv").read_bytes() == expected
