@@ -174,6 +174,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=_positive_int, metavar="N", help="parallel processes (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDR", help="dask scheduler address, e.g. tcp://host:8786")
     p.add_argument("--dask-local", action="store_true", help="use a local dask cluster instead of processes")
+    p.add_argument("--dask-dashboard", metavar="ADDR",
+                   help="with --dask-local: serve its dashboard at ADDR, e.g. 127.0.0.1:8787 (default: off)")
     p.add_argument("--overwrite", action="store_true", help="rerun points that already have results")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_sweep)
@@ -290,8 +292,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     status = str(meta.get("status", "ok"))
     out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
     where = f"; wrote {out_dir}" if out_dir else ""
+    n_warn = len(meta.get("warnings") or [])
+    told = f"{status} ({n_warn} warning{'s' if n_warn != 1 else ''} above)" if n_warn else status
     if not args.quiet or status != "ok":  # quiet: nothing on stdout unless the run failed
-        print(f"{scenario.name}: {status}{where}")
+        print(f"{scenario.name}: {told}{where}")
     if not args.quiet:
         _print_metrics(getattr(result, "metrics", None))
     from netsim.status import count_statuses
@@ -406,6 +410,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
     if args.scheduler and args.dask_local:
         raise ConfigError("give either --scheduler ADDR or --dask-local, not both")
+    if args.dask_dashboard and not args.dask_local:
+        raise ConfigError("--dask-dashboard needs --dask-local (a scheduler you start has its own: "
+                          "`dask scheduler --dashboard-address ADDR`)")
     if not Path(args.file).exists():
         raise ConfigError(f"file not found: {args.file}")
     from netsim.sweep import run_sweep
@@ -416,6 +423,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         workers=args.workers,
         scheduler=args.scheduler,
         local_dask=args.dask_local,
+        dashboard=args.dask_dashboard,
         overwrite=args.overwrite,
         progress=not (args.no_progress or args.quiet),
     )

@@ -297,6 +297,13 @@ def run(
             result.meta["status"] = "error"
             result.meta["error"] = f"{type(exc).__name__}: {exc}"
         result.metrics = pd.Series(dtype=float, name="value")
+    if failure is None:
+        from netsim.run_warnings import load_warnings
+
+        extra = load_warnings(result.metrics.to_dict(), result.jobs, scenario.nodes, scenario.networks or {})
+        for text in extra:
+            log.warning("%s: %s", scenario.name, text)
+        result.meta["warnings"] = list(result.meta.get("warnings") or []) + extra
     result.meta.update(
         {
             "scenario": scenario.name,
