@@ -176,8 +176,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dask-local", action="store_true", help="use a local dask cluster instead of processes")
     p.add_argument("--dask-dashboard", metavar="ADDR",
                    help="with --dask-local: serve its dashboard at ADDR, e.g. 127.0.0.1:8787 (default: off)")
-    p.add_argument("--dask-dashboard", metavar="ADDR",
-                   help="with --dask-local: serve its dashboard at ADDR, e.g. 127.0.0.1:8787 (default: off)")
     p.add_argument("--overwrite", action="store_true", help="rerun points that already have results")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_sweep)
@@ -412,9 +410,6 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
     if args.scheduler and args.dask_local:
         raise ConfigError("give either --scheduler ADDR or --dask-local, not both")
-    if args.dask_dashboard and not args.dask_local:
-        raise ConfigError("--dask-dashboard needs --dask-local (a scheduler you start has its own: "
-                          "`dask scheduler --dashboard-address ADDR`)")
     if args.dask_dashboard and not args.dask_local:
         raise ConfigError("--dask-dashboard needs --dask-local (a scheduler you start has its own: "
                           "`dask scheduler --dashboard-address ADDR`)")
