@@ -29,7 +29,7 @@ from typing import Callable, Iterator
 import pytest
 import yaml
 
-from netsim.sweep import SchedulerLost, run_sweep
+from netsim.sweep import run_sweep
 
 pytestmark = pytest.mark.slow  # about 1.5-3 minutes: `.ci/run` runs it as its own step
 
