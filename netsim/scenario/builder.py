@@ -33,7 +33,7 @@ from netsim.env import SimEnv, run_events
 from netsim.errors import BuildError, ConfigError, NetsimError
 from netsim.timebase import MS
 
-__all__ = ["Simulation", "build", "make_plant", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
+__all__ = ["Simulation", "build", "make_plant", "wire_kernels", "build_networks", "bind_receivers", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
 
 log = logging.getLogger(__name__)
 
@@ -333,11 +333,53 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
     """Kernels with their tasks and handlers; returns also the (node, network, target) receive bindings."""
     if not scenario.nodes:
         return {}, {}, []
-    from netsim.kernel import Kernel
     from netsim.programs import ProgramContext
 
-    kernels: dict[str, Any] = {}
     programs: dict[str, Any] = {}
+
+    def body(spec: Any, kernel: Any, node_name: str, path: str, period: int | None) -> Any:
+        ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=spec.name,
+                             execution=_exec_time(spec, path), signals=signals, scenario=scenario,
+                             period=period, spec=spec)
+        made = _program(spec, ctx, path)
+        programs[f"{node_name}.{spec.name}"] = made
+        return made
+
+    def attach(kernel: Any) -> None:
+        _attach_io(kernel, scenario, channels, plant, env)
+
+    kernels, bindings = wire_kernels(scenario, env, body, attach)
+    return kernels, programs, bindings
+
+
+BodyFn = Callable[[Any, Any, str, str, "int | None"], Any]
+
+
+def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
+                 attach: Callable[[Any], None] | None = None) -> tuple[dict[str, Any], list[tuple[str, str, str]]]:
+    """One kernel per node with its handlers, tasks and triggers, exactly as :func:`build` creates them.
+
+    Parameters
+    ----------
+    body
+        ``body(spec, kernel, node, path, period)`` returns the program body of a task or handler spec
+        (``netsim validate`` passes placeholders, so every kernel check runs without building programs).
+    attach
+        Called with each new kernel before its tasks are created (the builder attaches the io channels).
+
+    Returns
+    -------
+    kernels, bindings
+        The kernels by node name and the ``(node, network, target)`` receive bindings.
+
+    Raises
+    ------
+    BuildError
+        With the YAML path (``nodes.<n>.tasks[i].<field>``) of what the kernel refused.
+    """
+    from netsim.kernel import Kernel
+
+    kernels: dict[str, Any] = {}
     bindings: list[tuple[str, str, str]] = []
     for node_name, node in scenario.nodes.items():
         npath = f"nodes.{node_name}"
@@ -347,25 +389,16 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
             raise BuildError(str(exc), path=npath) from None
         kernels[node_name] = kernel
         env.components[f"kernel.{node_name}"] = kernel
-        _attach_io(kernel, scenario, channels, plant, env)
-
+        if attach is not None:
+            attach(kernel)
         for i, h in enumerate(node.handlers):
             hpath = f"{npath}.handlers[{i}]"
-            ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=h.name,
-                                 execution=_exec_time(h, hpath), signals=signals, scenario=scenario,
-                                 period=None, spec=h)
-            body = _program(h, ctx, hpath)
-            programs[f"{node_name}.{h.name}"] = body
-            _call(kernel.create_handler, hpath, h.name, body, priority=h.priority, latency=h.latency)
+            _call(kernel.create_handler, hpath, h.name, body(h, kernel, node_name, hpath, None),
+                  priority=h.priority, latency=h.latency)
         for i, t in enumerate(node.tasks):
             tpath = f"{npath}.tasks[{i}]"
             periodic = t.release_kind == "periodic"
-            ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=t.name,
-                                 execution=_exec_time(t, tpath), signals=signals, scenario=scenario,
-                                 period=t.period, spec=t)
-            body = _program(t, ctx, tpath)
-            programs[f"{node_name}.{t.name}"] = body
-            _call(kernel.create_task, tpath, t.name, body,
+            _call(kernel.create_task, tpath, t.name, body(t, kernel, node_name, tpath, t.period),
                   period=t.period if periodic else None, offset=t.offset, deadline=t.deadline,
                   priority=t.priority, wcet=t.wcet, preemptible=t.preemptible,
                   wcet_handler=t.wcet_handler, deadline_handler=t.deadline_handler)
@@ -391,16 +424,37 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
                       start=trig.periodic_load.start, handler=h.name)
             else:
                 bindings.append((node_name, trig.on_message, h.name))
-    return kernels, programs, bindings
+    return kernels, bindings
+
+
+def bind_receivers(kernels: dict[str, Any], networks: dict[str, Any], bindings: list[tuple[str, str, str]]) -> None:
+    """Bind each ``(node, network, target)`` reception (the kernels check the targets when the run starts)."""
+    for node, net, target in bindings:
+        if net not in networks:
+            raise BuildError(f"node '{node}' receives on network '{net}', which is not defined",
+                             path=f"nodes.{node}")
+        _call(kernels[node].bind_receive, f"nodes.{node}", net, target)
+
+
+#: Task/handler fields a kernel error may name that are keys of the scenario's task or handler.
+_SPEC_FIELDS = ("period", "offset", "deadline", "priority", "wcet", "wcet_handler", "deadline_handler", "latency",
+                "preemptible", "name")
 
 
 def _call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:
-    """Call a kernel/network constructor, turning its user errors into BuildErrors with ``path``."""
+    """Call a kernel/network constructor, turning its user errors into BuildErrors with ``path`` (and the field
+    a kernel error names, when it is a key of the task or handler at ``path``)."""
     try:
         return fn(*args, **kwargs)
     except ConfigError as exc:
         if exc.path is None:
-            raise BuildError(exc.message, path=path) from None
+            field = getattr(exc, "field", None)
+            where = f"{path}.{field}" if field in _SPEC_FIELDS and path.endswith("]") else path
+            err = BuildError(exc.message, path=where)
+            for attr in ("node", "task", "field"):
+                if hasattr(exc, attr):
+                    setattr(err, attr, getattr(exc, attr))
+            raise err from None
         raise
     except NetsimError as exc:
         raise BuildError(str(exc), path=path) from None
@@ -408,7 +462,8 @@ def _call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:
         raise BuildError(str(exc), path=path) from exc
 
 
-def _build_networks(scenario: Any, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:
+def build_networks(scenario: Any, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:
+    """The scenario's networks (``make_network``), each attached to its nodes' kernels."""
     if not scenario.networks:
         return {}
     from netsim.network import make_network
@@ -504,12 +559,8 @@ def build(scenario: Any) -> Simulation:
         env.components["plant"] = plant
     channels = _build_io(scenario, env, plant)
     kernels, programs, bindings = _build_kernels(scenario, env, signals, channels, plant)
-    networks = _build_networks(scenario, env, kernels)
-    for node, net, target in bindings:
-        if net not in networks:
-            raise BuildError(f"node '{node}' receives on network '{net}', which is not defined",
-                             path=f"nodes.{node}")
-        _call(kernels[node].bind_receive, f"nodes.{node}", net, target)
+    networks = build_networks(scenario, env, kernels)
+    bind_receivers(kernels, networks, bindings)
     _record_signals(scenario, env, signals)
     return Simulation(scenario=scenario, env=env, plant=plant, signals=signals, channels=channels,
                       kernels=kernels, networks=networks, programs=programs, duration=scenario.duration)

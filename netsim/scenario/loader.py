@@ -3,7 +3,8 @@
 The file is read with ruamel.yaml's round-trip loader, which keeps the line of every key and list item, so
 each problem is reported as ``file:line: path: message``. Validation runs in three layers that all run even
 when an earlier one finds problems: the base schema (:mod:`netsim.scenario.schema`), every plugin's own
-``Params`` model, and the cross references (:mod:`netsim.scenario.validate`).
+``Params`` model, and the cross references (:mod:`netsim.scenario.validate`); a scenario that passes them
+then goes through build's own kernel and network checks (:mod:`netsim.scenario.static_build`).
 
 Top-level keys starting with ``x-`` are ignored, so a file can hold YAML anchors for repeated entries::
 
@@ -217,6 +218,11 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None) -> tuple[list[P
         _attach(scenario, validated)
         scenario._source = file
         scenario._raw = raw
+        from netsim.scenario.static_build import build_problems
+
+        problems += build_problems(scenario)  # what build checks with its runtime objects, nothing simulated
+        if any(p.severity == ERROR for p in problems):
+            scenario = None
     elif any(p.severity == ERROR for p in problems):
         scenario = None
     return done(problems), scenario

@@ -28,6 +28,13 @@ What is checked
   metric reads them from the signals table after the run). A metric's ``chain`` (or ``*_chain``) lists
   ``node.task`` names of existing tasks or handlers.
 - ``baseline.overrides`` paths can be applied and give a valid scenario.
+- The kernel's own task checks (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
+  ``check``): e.g. ``rm``/``dm`` refuse a deadline longer than the period, a ``wcet_handler`` needs a ``wcet``.
+- A ``module:attr`` plugin must accept the arguments build calls it with (:mod:`netsim.scenario.calls`); a
+  registered plant that does not declare its ports is built (build's own ``make_plant``) for the io check.
+
+A scenario that passes all of these then goes through build's kernel and network construction
+(:mod:`netsim.scenario.static_build`), so ``validate`` refuses what ``run`` would refuse while building.
 """
 
 from __future__ import annotations

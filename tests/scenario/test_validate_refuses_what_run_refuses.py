@@ -72,6 +72,10 @@ CASES = [
     ("time_as_a_bare_number",
      [("period: 100 ms", "period: 5")],
      f"{TASK}.period", "period: 5", "add a unit, e.g. '5 ms'"),
+    ("a_check_build_makes_with_its_runtime_objects",  # Kernel.create_periodic_load: at most one per node
+     [("      - {name: h, program: idle}\n", "      - {name: h, program: idle, execution: 1 us, trigger: {periodic_load: {period: 10 us}}}\n"
+       "      - {name: h2, program: idle, execution: 1 us, trigger: {periodic_load: {period: 20 us}}}\n")],
+     "nodes.n.handlers[1].trigger", "name: h2", "node already has the periodic load 'h'; at most one per node"),
     ("network_task_without_to",
      [("network: can, to: m, bits: 80", "network: can, bits: 80")],
      f"{TASK}.params", "network: can, bits: 80", "'to' is missing"),
