@@ -33,9 +33,9 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any, Callable, Generator
+from typing import Annotated, Any, Callable, Generator
 
-from pydantic import model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 import netsim.runtime_metrics  # noqa: F401 - registers the 'metric' entries (registry.PLUGIN_MODULES lacks it)
 from netsim.control.pid import PID, PIDParams
@@ -58,11 +58,20 @@ log = logging.getLogger(__name__)
 BROADCAST = "all"
 
 
-def _check_destination(network: str | None, to: str | None) -> None:
-    """A sender on ``network`` names its destination: a node, or ``all`` to broadcast."""
+def _destination_given(to: str | None, info: ValidationInfo) -> str | None:
+    """A sender on ``network`` names its destination (``to``): a node, or ``all`` to broadcast.
+
+    Runs as the ``to`` field's validator (also when ``to`` is left out), so the error's path is ``params.to``.
+    """
+    network = info.data.get("network")
     if network is not None and to is None:
         raise ValueError(f"'to' is missing: name the node that receives on '{network}', or write "
                          f"'to: {BROADCAST}' to broadcast to every node on it")
+    return to
+
+
+#: ``to`` of a program that sends on ``network`` (declared after ``network``): required with a network.
+Destination = Annotated[str | None, Field(default=None, validate_default=True)]
 
 
 def _destination(to: str | None) -> str | None:
@@ -185,7 +194,7 @@ class Sampler:
     class Params(StrictModel):
         channel: str
         network: str | None = None
-        to: str | None = None
+        to: Destination
         bits: int = 80
         priority: int = 0
         tag: str = "y"
@@ -193,10 +202,10 @@ class Sampler:
         after_send: Time = 0
         record_as: str | None = None
 
-        @model_validator(mode="after")
-        def _to(self) -> "Sampler.Params":
-            _check_destination(self.network, self.to)
-            return self
+        @field_validator("to")
+        @classmethod
+        def _to(cls, to: str | None, info: ValidationInfo) -> str | None:
+            return _destination_given(to, info)
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
@@ -221,7 +230,7 @@ class _ControllerParams(PIDParams):
     channel: str | None = None
     input_network: str | None = None
     network: str | None = None
-    to: str | None = None
+    to: Destination
     output_channel: str | None = None
     key: str = "y"
     bits: int = 80
@@ -229,13 +238,17 @@ class _ControllerParams(PIDParams):
     tag: str = "u"
     record_as: str | None = None
 
+    @field_validator("to")
+    @classmethod
+    def _to(cls, to: str | None, info: ValidationInfo) -> str | None:
+        return _destination_given(to, info)
+
     @model_validator(mode="after")
     def _output(self) -> "_ControllerParams":
         if self.network is None and self.output_channel is None:
             raise ValueError("give 'network' (and 'to') to send the control signal, or 'output_channel' to write it")
         if self.network is not None and self.output_channel is not None:
             raise ValueError("give either 'network' or 'output_channel' for the control signal, not both")
-        _check_destination(self.network, self.to)
         return self
 
 
@@ -320,12 +333,17 @@ class Interference:
 
     class Params(StrictModel):
         network: str
-        to: str | None = None
+        to: Destination
         bits: int = 80
         priority: int = 0
         share: float = 1.0
         rate: float | None = None
         tag: str = "interference"
+
+        @field_validator("to")
+        @classmethod
+        def _to(cls, to: str | None, info: ValidationInfo) -> str | None:
+            return _destination_given(to, info)
 
         @model_validator(mode="after")
         def _check(self) -> "Interference.Params":
@@ -333,7 +351,6 @@ class Interference:
                 raise ValueError(f"share is a probability in [0, 1], got {self.share}")
             if self.rate is not None and not self.rate > 0:
                 raise ValueError(f"rate (frames per second) must be positive, got {self.rate}")
-            _check_destination(self.network, self.to)
             return self
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:

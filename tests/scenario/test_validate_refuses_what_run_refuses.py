@@ -78,7 +78,7 @@ CASES = [
      "nodes.n.handlers[1].trigger", "name: h2", "node already has the periodic load 'h'; at most one per node"),
     ("network_task_without_to",
      [("network: can, to: m, bits: 80", "network: can, bits: 80")],
-     f"{TASK}.params", "network: can, bits: 80", "'to' is missing"),
+     f"{TASK}.params.to", "network: can, bits: 80", "'to' is missing"),
 ]
 
 
