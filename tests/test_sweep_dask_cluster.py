@@ -277,15 +277,24 @@ def test_scheduler_killed_mid_sweep_stops_with_one_line_and_a_rerun_resumes(
     assert (out / "summary.csv").read_bytes() == expected
 
 
-def test_ctrl_c_of_a_local_dask_sweep_is_clean_and_a_rerun_resumes(serial, tmp_path: Path) -> None:
+@pytest.mark.parametrize("backend", ["dask-local", "scheduler", "pool"])
+def test_ctrl_c_of_a_dask_sweep_is_clean_like_a_pool_sweep_and_a_rerun_resumes(
+    backend: str, serial, tmp_path: Path, request: pytest.FixtureRequest
+) -> None:
     path, expected = serial
     out = tmp_path / "out"
-    proc = _sweep_cli([str(path), "--out", str(out), "--dask-local", "--workers", "2"])
+    if backend == "dask-local":
+        where = ["--dask-local", "--workers", "2"]
+    elif backend == "scheduler":  # the cluster runs elsewhere (own sessions): Ctrl-C reaches netsim only
+        where = ["--scheduler", request.getfixturevalue("cluster").address]
+    else:
+        where = ["--workers", "2"]
+    proc = _sweep_cli([str(path), "--out", str(out), *where])
     try:
         _wait_for("the first finished run", lambda: bool(_finished(out)), proc=proc)
         os.killpg(proc.pid, signal.SIGINT)  # what a terminal's Ctrl-C does: the whole foreground group
         stdout, stderr = proc.communicate(timeout=WAIT_S)  # "once ignored": a hang fails here
-        assert _all_ended([proc.pid]), "a local Dask worker process outlived the sweep"
+        assert _all_ended([proc.pid]), "a worker process of the sweep outlived it"
     finally:
         _kill_group(proc)
 

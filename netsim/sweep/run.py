@@ -465,15 +465,19 @@ def run_sweep(
 
     todo: list[tuple[Point, dict[str, Any]]] = []
     resumed = 0
-    for point, raw in zip(sweep.points, raws):
-        if _finished(point, folder / point.folder, raw) is not None:
-            resumed += 1
-        else:
-            todo.append((point, raw))
+    outcome, desc = "done", "nothing to run"
+    try:  # from here on, Ctrl-C (even while finished runs are being looked up) still writes summary.csv
+        for point, raw in zip(sweep.points, raws):
+            if _finished(point, folder / point.folder, raw) is not None:
+                resumed += 1
+            else:
+                todo.append((point, raw))
+    except KeyboardInterrupt:
+        outcome, todo = "interrupted", []
+        log.warning("sweep %s interrupted; finished runs are kept, run it again to resume", sweep.name)
     if resumed:
         log.info("sweep %s: %d of %d runs already finished, %d to run", sweep.name, resumed, len(raws), len(todo))
 
-    outcome, desc = "done", "nothing to run"
     if todo:
         outcome, desc = _execute(
             sweep,
