@@ -119,7 +119,7 @@ class ProgramContext:
             if rec.enabled is None or name in rec.enabled or rec.wants(name):
                 times = rec.times.get(name)
                 if times is not None:
-                    times.append(int(self.env.sim._now if t_ns is None else t_ns))
+                    times.append(int(self.env.sim.now if t_ns is None else t_ns))
                     rec.values[name].append(value)
                     return
             else:
