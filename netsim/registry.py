@@ -25,7 +25,7 @@ from typing import Any, Callable, TypeVar
 
 from netsim.errors import ConfigError
 
-__all__ = ["Entry", "register", "lookup", "entries", "kinds", "load_plugins", "resolve"]
+__all__ = ["Entry", "register", "lookup", "entries", "kinds", "load_plugins", "resolve", "is_builtin"]
 
 KINDS = (
     "plant",
@@ -137,6 +137,18 @@ def lookup(kind: str, name: str) -> Any:
     close = difflib.get_close_matches(name, list(table), n=1)
     hint = f"; did you mean '{close[0]}'?" if close else f" (known: {', '.join(sorted(table)) or 'none'})"
     raise ConfigError(f"unknown {kind} '{name}'{hint}")
+
+
+def is_builtin(obj: Any) -> bool:
+    """True when ``obj`` comes from one of netsim's own plugin modules (:data:`PLUGIN_MODULES` and below).
+
+    ``netsim validate`` constructs such plugins (a plant, a network) to run build's own checks; it never calls
+    code from anywhere else (a scenario's ``module:attr`` path, a user's plugin module, a test double).
+    """
+    module = getattr(obj, "__module__", None)
+    if not isinstance(module, str):
+        return False
+    return any(module == m or module.startswith(m + ".") for m in PLUGIN_MODULES)
 
 
 def resolve(path: str) -> Any:

@@ -179,7 +179,7 @@ def _build_plant(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> Any:
         return None
     plant = make_plant(spec.model, spec.plugin(), spec.validated_params())
     if spec.process_noise is not None:
-        _set_process_noise(plant, spec.process_noise)
+        _call(_set_process_noise, "plant.process_noise", plant, spec.process_noise)
     for port, sig_name in spec.disturbances.items():
         _call(plant.add_disturbance, f"plant.disturbances.{port}", port, signals[sig_name])
     record_events = scenario.record is None or any(

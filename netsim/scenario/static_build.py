@@ -1,19 +1,20 @@
-"""The build-time checks of a valid scenario, run by ``netsim validate`` without building programs or plants.
+"""The build-time checks of a valid scenario, run by ``netsim validate`` without simulating anything.
 
-``build`` makes checks that need the runtime objects: the kernel refuses a task, a timer or a second periodic
-load; a network refuses its parameters (an ACK timeout shorter than the ACK, a missing delay file) or a node;
-the kernel's reference check (``Kernel.validate``, run when the simulation starts) refuses a binding. This
-module runs **the same code** -- :func:`netsim.scenario.builder.wire_kernels`,
-:func:`~netsim.scenario.builder.build_networks`, :func:`~netsim.scenario.builder.bind_receivers` and each
-kernel's ``validate`` -- on a throw-away environment, with placeholder task bodies, and turns the first
-error into a :class:`~netsim.scenario.problems.Problem` with its YAML path.
+``build`` makes checks that need its runtime objects: the plant refuses an ``x0`` or a ``process_noise`` of
+the wrong size; the kernel refuses a task, a timer or a second periodic load on a node; a network refuses
+its parameters (e.g. an ACK timeout shorter than the ACK) or a node; each kernel's reference check
+(``Kernel.validate``, run when the simulation starts) refuses a binding. :func:`build_problems` runs **the
+same code** -- the builder's signals, plant and io channels, :func:`netsim.scenario.builder.wire_kernels`,
+:func:`~netsim.scenario.builder.build_networks`, :func:`~netsim.scenario.builder.bind_receivers` and
+``Kernel.validate`` -- on a throw-away environment with placeholder task bodies, and turns the first error
+into a :class:`~netsim.scenario.problems.Problem` with its YAML path.
 
-What it does not run (decided for speed and for issue 14, which forbids running a scenario's own code):
-programs and signals are not constructed (their ``Params`` are checked by :mod:`netsim.scenario.validate`),
-plants only as :mod:`~netsim.scenario.validate` builds them for their ports; a scenario with a node policy
-or a network type given as a ``module:Class`` path is skipped, and networks whose registered type is not a
-``Network`` (test doubles) are left out. Nothing is simulated;
-it costs about a millisecond per node.
+What it does not run (for speed, and for issue 14: validating must not run code a scenario brings along):
+programs are never constructed (their ``Params`` are checked by :mod:`netsim.scenario.validate`); plants,
+signals and networks are built only when they come from netsim's own plugin modules
+(:func:`netsim.registry.is_builtin`), and kernels only when every node uses a built-in policy. Cost: about
+a millisecond per node, plus the plant's own construction (the HDD plant takes about 1.5 s the first time in
+a process, then ``models.hdd`` caches it).
 """
 
 from __future__ import annotations
@@ -39,27 +40,40 @@ def _body(spec: Any, kernel: Any, node: str, path: str, period: int | None) -> A
     return _placeholder
 
 
-def _own_code(scenario: Any) -> bool:
-    """True when a node policy or a network type is a ``module:attr`` path (code from the scenario)."""
+def _lookup(kind: str, name: str) -> Any:
+    from netsim import registry
+
+    try:
+        return registry.lookup(kind, name)
+    except ConfigError:
+        return None
+
+
+def _netsim_kernels(scenario: Any) -> bool:
+    """True when every node policy is built into the kernel (a custom policy is not instantiated here)."""
     from netsim.kernel.policies import BUILTIN_POLICIES
 
-    if any(node.policy not in BUILTIN_POLICIES for node in scenario.nodes.values()):
-        return True
-    return any(":" in net.type for net in scenario.networks.values())
+    return all(node.policy in BUILTIN_POLICIES for node in scenario.nodes.values())
 
 
-def _real_networks(scenario: Any) -> bool:
-    """True when every network type is a :class:`~netsim.network.Network` (test doubles registered under kind
-    ``network`` are not; ``run`` reports them, here they are left out with the receive bindings)."""
-    from netsim import registry
+def _netsim_plant(scenario: Any) -> bool:
+    """True when the plant and every signal come from netsim's own plugin modules (then they are built)."""
+    from netsim.registry import is_builtin
+
+    objs = [_lookup("signal", s.type) for s in scenario.signals.values()]
+    if scenario.plant is not None:
+        objs.append(_lookup("plant", scenario.plant.model))
+    return all(o is not None and is_builtin(o) for o in objs)
+
+
+def _netsim_networks(scenario: Any) -> bool:
+    """True when every network type is one of netsim's own :class:`~netsim.network.Network` classes."""
     from netsim.network.pipeline import Network
+    from netsim.registry import is_builtin
 
     for net in scenario.networks.values():
-        try:
-            cls = registry.lookup("network", net.type)
-        except ConfigError:
-            return False
-        if not (isinstance(cls, type) and issubclass(cls, Network)):
+        cls = _lookup("network", net.type)
+        if not (isinstance(cls, type) and issubclass(cls, Network) and is_builtin(cls)):
             return False
     return True
 
@@ -81,14 +95,19 @@ def build_problems(scenario: Any) -> list[Problem]:
         Empty when the kernels and networks build and every kernel's references resolve.
     """
     from netsim.env import SimEnv
-    from netsim.scenario.builder import bind_receivers, build_networks, wire_kernels
+    from netsim.scenario.builder import (_build_io, _build_plant, _make_signals, bind_receivers, build_networks,
+                                         wire_kernels)
 
-    if _own_code(scenario):
+    if not _netsim_kernels(scenario):
         return []
-    env = SimEnv(seed=scenario.seed)
+    env = SimEnv(seed=scenario.seed, record=None if scenario.record is None else set(scenario.record))
     try:
+        if _netsim_plant(scenario):
+            signals = _make_signals(scenario)
+            plant = _build_plant(scenario, env, signals)
+            _build_io(scenario, env, plant)
         kernels, bindings = wire_kernels(scenario, env, _body)
-        if _real_networks(scenario):
+        if _netsim_networks(scenario):
             networks = build_networks(scenario, env, kernels)
             bind_receivers(kernels, networks, bindings)
         for name, kernel in kernels.items():

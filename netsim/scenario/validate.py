@@ -223,13 +223,15 @@ class _Checker:
                     outputs: list[Any] | None) -> tuple[list[Any] | None, list[Any] | None]:
         """Ports of a registered plant that does not declare them, from the plant ``build`` would make.
 
-        Only registered plants (netsim's own plugin modules, loaded anyway) are built; a ``module:attr`` path
-        from the scenario is not called (validating must not run a scenario's own code). A plant that refuses
-        its parameters is reported as ``build`` would report it.
+        Only plants from netsim's own plugin modules are built (:func:`netsim.registry.is_builtin`; validating
+        must not run code a scenario brings along). A plant that refuses its parameters is reported as
+        ``build`` would report it.
         """
-        if not isinstance(model, str) or ":" in model:
-            return inputs, outputs
+        from netsim.registry import is_builtin
         from netsim.scenario.builder import make_plant
+
+        if not isinstance(model, str) or not is_builtin(factory):
+            return inputs, outputs
 
         try:
             built = make_plant(model, factory, params)

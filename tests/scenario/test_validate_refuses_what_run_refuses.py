@@ -76,6 +76,9 @@ CASES = [
      [("      - {name: h, program: idle}\n", "      - {name: h, program: idle, execution: 1 us, trigger: {periodic_load: {period: 10 us}}}\n"
        "      - {name: h2, program: idle, execution: 1 us, trigger: {periodic_load: {period: 20 us}}}\n")],
      "nodes.n.handlers[1].trigger", "name: h2", "node already has the periodic load 'h'; at most one per node"),
+    ("plant_state_of_the_wrong_size",  # LTIPlant.set_state, called by build after the plant is made
+     [("  params: {gain: 1000, a: 1}\n", "  params: {gain: 1000, a: 1}\n  x0: [0, 0, 0]\n")],
+     "plant.x0", "x0: [0, 0, 0]", "state must have 2 entries, got 3"),
     ("network_task_without_to",
      [("network: can, to: m, bits: 80", "network: can, bits: 80")],
      f"{TASK}.params.to", "network: can, bits: 80", "'to' is missing"),
