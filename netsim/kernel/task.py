@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
 from netsim.errors import BuildError
+from netsim.timebase import format_time
 
 __all__ = ["TaskSpec", "HandlerSpec", "Task", "Handler", "task_error", "check_body", "check_time", "did_you_mean"]
 
@@ -84,9 +85,9 @@ def check_time(node: str, task: str, field: str, value: Any, *, positive: bool =
         raise task_error(node, task, field, f"must be an integer number of ns, got {value!r}")
     value = int(value)
     if positive and value <= 0:
-        raise task_error(node, task, field, f"must be positive, got {value} ns")
+        raise task_error(node, task, field, f"must be positive, got {format_time(value)}")
     if value < 0:
-        raise task_error(node, task, field, f"must not be negative, got {value} ns")
+        raise task_error(node, task, field, f"must not be negative, got {format_time(value)}")
     return value
 
 
