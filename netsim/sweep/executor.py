@@ -312,7 +312,7 @@ def open_executor(
                     cluster.close()
                 raise
             try:
-                n = 1 if scheduler_lost_client(client) else (sum(client.nthreads().values()) or 1)
+                n = sum(client.nthreads().values()) or 1
                 yield DaskExecutor(client), n, desc
             finally:
                 _close_quietly(client, cluster)
@@ -337,8 +337,8 @@ def scheduler_lost_client(client: Any) -> bool:
 
 
 def _close_quietly(client: Any, cluster: Any) -> None:
-    """Close the client (and the local cluster); a lost scheduler or a second Ctrl-C does not stop the
-    closing of the local cluster's worker processes."""
+    """Close the client, then the local cluster: a client that cannot close cleanly (its scheduler is
+    gone) waits at most 2 s and never keeps the local cluster's worker processes alive."""
     try:
         if scheduler_lost_client(client):
             client.close(timeout=2)
