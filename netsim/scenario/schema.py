@@ -28,7 +28,9 @@ Public classes and their fields (times in ns)
     ``name, program, params, period, offset, deadline (default: period), priority, execution, wcet,
     release ("periodic" | "aperiodic" | "on_message:<net>"; default periodic when a period is given),
     preemptible, wcet_handler, deadline_handler``; properties ``release_kind``, ``release_network``;
-    method ``execution_spec()``.
+    method ``execution_spec()``. A program that sends on ``params.network`` names the receiver in
+    ``params.to``: a node, or ``all`` to broadcast to every other node on that network (netsim's programs
+    refuse a missing ``to``; it used to broadcast silently).
 ``HandlerSpec``
     ``name, program, params, priority, latency, execution, trigger: HandlerTrigger | None``.
 ``HandlerTrigger``
