@@ -11,13 +11,62 @@ alone, whatever the order in which streams are created.
 
 Event loop
 ----------
-simpy's heap holds ``(time, priority, event id, event)`` entries. netsim's own wake-ups (kernel segment ends,
-releases, timers, network transmissions, the plant's recording grid) are *call entries* on the same heap:
-``(time, priority, event id, fn, arg)``, scheduled with :func:`schedule_call` and run by :func:`run_events` as
-``fn(entry)`` (the callback reads ``entry[4]``; the entry tuple itself identifies the wake-up, e.g. to tell a
-superseded one). They cost no event object and no callback list; simpy events and processes still work
-beside them, in the same order of (time, priority, id). simpy's own ``Environment.step``/``run`` cannot
-process call entries: run the loop with :func:`run_events` (or :meth:`SimEnv.run`).
+:class:`EventLoop` is a :class:`simpy.Environment` subclass and the one module of netsim that knows how
+simpy stores its schedule. Its heap holds one entry shape, simpy's own ``(time, priority, id, item)``, run
+in the order of ``(time, priority, id)``. The item is either
+
+- a simpy event (timeouts, processes, stores, resources: everything simpy schedules through
+  :meth:`EventLoop.schedule`), processed as :meth:`simpy.Environment.step` processes it; or
+- a *call item* ``(fn, arg)``, a plain tuple: the loop calls ``fn(item)``, and ``fn`` reads ``item[1]``.
+  netsim's own wake-ups (kernel segment ends, releases, timers, network transmissions, the plant's recording
+  grid) are call items: no event object, no callback list, one heap push. The item itself identifies the
+  wake-up, so a component tells a superseded one by identity (``if item is not job.wake: return``).
+
+Ways to schedule, cheapest first:
+
+- hot paths take ``push, heap, ids = sim.scheduler()`` once and push ``(t, priority, next(ids), (fn, arg))``
+  inline (``t`` absolute, never before ``sim.now``);
+- :func:`schedule_call` ``(sim, delay, priority, fn, arg)`` does the same and returns the item;
+- :meth:`EventLoop.call_at` ``(t, fn, *args, priority=...)`` and :meth:`EventLoop.call_later` return a
+  :class:`Call` handle whose :meth:`Call.cancel` is O(1) (the entry stays in the heap and is skipped);
+- :meth:`EventLoop.event_at` is a simpy event (for a process to yield) processed at a chosen priority.
+
+``sim.now`` is a plain attribute (simpy's is a property over ``_now``): read on every hot path, it costs a
+dictionary look-up, not a function call.
+
+Two loops run the same heap in the same order. :func:`run_events` (and :meth:`SimEnv.run`, and
+:meth:`netsim.scenario.builder.Simulation.run`) is netsim's fast loop: every entry up to and *including*
+``t_end``. simpy's own :meth:`simpy.Environment.run` works too, through the overridden :meth:`EventLoop.step`:
+``sim.run(until=t_end + 1)`` processes the same entries (simpy stops *before* ``until``) and leaves the clock
+at ``t_end + 1``, as :meth:`SimEnv.run` does; ``sim.run()`` runs until the heap is empty (never, with a
+periodic task), ``sim.run(until=event)`` until that event.
+
+A failed simpy event (a process that raised) is handed to the processes waiting for it, as in simpy; when
+none of them defuses it, the loop raises the *original* exception (simpy raises a copy built from
+``exc.args``, which netsim errors with extra constructor arguments, e.g. ``DivergenceError(message,
+time_ns)``, cannot survive). An exception raised by a call item's ``fn`` propagates as it is.
+
+A plain simpy process in a netsim run
+-------------------------------------
+Anything written for simpy runs beside kernels, networks and plants, in the one clock and the one
+same-instant table (a custom traffic source, a test harness, a simpy model of a machine)::
+
+    env = SimEnv(seed=1)
+    sim = env.sim                      # an EventLoop: a simpy.Environment
+    parts = simpy.Store(sim)
+
+    def machine():                     # a plain simpy process
+        while True:
+            yield sim.timeout(2_000_000)        # 2 ms, in integer nanoseconds
+            yield parts.put(sim.now)
+
+    sim.process(machine())
+    sim.call_later(0, print_when_full)  # or a netsim kernel, network or plant built on env
+    env.run(10_000_000)                 # or sim.run(until=10_000_001)
+
+simpy's timeouts and triggered events are NORMAL and its process starts and interrupts URGENT (the first two
+rows of the table below), so a process resumed at *t* acts before the kernels dispatch at *t* and the media
+arbitrate at *t*: a frame it sends at *t* takes part in that instant's arbitration, like one sent by a task.
 
 Same-instant order
 ------------------
@@ -75,16 +124,17 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass, field
 from heapq import heappop, heappush
-from typing import Any, Callable, Final
+from typing import Any, Callable, Final, Iterator, NamedTuple
 
 import numpy as np
 import simpy
 import simpy.events
+from simpy.core import EmptySchedule, StopSimulation
 
 
 __all__ = [
-    "SimEnv", "Recorder", "stream_seed", "schedule_call", "run_events", "CallEntry",
-    "URGENT", "NORMAL", "DISPATCH", "AIR", "ARBITRATE", "DEADLINE", "RECORD",
+    "SimEnv", "EventLoop", "Call", "CallItem", "Scheduler", "Recorder", "stream_seed", "schedule_call",
+    "run_events", "URGENT", "NORMAL", "DISPATCH", "AIR", "ARBITRATE", "DEADLINE", "RECORD",
 ]
 
 #: Set-up at the start of the run; simpy's process starts and interrupts (simpy's URGENT).
@@ -102,56 +152,178 @@ DEADLINE: Final[int] = ARBITRATE + 1
 #: The plant's grid samples: the outputs once everything of the instant (actuations included) is done.
 RECORD: Final[int] = DEADLINE + 1
 
-#: A call entry: ``(time_ns, priority, event_id, fn, arg)``; ``fn`` is called with the entry itself.
-CallEntry = tuple[int, int, int, Callable[[Any], None], Any]
+#: A call item ``(fn, arg)``: the event loop calls ``fn(item)``; ``fn`` reads ``arg`` as ``item[1]``.
+CallItem = tuple[Callable[[Any], None], Any]
 
 
-def schedule_call(sim: simpy.Environment, delay: int, priority: int, fn: Callable[[Any], None],
-                  arg: Any = None) -> CallEntry:
-    """Schedule ``fn(entry)`` ``delay`` ns from now with simpy ``priority``; returns the entry.
+class Scheduler(NamedTuple):
+    """What a hot path needs to push call entries inline (:meth:`EventLoop.scheduler`).
 
-    Hot paths push the same tuple inline: ``heappush(sim._queue, (sim._now + d, prio, next(sim._eid), fn, arg))``.
+    ``push(heap, (t, priority, next(ids), (fn, arg)))`` schedules ``fn((fn, arg))`` at absolute time ``t``
+    (never before ``sim.now``); ``heap[0][0]`` is the time of the next entry (when ``heap`` is not empty).
     """
-    entry = (sim._now + delay, priority, next(sim._eid), fn, arg)  # type: ignore[attr-defined]
-    heappush(sim._queue, entry)  # type: ignore[attr-defined]
-    return entry
+
+    push: Callable[[list, tuple], None]
+    heap: list
+    ids: Iterator[int]
 
 
-def run_events(sim: simpy.Environment, t_end: int) -> None:
-    """Process every event up to and including ``t_end`` ns: call entries and simpy events, in heap order.
+class Call:
+    """A cancellable scheduled call ``fn(*args)`` (:meth:`EventLoop.call_at`, :meth:`EventLoop.call_later`).
 
-    simpy re-raises a process's unhandled exception as a *copy* built from ``exc.args``; netsim errors with
-    extra constructor arguments (``DivergenceError(message, time_ns)``) cannot be copied that way, and the
-    copy would lose ``time_ns`` anyway. So the loop looks at a simpy event before popping it and raises the
-    original exception of a failed, undefused event itself. An exception raised by a call entry's ``fn``
-    propagates as it is.
+    :meth:`cancel` is O(1): the entry stays in the heap and is skipped when it comes due.
     """
-    queue = sim._queue  # type: ignore[attr-defined]
-    until = int(t_end) + 1
-    pop = heappop
-    while queue:
-        entry = queue[0]
-        if entry[0] >= until:
-            break
-        if len(entry) == 5:  # a call entry
+
+    __slots__ = ("fn", "args", "live")
+
+    def __init__(self, fn: Callable[..., None], args: tuple) -> None:
+        self.fn = fn
+        self.args = args
+        self.live = True
+
+    def cancel(self) -> None:
+        """Do not call ``fn`` after all."""
+        self.live = False
+
+
+def _fire(item: tuple[Any, Call]) -> None:
+    call = item[1]
+    if call.live:
+        call.fn(*call.args)
+
+
+class EventLoop(simpy.Environment):
+    """A simpy environment in integer nanoseconds whose heap also runs netsim's call items.
+
+    Everything simpy offers works on it (processes, timeouts, stores, resources, :meth:`run`); netsim's
+    components add call items (see the module docstring). ``now`` is a plain attribute, the current time
+    in ns: read it, never assign it.
+
+    Parameters
+    ----------
+    initial_time
+        Start time in ns.
+    """
+
+    now: int = 0  # shadows simpy's property: a plain instance attribute, set by the loop
+
+    def __init__(self, initial_time: int = 0) -> None:
+        super().__init__(int(initial_time))
+        self.now = int(initial_time)
+
+    # simpy's base class and simpy.rt name the clock _now; here it is an alias of the attribute ``now``
+    @property
+    def _now(self) -> int:
+        return self.now
+
+    @_now.setter
+    def _now(self, t: int) -> None:
+        self.now = t
+
+    def schedule(self, event: simpy.Event, priority: int = NORMAL, delay: int = 0) -> None:
+        """Schedule a simpy ``event`` ``delay`` ns from now with ``priority`` (simpy's extension point)."""
+        heappush(self._queue, (self.now + delay, priority, next(self._eid), event))
+
+    def scheduler(self) -> Scheduler:
+        """The push function, the heap and the id counter, for hot paths that push call entries inline."""
+        return Scheduler(heappush, self._queue, self._eid)
+
+    def call_at(self, t: int, fn: Callable[..., None], *args: Any, priority: int = NORMAL) -> Call:
+        """Call ``fn(*args)`` at absolute time ``t`` ns with ``priority``; returns the cancellable :class:`Call`."""
+        if t < self.now:
+            raise ValueError(f"call_at: time {t} ns is before now ({self.now} ns)")
+        call = Call(fn, args)
+        heappush(self._queue, (t, priority, next(self._eid), (_fire, call)))
+        return call
+
+    def call_later(self, delay: int, fn: Callable[..., None], *args: Any, priority: int = NORMAL) -> Call:
+        """Call ``fn(*args)`` ``delay`` ns from now (0: later in this instant); returns the :class:`Call`."""
+        if delay < 0:
+            raise ValueError(f"negative delay {delay} ns")
+        call = Call(fn, args)
+        heappush(self._queue, (self.now + delay, priority, next(self._eid), (_fire, call)))
+        return call
+
+    def event_at(self, delay: int, priority: int, value: Any = None) -> simpy.Event:
+        """A simpy event, already triggered with ``value``, processed ``delay`` ns from now at ``priority``.
+
+        Like ``timeout(delay, value)`` (which is always NORMAL), at another row of the same-instant table.
+        """
+        ev = simpy.Event(self)
+        ev._ok = True
+        ev._value = value
+        self.schedule(ev, priority, delay)
+        return ev
+
+    def events_scheduled(self) -> int:
+        """How many entries (events and call items) have been scheduled so far."""
+        return int(repr(self._eid)[6:-1])  # itertools.count's repr is "count(n)"
+
+    def step(self) -> None:
+        """Process the next entry, a call item or a simpy event (simpy's extension point; :meth:`run` uses it).
+
+        Raises
+        ------
+        simpy.core.EmptySchedule
+            When nothing is scheduled.
+        """
+        try:
+            self.now, _, _, item = heappop(self._queue)
+        except IndexError:
+            raise EmptySchedule from None
+        if item.__class__ is tuple:
+            item[0](item)
+            return
+        callbacks, item.callbacks = item.callbacks, None
+        for i, callback in enumerate(callbacks):
+            try:
+                callback(item)
+            except StopSimulation:
+                # as simpy: the remaining callbacks run when the simulation resumes
+                item.callbacks = callbacks[i + 1:]
+                self.schedule(item, URGENT - 1)
+                raise
+        if not item._ok and not hasattr(item, "_defused"):
+            raise item._value
+
+    def run_until(self, t_end: int) -> None:
+        """Process every entry up to and including ``t_end`` ns (netsim's fast loop; the clock stays at the
+        last entry processed)."""
+        queue = self._queue
+        until = int(t_end) + 1
+        pop = heappop
+        while queue:
+            entry = queue[0]
+            if entry[0] >= until:
+                break
             pop(queue)
-            sim._now = entry[0]  # type: ignore[attr-defined]
-            entry[3](entry)
-            continue
-        # a simpy event: simpy's Environment.step, inlined
-        event = entry[3]
-        if event._ok is False and not hasattr(event, "_defused") and isinstance(event._value, BaseException):
-            event._defused = True
-            raise event._value
-        pop(queue)
-        sim._now = entry[0]  # type: ignore[attr-defined]
-        callbacks, event.callbacks = event.callbacks, None
-        for callback in callbacks:
-            callback(event)
-        if not event._ok and not hasattr(event, "_defused"):
-            exc = type(event._value)(*event._value.args)
-            exc.__cause__ = event._value
-            raise exc
+            self.now = entry[0]
+            item = entry[3]
+            if item.__class__ is tuple:  # a call item
+                item[0](item)
+                continue
+            # a simpy event: step(), inlined
+            callbacks, item.callbacks = item.callbacks, None
+            for callback in callbacks:
+                callback(item)
+            if not item._ok and not hasattr(item, "_defused"):
+                raise item._value
+
+
+def schedule_call(sim: EventLoop, delay: int, priority: int, fn: Callable[[Any], None],
+                  arg: Any = None) -> CallItem:
+    """Schedule ``fn(item)`` ``delay`` ns from now with ``priority``; returns the call item ``(fn, arg)``.
+
+    Hot paths push the same entry inline with :meth:`EventLoop.scheduler`.
+    """
+    item = (fn, arg)
+    heappush(sim._queue, (sim.now + delay, priority, next(sim._eid), item))
+    return item
+
+
+def run_events(sim: EventLoop, t_end: int) -> None:
+    """Process every entry of ``sim`` up to and including ``t_end`` ns (:meth:`EventLoop.run_until`)."""
+    sim.run_until(t_end)
 
 
 def stream_seed(seed: int, name: str) -> np.random.SeedSequence:
@@ -217,15 +389,15 @@ class SimEnv:
 
     Attributes
     ----------
-    sim : simpy.Environment
-        The underlying event loop; ``sim.now`` is the time in nanoseconds.
+    sim : EventLoop
+        The event loop (a :class:`simpy.Environment`); ``sim.now`` is the time in nanoseconds.
     recorder : Recorder
         Recorded signals.
     """
 
     def __init__(self, seed: int = 0, record: set[str] | None = None) -> None:
         self.seed = int(seed)
-        self.sim = simpy.Environment(initial_time=0)
+        self.sim = EventLoop(0)
         self.recorder = Recorder(enabled=record)
         self._streams: dict[str, np.random.Generator] = {}
         self._finalizers: list[Callable[[int], None]] = []
@@ -235,7 +407,7 @@ class SimEnv:
     @property
     def now(self) -> int:
         """Current simulation time in nanoseconds."""
-        return int(self.sim.now)
+        return self.sim.now
 
     def rng(self, name: str) -> np.random.Generator:
         """The random stream ``name`` (created on first use, then the same object every call)."""
@@ -268,9 +440,17 @@ class SimEnv:
         self._finalizers.append(fn)
 
     def run(self, until_ns: int) -> None:
-        """Run the event loop up to and including events at ``until_ns``, then call the finalizers."""
-        run_events(self.sim, int(until_ns))
-        if self.sim._now <= until_ns:  # as simpy's run(until=until_ns + 1) leaves the clock
-            self.sim._now = int(until_ns) + 1
+        """Run the event loop up to and including events at ``until_ns``, then call the finalizers.
+
+        The clock ends at ``until_ns + 1``, where simpy's ``sim.run(until=until_ns + 1)`` leaves it.
+        """
+        sim = self.sim
+        sim.run_until(int(until_ns))
+        if sim.now <= until_ns:
+            sim.now = int(until_ns) + 1
+        self.finish(int(until_ns))
+
+    def finish(self, until_ns: int) -> None:
+        """Call the finalizers registered with :meth:`at_end` (after :meth:`run`, or after ``sim.run``)."""
         for fn in self._finalizers:
             fn(int(until_ns))

@@ -38,7 +38,6 @@ import abc
 
 import logging
 import math
-from heapq import heappush
 from typing import Any, Callable, ClassVar, Iterable, Sequence
 
 import numpy as np
@@ -437,7 +436,7 @@ class Plant(abc.ABC):
     def _record_grid(self, names: list[str]) -> None:
         """Record the outputs now (one sample of the ``record_grid``)."""
         env = self.env
-        now = env.sim._now
+        now = env.sim.now
         self.advance_to(now)
         rec = env.recorder
         times, values = rec.times, rec.values
@@ -696,24 +695,24 @@ class Plant(abc.ABC):
         """Overwrite the physical state at the plant's current time."""
 
 
-def _grid_tick(entry: tuple) -> None:
-    """One sample of the ``record_grid`` (a call entry of :mod:`netsim.env`; ``entry[4]`` is ``(plant, grid,
-    names)``), then the entry of the next sample, ``grid`` ns later. Every sample runs at ``RECORD`` priority
+def _grid_tick(item: tuple) -> None:
+    """One sample of the ``record_grid`` (a call item of :mod:`netsim.env`: ``(_grid_tick, (plant, grid,
+    names))``), then the item of the next sample, ``grid`` ns later. Every sample runs at ``RECORD`` priority
     (:mod:`netsim.env`), after everything else of its instant.
 
-    An exception while sampling (e.g. :class:`~netsim.errors.DivergenceError`) is raised by an entry scheduled
+    An exception while sampling (e.g. :class:`~netsim.errors.DivergenceError`) is raised by an item scheduled
     now (NORMAL: it runs next), as a failing simpy process would raise it.
     """
-    value = entry[4]
+    value = item[1]
     plant = value[0]
     sim = plant.env.sim
     try:
         plant._record_grid(value[2])
     except BaseException as exc:  # noqa: BLE001 - handed to the event loop, as a failing process would
-        heappush(sim._queue, (sim._now, NORMAL, next(sim._eid), _raise, exc))
+        schedule_call(sim, 0, NORMAL, _raise, exc)
         return
-    heappush(sim._queue, (entry[0] + value[1], RECORD, next(sim._eid), _grid_tick, value))
+    schedule_call(sim, value[1], RECORD, _grid_tick, value)
 
 
-def _raise(entry: tuple) -> None:
-    raise entry[4]
+def _raise(item: tuple) -> None:
+    raise item[1]

@@ -91,9 +91,9 @@ def test_call_entries_and_simpy_events_run_in_time_priority_and_id_order():
         order.append(("proc", sim.now))
 
     sim.process(proc())  # a simpy process: its Initialize event is due at 0 (URGENT), its timeout at 5 (NORMAL)
-    schedule_call(sim, 5, 1, lambda e: order.append(("b", sim.now, e[4])), "x")  # scheduled after the process
-    schedule_call(sim, 5, 0, lambda e: order.append(("a", sim.now, e[4])), "y")  # more urgent at the same time
-    schedule_call(sim, 7, 2, lambda e: order.append(("c", sim.now, e[4])), None)
+    schedule_call(sim, 5, 1, lambda e: order.append(("b", sim.now, e[1])), "x")  # scheduled after the process
+    schedule_call(sim, 5, 0, lambda e: order.append(("a", sim.now, e[1])), "y")  # more urgent at the same time
+    schedule_call(sim, 7, 2, lambda e: order.append(("c", sim.now, e[1])), None)
     schedule_call(sim, 9, 1, lambda e: order.append(("late", sim.now)), None)
     env.run(7)
     # (time, priority, id) order. Ids: the process start 0, 'b' 1, 'a' 2, 'c' 3, 'late' 4; the process's timeout

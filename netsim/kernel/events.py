@@ -1,9 +1,10 @@
 """Priorities of the kernel's own wake-ups (segment ends, releases, timers, sleeps, dispatches, deadlines).
 
-Each wake-up is a call entry ``(time, priority, id, callback, value)`` on simpy's heap
-(:func:`netsim.env.schedule_call`; hot paths push the tuple inline): no event object, no simpy process.
-The callback receives the entry; ``entry[4]`` is the job, timer or task it concerns, and the entry itself
-tells a superseded wake-up from the current one.
+Each wake-up is a call item ``(callback, value)`` in an entry ``(time, priority, id, item)`` of the event
+loop's heap (:func:`netsim.env.schedule_call`; hot paths push the entry inline with the heap and counter of
+:meth:`netsim.env.EventLoop.scheduler`): no event object, no simpy process. The callback receives the item;
+``item[1]`` is the job, timer or task it concerns, and the item itself tells a superseded wake-up from the
+current one.
 
 The priorities are the run's one same-instant table, defined (and explained) in :mod:`netsim.env` and
 re-exported here for the kernel: :data:`NORMAL` for segment ends, releases, timers and sleeps;

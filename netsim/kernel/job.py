@@ -108,7 +108,7 @@ class Job:
     @property
     def now(self) -> int:
         """Current simulation time in ns."""
-        return self._kernel._sim._now  # type: ignore[no-any-return]
+        return self._kernel._sim.now  # type: ignore[no-any-return]
 
     @property
     def spec(self) -> Any:

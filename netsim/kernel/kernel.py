@@ -149,8 +149,8 @@ class Kernel(KernelBuilder):
         self.switches = 0
         self.switch_time = 0
         self.segments = 0
-        self._queue = env.sim._queue  # simpy's heap; wake-ups are call entries pushed on it (kernel.events)
-        self._eid = env.sim._eid
+        # the event loop's heap and id counter: wake-ups are call entries pushed on it (kernel.events)
+        _, self._queue, self._eid = env.sim.scheduler()
         schedule_call(self._sim, 0, URGENT, self._on_start)
         env.at_end(self._finalize)
 
@@ -279,7 +279,7 @@ class Kernel(KernelBuilder):
         return obj
 
     def _release(self, task: Task, data: Any) -> Job:
-        now = self._sim._now
+        now = self._sim.now
         spec = task.spec
         jid = task.released
         task.released = jid + 1
@@ -294,7 +294,7 @@ class Kernel(KernelBuilder):
         job._np = not (spec.preemptible and self.policy.preemptive)
         job._budget = spec.wcet
         if task.deadline_handler is not None and deadline is not None:
-            heappush(self._queue, (deadline, DEADLINE, next(self._eid), self._on_deadline, job))
+            heappush(self._queue, (deadline, DEADLINE, next(self._eid), (self._on_deadline, job)))
         if task.active is None:
             task.active = job
             self._make_ready(job, now)
@@ -303,7 +303,7 @@ class Kernel(KernelBuilder):
         return job
 
     def _invoke(self, handler: Handler, data: Any, invoker: str | None) -> Job:
-        now = self._sim._now
+        now = self._sim.now
         job = Job(self, handler, handler.invocations, handler.data if data is None else data, now, None, True,
                   invoker)
         handler.invocations += 1
@@ -358,26 +358,27 @@ class Kernel(KernelBuilder):
         self.validate()
 
     def _on_periodic_release(self, ev: tuple) -> None:
-        task: Task = ev[4]
+        task: Task = ev[1]
         self._release(task, None)
-        heappush(self._queue, (ev[0] + task.spec.period, NORMAL, next(self._eid), self._on_periodic_release, task))
+        heappush(self._queue, (self._sim.now + task.spec.period, NORMAL, next(self._eid),
+                               (self._on_periodic_release, task)))
         self._request_dispatch()
 
     def _on_timer(self, ev: tuple) -> None:
-        timer: Timer = ev[4]
+        timer: Timer = ev[1]
         if not timer.active:
             return
         timer.fired += 1
         handler = self.handlers.get(timer.handler) or self._get(self.handlers, timer.handler, "handler")
         self._invoke(handler, timer.data, timer.invoker)
         if timer.period is not None:
-            heappush(self._queue, (ev[0] + timer.period, NORMAL, next(self._eid), self._on_timer, timer))
+            heappush(self._queue, (self._sim.now + timer.period, NORMAL, next(self._eid), (self._on_timer, timer)))
         else:
             timer.active = False
         self._request_dispatch()
 
     def _on_sleep_done(self, ev: tuple) -> None:
-        job: Job = ev[4]
+        job: Job = ev[1]
         if job._state != BLOCKED or job._wake is not ev:
             return
         job._wake = None
@@ -386,7 +387,7 @@ class Kernel(KernelBuilder):
         self._request_dispatch()
 
     def _on_deadline(self, ev: tuple) -> None:
-        job: Job = ev[4]
+        job: Job = ev[1]
         if job.finish is not None:
             return
         job.deadline_overrun = True
@@ -394,17 +395,17 @@ class Kernel(KernelBuilder):
         self._request_dispatch()
 
     def _on_segment_event(self, ev: tuple) -> None:
-        job: Job = ev[4]
+        job: Job = ev[1]
         if ev is not job._ev:
             return  # superseded by a nearer wake-up of the same job
         job._ev = None
         if self._seg_job is not job:
             return  # preempted, blocked or killed meanwhile: a new wake-up is armed when it runs again
-        now = self._sim._now
+        now = self._sim.now
         end = job._seg_end
         if now < end:  # the job was preempted and resumed: its segment ends later than first planned
-            job._ev = ev = (end, NORMAL, next(self._eid), self._on_segment_event, job)
-            heappush(self._queue, ev)
+            job._ev = ev = (self._on_segment_event, job)
+            heappush(self._queue, (end, NORMAL, next(self._eid), ev))
             job._ev_time = end
             return
         self._seg_job = None
@@ -448,28 +449,28 @@ class Kernel(KernelBuilder):
         if self._busy or self._dispatch_pending:
             return
         sim = self._sim
-        queue = sim._queue  # simpy's event heap: dispatch at once if nothing else is due now
-        if not queue or queue[0][0] > sim._now:
+        queue = self._queue  # the event loop's heap: dispatch at once if nothing else is due now
+        if not queue or queue[0][0] > sim.now:
             if not self._ready and self._running is None and self._load is None:
                 self._last_task_job = None  # what _dispatch does when nothing is ready: the CPU idles
                 return
             self._dispatch()
         else:
             self._dispatch_pending = True
-            heappush(queue, (sim._now, DISPATCH, next(self._eid), self._on_deferred_dispatch, None))
+            heappush(queue, (sim.now, DISPATCH, next(self._eid), (self._on_deferred_dispatch, None)))
 
     def _request_dispatch_deferred(self) -> None:
         """Dispatch after every event of this instant (entry points called from outside the kernel)."""
         if self._busy or self._dispatch_pending:
             return
         self._dispatch_pending = True
-        heappush(self._queue, (self._sim._now, DISPATCH, next(self._eid), self._on_deferred_dispatch, None))
+        heappush(self._queue, (self._sim.now, DISPATCH, next(self._eid), (self._on_deferred_dispatch, None)))
 
     def _dispatch(self) -> None:
         """Give the CPU to the most urgent job and run it until it starts a segment or the CPU idles."""
         self._busy = True
         try:
-            now = self._sim._now
+            now = self._sim.now
             ready = self._ready
             load = self._load
             while True:
@@ -572,8 +573,8 @@ class Kernel(KernelBuilder):
         # One wake-up per job, re-armed lazily: a preempted job keeps its pending wake-up, which re-arms
         # itself for the later end when it fires early, so a preemption costs no new simpy event.
         if job._ev is None or job._ev_time > end:
-            job._ev = ev = (end, NORMAL, next(self._eid), self._on_segment_event, job)
-            heappush(self._queue, ev)
+            job._ev = ev = (self._on_segment_event, job)
+            heappush(self._queue, (end, NORMAL, next(self._eid), ev))
             job._ev_time = end
 
     def _charge(self, job: Job, elapsed: int) -> None:

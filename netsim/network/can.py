@@ -110,7 +110,7 @@ class CanBus(Network):
                     best, best_q = f, q
         if best is None or best_q is None:
             return
-        now = self.sim._now
+        now = self.sim.now
         best_q.pop(now)
         self._busy = True
         best.tx_start_ns = now
@@ -118,7 +118,7 @@ class CanBus(Network):
         call_later(self.sim, best.tx_ns, self._done, best)
 
     def _done(self, frame: Frame) -> None:
-        now = self.sim._now
+        now = self.sim.now
         self._meter.stop(now)
         self._busy = False
         start = frame.tx_start_ns

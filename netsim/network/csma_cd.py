@@ -66,7 +66,7 @@ class CsmaCdBus(Network):
         """Take ``node``'s next frame to the MAC (if any) and make the node contend."""
         q = self.queues[node]
         if len(q):
-            self._current[node] = q.pop(self.sim._now)
+            self._current[node] = q.pop(self.sim.now)
             self._ready.append(node)
             self._request()
 
@@ -79,7 +79,7 @@ class CsmaCdBus(Network):
         self._pending = False
         if not self._ready:
             return
-        now = self.sim._now
+        now = self.sim.now
         if self._state == "tx":
             assert self._tx is not None
             node, _frame, start, call = self._tx
@@ -109,10 +109,10 @@ class CsmaCdBus(Network):
         self._state = "collision"
         self._coll_nodes = nodes + self._ready
         self._ready = []
-        call_later(self.sim, start + self._window - self.sim._now, self._collision_end, None)
+        call_later(self.sim, start + self._window - self.sim.now, self._collision_end, None)
 
     def _collision_end(self, _: Any) -> None:
-        now = self.sim._now
+        now = self.sim.now
         self._meter.stop(now)
         self._state = "idle"
         nodes, self._coll_nodes = self._coll_nodes, []
@@ -138,7 +138,7 @@ class CsmaCdBus(Network):
         self._request()
 
     def _tx_end(self, node: str) -> None:
-        now = self.sim._now
+        now = self.sim.now
         assert self._tx is not None
         _, frame, start, _call = self._tx
         self._tx = None

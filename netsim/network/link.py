@@ -58,7 +58,7 @@ class Link(Network):
 
     def _offer(self, frame: Frame) -> None:
         if self._rate is None:
-            now = self.sim._now
+            now = self.sim.now
             self._sent(frame, now, now)
         else:
             self._tx[frame.sender].offer(frame)
@@ -84,4 +84,4 @@ class Link(Network):
                 if arrival < last:
                     arrival = last
                 self._last_arrival[key] = arrival
-            call_later(sim, arrival - self.sim._now + post[receiver], self._deliver, copy)  # type: ignore[index]
+            call_later(sim, arrival - self.sim.now + post[receiver], self._deliver, copy)  # type: ignore[index]

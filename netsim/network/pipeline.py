@@ -209,7 +209,7 @@ class Network(abc.ABC):
         if framing is None:  # wire bits and transmission time depend on (bits, sender) only: computed once
             wire = self.wire_bits(msg)
             framing = self._framing[(bits, sender)] = (wire, self._frame_time(wire, sender))
-        now = self.sim._now
+        now = self.sim.now
         msg.network = name = self.name
         msg.sent_ns = now
         if msg.msg_id < 0:
@@ -356,7 +356,7 @@ class Network(abc.ABC):
 
     def _push(self, queue: SendQueue, frame: Frame, *, front: bool = False) -> bool:
         """Put ``frame`` in ``queue``; if the queue is full, drop all its copies (``queue_full``)."""
-        now = self.sim._now
+        now = self.sim.now
         ok = queue.push_front(frame, now) if front else queue.push(frame, now)
         if not ok:
             self._drop_frame(frame, DROP_QUEUE_FULL)
@@ -404,7 +404,7 @@ class Network(abc.ABC):
                 self._drop_copy(copy, DROP_STALE)
                 return
             self._last_seq[key] = msg.seq  # type: ignore[index]
-        now = self.sim._now
+        now = self.sim.now
         msg.delivered_ns = rec.delivered_ns = now
         delay = now - msg.sent_ns
         rec.delay_ns = delay
@@ -432,7 +432,7 @@ class Transmitter:
         ``on_done(frame, start_ns, end_ns)`` after each transmission.
     """
 
-    __slots__ = ("net", "sim", "queue", "rate", "meter", "on_done", "busy", "_pending", "_tx_ns")
+    __slots__ = ("net", "sim", "queue", "rate", "meter", "on_done", "busy", "_pending", "_tx_ns", "_heap", "_ids")
 
     def __init__(
         self,
@@ -451,6 +451,7 @@ class Transmitter:
         self.busy = False
         self._pending = False
         self._tx_ns: dict[int, int] = {}  # tx_time_ns(wire_bits, rate) by wire_bits
+        _, self._heap, self._ids = self.sim.scheduler()  # transmission ends are pushed inline (netsim.env)
 
     def offer(self, frame: Frame, *, front: bool = False) -> bool:
         """Queue ``frame`` (dropped as ``queue_full`` if the queue is full) and start sending if idle."""
@@ -458,7 +459,7 @@ class Transmitter:
         if not (self.busy or self._pending or q._len or q.priority) and (q.limit is None or q.limit > 0):
             # idle output, empty FIFO queue: what push + pop would do, without the queue round trip (the
             # frame counts as queued for an instant, as it did, so max_len becomes at least 1)
-            now = self.sim._now
+            now = self.sim.now
             q._last_t = now  # the length-time integral gains nothing: the queue was empty
             if q.max_len < 1:
                 q.max_len = 1
@@ -483,23 +484,22 @@ class Transmitter:
         self._pending = False
         if self.busy or not self.queue._len:
             return
-        now = self.sim._now
+        now = self.sim.now
         self._begin(self.queue.pop(now), now)
 
     def _begin(self, frame: Frame, now: int) -> None:
-        """Put ``frame`` on the output now; its end is a call entry to :meth:`_done`."""
+        """Put ``frame`` on the output now; its end is a call item ``(_done, frame, now)``."""
         self.busy = True
         self.meter.open_since = now  # meter.start(now)
         tx = self._tx_ns.get(frame.wire_bits)
         if tx is None:
             tx = self._tx_ns[frame.wire_bits] = tx_time_ns(frame.wire_bits, self.rate)
-        sim = self.sim
-        heappush(sim._queue, (now + tx, NORMAL, next(sim._eid), self._done, (frame, now)))
+        heappush(self._heap, (now + tx, NORMAL, next(self._ids), (self._done, frame, now)))
 
-    def _done(self, entry: tuple) -> None:
-        """The call entry of a transmission's end: ``entry[4]`` is ``(frame, start_ns)``."""
-        frame, start = entry[4]
-        now = entry[0]
+    def _done(self, item: tuple) -> None:
+        """The call item of a transmission's end: ``(_done, frame, start_ns)``."""
+        _, frame, start = item
+        now = self.sim.now
         meter = self.meter
         meter.open_since = None  # meter.stop(now), inlined
         if now > start:  # meter.add(start, now), inlined

@@ -59,7 +59,7 @@ class RoundRobinBus(Network):
     def _schedule(self) -> None:
         if self._busy:
             return
-        now = self.sim._now
+        now = self.sim.now
         best: tuple[int, int] | None = None
         best_j = -1
         for j, node in enumerate(self.nodes):
@@ -83,7 +83,7 @@ class RoundRobinBus(Network):
         if not len(q):
             self._schedule()
             return
-        now = self.sim._now
+        now = self.sim.now
         frame = q.pop(now)
         self._busy = True
         frame.tx_start_ns = now
@@ -92,7 +92,7 @@ class RoundRobinBus(Network):
 
     def _done(self, arg: Any) -> None:
         frame, j = arg
-        now = self.sim._now
+        now = self.sim.now
         self._meter.stop(now)
         self._busy = False
         self._ref_t = now + self._pass

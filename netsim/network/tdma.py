@@ -108,30 +108,30 @@ class TdmaBus(Network):
             if not len(q):
                 ev = self._wake[node] = sim.event()
                 yield ev
-            s, _ = self.window(node, sim._now)
-            if s > sim._now:
-                yield sim.timeout(s - sim._now)
+            s, _ = self.window(node, sim.now)
+            if s > sim.now:
+                yield sim.timeout(s - sim.now)
             yield arbitration_event(sim)  # frames queued at this very instant compete
             if not len(q):
                 continue
-            frame = q.pop(sim._now)
+            frame = q.pop(sim.now)
             remaining = frame.tx_ns
             start: int | None = None
             while True:
-                s, e = self.window(node, sim._now)
-                if s > sim._now:
-                    yield sim.timeout(s - sim._now)
+                s, e = self.window(node, sim.now)
+                if s > sim.now:
+                    yield sim.timeout(s - sim.now)
                 if start is None:
-                    start = sim._now
-                chunk = min(remaining, e - sim._now)
-                meter.start(sim._now)
+                    start = sim.now
+                chunk = min(remaining, e - sim.now)
+                meter.start(sim.now)
                 yield sim.timeout(chunk)
-                meter.stop(sim._now)
+                meter.stop(sim.now)
                 remaining -= chunk
                 if remaining <= 0:
                     break
             frame.tx_start_ns = start
-            self._transmitted(frame, start, sim._now)
+            self._transmitted(frame, start, sim.now)
 
     def _extra_metrics(self, t_end_ns: int) -> dict[str, float]:
         owned = sum(1 for o in self.params.schedule if o not in (None, ""))

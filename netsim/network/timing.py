@@ -1,7 +1,7 @@
 """Small event helpers shared by the network models: scheduled calls and transmission times.
 
-Networks are driven by call entries on simpy's heap (see :mod:`netsim.env`) rather than by one process per
-message, which keeps the cost per message to one or two heap operations. Their priorities come from the
+Networks are driven by call items on the event loop's heap (see :mod:`netsim.env`) rather than by one process
+per message, which keeps the cost per message to one or two heap operations. Their priorities come from the
 run's one same-instant table (:mod:`netsim.env`): ends of wired transmissions, interface delays and
 deliveries are ``NORMAL``; radio transmissions go on and off the air at ``AIR``; media decide who sends at
 ``ARBITRATE``, after every ordinary event, every kernel dispatch and every air change at *t*, including
@@ -13,50 +13,19 @@ slot starts, token visits, priority queues of serial outputs).
 from __future__ import annotations
 
 import math
-from heapq import heappush
-from typing import Any, Callable
 
-import simpy
 from simpy.events import Event
 
-from netsim.env import ARBITRATE, NORMAL
+from netsim.env import ARBITRATE, Call, EventLoop
 from netsim.timebase import S
 
 __all__ = ["Call", "call_later", "arbitration_event", "tx_time_ns"]
 
-
-def _run(entry: tuple) -> None:
-    call: Call = entry[4]
-    if call.live:
-        call.fn(call.arg)
-
-
-class Call:
-    """A scheduled call of ``fn(arg)`` ``delay`` ns from now (a call entry of :mod:`netsim.env`), unless
-    :meth:`cancel` was called before it is due."""
-
-    __slots__ = ("fn", "arg", "live")
-
-    def __init__(self, sim: simpy.Environment, delay: int, fn: Callable[[Any], None], arg: Any, priority: int) -> None:
-        self.fn = fn
-        self.arg = arg
-        self.live = True
-        heappush(sim._queue, (sim._now + delay, priority, next(sim._eid), _run, self))  # type: ignore[attr-defined]
-
-    def cancel(self) -> None:
-        """Do not call ``fn`` after all (the entry stays in the heap and is ignored)."""
-        self.live = False
-
-
-def call_later(
-    sim: simpy.Environment, delay_ns: int, fn: Callable[[Any], None], arg: Any = None, *, priority: int = NORMAL
-) -> Call:
-    """Call ``fn(arg)`` after ``delay_ns`` (0: later in this instant), with a ``priority`` of the
-    same-instant table of :mod:`netsim.env` (``ARBITRATE`` for a medium's decision among the frames queued
-    by then: after every release, delivery and dispatch of that instant)."""
-    if delay_ns < 0:
-        raise ValueError(f"negative delay {delay_ns} ns")
-    return Call(sim, delay_ns, fn, arg, priority)
+#: ``call_later(sim, delay_ns, fn, *args, priority=NORMAL) -> Call``: call ``fn(*args)`` after ``delay_ns``
+#: (0: later in this instant), with a ``priority`` of the same-instant table of :mod:`netsim.env`
+#: (``ARBITRATE`` for a medium's decision among the frames queued by then: after every release, delivery and
+#: dispatch of that instant); :meth:`Call.cancel` drops it. It is :meth:`netsim.env.EventLoop.call_later`.
+call_later = EventLoop.call_later
 
 
 def tx_time_ns(bits: int, rate_bps: float) -> int:
@@ -73,10 +42,6 @@ def tx_time_ns(bits: int, rate_bps: float) -> int:
     return max(1, math.ceil(bits * S / rate_bps - 1e-6))
 
 
-def arbitration_event(sim: simpy.Environment, delay_ns: int = 0) -> Event:
+def arbitration_event(sim: EventLoop, delay_ns: int = 0) -> Event:
     """An event (for a process to yield) processed at ``ARBITRATE`` priority at ``now + delay_ns``."""
-    ev = Event(sim)
-    ev._ok = True
-    ev._value = None
-    sim.schedule(ev, ARBITRATE, delay_ns)
-    return ev
+    return sim.event_at(delay_ns, ARBITRATE)

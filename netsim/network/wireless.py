@@ -221,7 +221,7 @@ class WirelessMedium(Network):
 
     def _on_air(self, item: tuple) -> None:
         sender, receivers, duration, on_end, arg = item
-        now = self.sim._now
+        now = self.sim.now
         for other in self._active:  # the new transmission interferes with every reception under way
             for rx in other[1]:
                 if rx[0] == sender:
@@ -242,7 +242,7 @@ class WirelessMedium(Network):
         tx, on_end, arg = item
         self._active.remove(tx)
         if not self._active:
-            self._meter.stop(self.sim._now)
+            self._meter.stop(self.sim.now)
         sender = tx[0]
         outcome: dict[str, str | None] = {}
         for r, interf, duplex_ok in tx[1]:
@@ -266,7 +266,7 @@ class WirelessMedium(Network):
         """Take ``node``'s next frame to the MAC (if any) and start its channel access."""
         q = self.queues[node]
         if len(q):
-            frame = self._current[node] = q.pop(self.sim._now)
+            frame = self._current[node] = q.pop(self.sim.now)
             self._retries[node] = 0
             self._pending[node] = list(frame.copies)
             self._start_access(node)
@@ -279,7 +279,7 @@ class WirelessMedium(Network):
         """The MAC grants the channel: ``node``'s current frame goes on the air now."""
         frame = self._current[node]
         assert frame is not None
-        now = self.sim._now
+        now = self.sim.now
         if frame.tx_start_ns is None:
             frame.tx_start_ns = now
         self.attempts += 1
@@ -288,7 +288,7 @@ class WirelessMedium(Network):
 
     def _frame_end(self, item: tuple, outcome: dict[str, str | None]) -> None:
         node, frame, _start = item
-        now = self.sim._now
+        now = self.sim.now
         p: Any = self.params
         pending = self._pending[node]
         got = [c for c in pending if outcome.get(c[0].receiver) is None]  # type: ignore[arg-type]
@@ -497,7 +497,7 @@ class Ieee80211b(WirelessMedium):
 
     def _contend(self, node: str, first: bool) -> None:
         p: Any = self.params
-        now = self.sim._now
+        now = self.sim.now
         idle = self._idle_since[node]
         if first and not self._post_backoff[node] and idle is not None and now - idle >= self._difs:
             self._bo[node] = None
@@ -514,7 +514,7 @@ class Ieee80211b(WirelessMedium):
         """Count the backoff down from now if the medium is idle (after a DIFS), else stay frozen."""
         if self._timer[node] is not None or self._sensed_busy(node):
             return
-        self._count_from[node] = self.sim._now
+        self._count_from[node] = self.sim.now
         slots = self._bo[node] or 0
         self._timer[node] = call_later(self.sim, self._difs + slots * self._slot, self._backoff_done, node)
 
@@ -524,7 +524,7 @@ class Ieee80211b(WirelessMedium):
             return
         timer.cancel()
         self._timer[node] = None
-        counted = (self.sim._now - self._count_from[node] - self._difs) // self._slot
+        counted = (self.sim.now - self._count_from[node] - self._difs) // self._slot
         if counted > 0:
             self._bo[node] = max(0, self._bo[node] - counted)  # type: ignore[operator]
 
@@ -537,7 +537,7 @@ class Ieee80211b(WirelessMedium):
             self._send_frame(node)
 
     def _on_medium_change(self) -> None:
-        now = self.sim._now
+        now = self.sim.now
         for n in self.nodes:
             busy = self._sensed_busy(n)
             if busy:
