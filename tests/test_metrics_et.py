@@ -115,3 +115,26 @@ def test_every_registered_metric_has_a_params_model():
     missing = [n for n in sorted(names) if not (isinstance(getattr(registry.lookup("metric", n), "Params", None), type)
                                                 and issubclass(registry.lookup("metric", n).Params, BaseModel))]
     assert missing == []
+
+
+def test_et_control_horizon_measures_from_hand_made_tables():
+    # 8 periods of T = 1 s; the actuator's tick records its past-the-packet flag at k + 0.5 (after its
+    # execution), the controller records N at arrivals; u packets sent at k = 0, 1, 5
+    T = 1.0
+    t = np.arange(8) * T + 0.5
+    flags = [0, 0, 0, 1, 1, 0, 0, 1]
+    N = [1, np.nan, 3, np.nan, np.nan, 4, np.nan, 9]  # 9 at t = 7.5: inside the window
+    sig = pd.DataFrame({"time_s": t, "r": 1.0, "y": 0.5, "u_past_end": flags, "N": N})
+    msgs = pd.DataFrame({"tag": ["u", "u", "u", "u"], "sent_s": [0.2, 1.2, 5.2, 8.2], "dropped": [False] * 4})
+    res = SimpleNamespace(signals=sig, messages=msgs, meta={"duration_s": 8.0})
+    m = et_control(res, {"period": f"{T} s"}, None)
+    assert m["et.played_past_packet"] == 3.0  # sum of the flags, one per period
+    assert m["et.N_max"] == 9.0
+    # runs of periods covered by one packet: 1 - 0, 5 - 1, 8 - 5 (the packet sent at 8.2 is past N_TTS)
+    assert m["et.u_gap_max"] == 4.0
+
+
+def test_et_control_leaves_horizon_measures_out_when_not_recorded():
+    run = _result([0.0, 1.0], [("y", 0.1)])
+    m = et_control(run, {"period": "1 s"}, None)
+    assert not {"et.played_past_packet", "et.N_max", "et.u_gap_max"} & set(m)
