@@ -283,10 +283,12 @@ def test_ctrl_c_of_a_dask_sweep_is_clean_like_a_pool_sweep_and_a_rerun_resumes(
 ) -> None:
     path, expected = serial
     out = tmp_path / "out"
+    remote: Cluster | None = None
     if backend == "dask-local":
         where = ["--dask-local", "--workers", "2"]
     elif backend == "scheduler":  # the cluster runs elsewhere (own sessions): Ctrl-C reaches netsim only
-        where = ["--scheduler", request.getfixturevalue("cluster").address]
+        remote = request.getfixturevalue("cluster")
+        where = ["--scheduler", remote.address]
     else:
         where = ["--workers", "2"]
     proc = _sweep_cli([str(path), "--out", str(out), *where])
@@ -297,6 +299,8 @@ def test_ctrl_c_of_a_dask_sweep_is_clean_like_a_pool_sweep_and_a_rerun_resumes(
         assert _all_ended([proc.pid]), "a worker process of the sweep outlived it"
     finally:
         _kill_group(proc)
+    if remote is not None:  # its workers finish the runs they had started; stop them before the checks
+        remote.close()
 
     assert proc.returncode == 130, (proc.returncode, stderr)
     assert "Traceback" not in stderr, stderr  # "three worker tracebacks on screen"
