@@ -203,12 +203,35 @@ def _unrecorded(scenario: Any, recorder: Any) -> list[str]:
     return [f"record: nothing recorded '{name}' (recorded signals: {known})" for name in missing]
 
 
+class _WarningCapture(logging.Handler):
+    """Collects the texts of the warnings netsim and the models log while a run's metrics are computed."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.WARNING)
+        self.texts: list[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.texts.append(record.getMessage())
+
+
 def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | None) -> dict[str, float]:
+    """The run's metrics; warnings a metric logs (e.g. et_control's 'h is shorter than a packet gap') are also
+    kept in ``result.meta["warnings"]``."""
     from netsim.runtime_metrics import compute_metrics, generic_metrics
 
     t_end_ns = int(round(result.meta["t_end_s"] * S))
-    values = generic_metrics(result, sim, t_end_ns)
-    values.update(compute_metrics(result, list(scenario.metrics), baseline))
+    capture = _WarningCapture()
+    loggers = [logging.getLogger("netsim"), logging.getLogger("models")]
+    for lg in loggers:
+        lg.addHandler(capture)
+    try:
+        values = generic_metrics(result, sim, t_end_ns)
+        values.update(compute_metrics(result, list(scenario.metrics), baseline))
+    finally:
+        for lg in loggers:
+            lg.removeHandler(capture)
+    if capture.texts:
+        result.meta["warnings"] = list(result.meta.get("warnings") or []) + capture.texts
     return values
 
 

@@ -33,3 +33,13 @@ def test_a_can_bus_flooded_by_interference_warns_though_the_run_is_ok(tmp_path):
     text = "\n".join(res.meta["warnings"])
     assert "network 'can' is saturated" in text and "queue_full" in text
     assert "task controller.control (released on_message:can) never ran" in text
+
+
+def test_a_warning_logged_by_a_metric_is_kept_in_meta_json(tmp_path):
+    # hdd_case3 with the other cases' h = 100 and their 1 Gbit/s network (the report's "h 100" variant): eq (22)
+    # holds packets back for longer than h periods, and et_control logs that the actuator played past its packet
+    res = run("scenarios/hdd_case3.yaml", out=tmp_path / "r", overrides={
+        "nodes.controller.tasks[0].params.design_params.h": 100,
+        "networks.net.bitrate": "1 Gbit/s", "networks.net.max_frame_bits": None})
+    assert res.metrics["et.played_past_packet"] > 0
+    assert any("past the end of its packet" in w for w in res.meta["warnings"])
