@@ -17,10 +17,12 @@ in the order of ``(time, priority, id)``. The item is either
 
 - a simpy event (timeouts, processes, stores, resources: everything simpy schedules through
   :meth:`EventLoop.schedule`), processed as :meth:`simpy.Environment.step` processes it; or
-- a *call item* ``(fn, arg)``, a plain tuple: the loop calls ``fn(item)``, and ``fn`` reads ``item[1]``.
-  netsim's own wake-ups (kernel segment ends, releases, timers, network transmissions, the plant's recording
-  grid) are call items: no event object, no callback list, one heap push. The item itself identifies the
-  wake-up, so a component tells a superseded one by identity (``if item is not job.wake: return``).
+- a *call item*, a plain tuple whose first element is a function: the loop calls ``fn(item)``. As a rule
+  the item is ``(fn, arg)`` and ``fn`` reads ``item[1]``; a hot path may carry more fields (a transmission's
+  end is ``(done, frame, start_ns)``). netsim's own wake-ups (kernel segment ends, releases, timers,
+  network transmissions, the plant's recording grid) are call items: no event object, no callback list, one
+  heap push. The item itself identifies the wake-up, so a component tells a superseded one by identity
+  (``if item is not job.wake: return``).
 
 Ways to schedule, cheapest first:
 
@@ -41,28 +43,29 @@ Two loops run the same heap in the same order. :func:`run_events` (and :meth:`Si
 at ``t_end + 1``, as :meth:`SimEnv.run` does; ``sim.run()`` runs until the heap is empty (never, with a
 periodic task), ``sim.run(until=event)`` until that event.
 
-A failed simpy event (a process that raised) is handed to the processes waiting for it, as in simpy; when
-none of them defuses it, the loop raises the *original* exception (simpy raises a copy built from
-``exc.args``, which netsim errors with extra constructor arguments, e.g. ``DivergenceError(message,
-time_ns)``, cannot survive). An exception raised by a call item's ``fn`` propagates as it is.
+A failed simpy event (a process that raised) is handed to the processes waiting for it, as in simpy (which
+throws a copy built from ``exc.args`` into each of them); when none of them defuses it, both loops raise the
+*original* exception (simpy's own ``step`` raises such a copy, which netsim errors with extra constructor
+arguments, e.g. ``DivergenceError(message, time_ns)``, cannot survive). An exception raised by a call item's
+``fn`` propagates as it is.
 
 A plain simpy process in a netsim run
 -------------------------------------
 Anything written for simpy runs beside kernels, networks and plants, in the one clock and the one
-same-instant table (a custom traffic source, a test harness, a simpy model of a machine)::
+same-instant table (a custom traffic source, a test harness, a simpy model of a machine). The README's
+section of this name has a complete example on a shipped scenario; in short::
 
     env = SimEnv(seed=1)
-    sim = env.sim                      # an EventLoop: a simpy.Environment
-    parts = simpy.Store(sim)
+    sim = env.sim                              # an EventLoop: a simpy.Environment
+    parts = simpy.Store(sim)                   # kernels, networks and plants are built on env as usual
 
-    def machine():                     # a plain simpy process
+    def machine():                             # a plain simpy process
         while True:
-            yield sim.timeout(2_000_000)        # 2 ms, in integer nanoseconds
+            yield sim.timeout(2_000_000)       # 2 ms, in integer nanoseconds
             yield parts.put(sim.now)
 
     sim.process(machine())
-    sim.call_later(0, print_when_full)  # or a netsim kernel, network or plant built on env
-    env.run(10_000_000)                 # or sim.run(until=10_000_001)
+    env.run(10_000_000)                        # or simpy's own: sim.run(until=10_000_001); env.finish(10_000_000)
 
 simpy's timeouts and triggered events are NORMAL and its process starts and interrupts URGENT (the first two
 rows of the table below), so a process resumed at *t* acts before the kernels dispatch at *t* and the media

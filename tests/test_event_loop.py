@@ -268,3 +268,17 @@ def test_no_private_simpy_attribute_outside_the_env_module():
             if _PRIVATE.search(line):
                 hits.append(f"{rel}:{n}: {line.strip()}")
     assert hits == []
+
+
+# ------------------------------------------------------------------ the README's example
+def test_the_readmes_simpy_process_example_prints_what_the_readme_says(capsys, monkeypatch):
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = text[text.index("### A plain simpy process in a netsim run"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    claimed = re.search(r"It prints `([^`]*)`", section).group(1)
+    monkeypatch.chdir(ROOT)  # the example names the scenario relative to the repository
+    exec(compile(code, "README.md", "exec"), {"__name__": "readme_example"})
+    assert capsys.readouterr().out.strip() == claimed
+    # the claim itself, by hand: an 80-bit frame at 80 kbit/s takes 1 ms; the sensor's frame, sent at the
+    # instant of the burst, waits for it: 1 ms + 1 ms
+    assert claimed == "100 bursts; sensor frame delay 2000000 to 2000000 ns"
