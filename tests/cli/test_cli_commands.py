@@ -139,7 +139,7 @@ def test_sweep_passes_its_options_and_prints_the_description(tmp_path, monkeypat
     (args, kwargs), = rec.calls
     assert args == (str(path),)
     assert kwargs == {"out": None, "workers": 3, "scheduler": "tcp://h:8786", "local_dask": False,
-                      "overwrite": True, "progress": True}
+                      "dashboard": None, "overwrite": True, "progress": True}
     assert capsys.readouterr().out == "sweep s: summary and optimum\n"
 
 
