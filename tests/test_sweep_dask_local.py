@@ -43,3 +43,13 @@ def test_local_dask_dashboard_is_off_unless_asked_for(dashboard: str | None) -> 
         else:
             assert services.get("dashboard") == port and f":{port}" in desc
             assert _answers_http(port)
+
+
+def test_cli_dask_dashboard_needs_dask_local(tmp_path, capsys) -> None:
+    from netsim.cli import main
+
+    sweep = tmp_path / "s.yaml"
+    sweep.write_text("sweep: s\n")
+    assert main(["sweep", str(sweep), "--dask-dashboard", "127.0.0.1:8787"]) == 2
+    err = capsys.readouterr().err
+    assert "--dask-dashboard needs --dask-local" in err and "Traceback" not in err
