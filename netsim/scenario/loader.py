@@ -29,7 +29,6 @@ import io
 import json
 import logging
 import os
-from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from pydantic import BaseModel, ValidationError
@@ -135,27 +134,35 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
     from ruamel.yaml import YAML
     from ruamel.yaml.error import MarkedYAMLError, YAMLError
 
+    from netsim.scenario.safe_yaml import YamlRefused, check_events, read_text
+
     name = os.fspath(path)
-    p = Path(name)
-    if not p.exists():
-        raise ScenarioError([Problem("", f"file not found: {name}", None, name)])
-    if p.is_dir():
-        raise ScenarioError([Problem("", f"{name} is a directory, not a scenario file", None, name)])
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError([Problem("", f"cannot read file: {exc}", None, name)]) from None
+        text = read_text(name)
+    except FileNotFoundError:
+        raise ScenarioError([Problem("", f"file not found: {name}", None, name)]) from None
+    except YamlRefused as exc:
+        raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None
     yaml = YAML(typ="rt", pure=True)
     try:
+        check_events(yaml.parse(io.StringIO(text)))  # depth, tags, alias expansion: before anything is built
         data = yaml.load(io.StringIO(text))
+    except YamlRefused as exc:
+        raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None
     except MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark is not None else None
         what = exc.problem or "syntax error"
         context = f" ({exc.context})" if exc.context else ""
+        if "'\\t'" in what or "\t" in what:
+            what, context = "a tab character where YAML expects indentation", "; indent with spaces, not tabs"
         raise ScenarioError([Problem("", f"YAML syntax error: {what}{context}", line, name)]) from None
     except YAMLError as exc:
-        raise ScenarioError([Problem("", f"YAML error: {str(exc).splitlines()[0]}", None, name)]) from None
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise ScenarioError([Problem("", f"YAML error: {first[:200]}", None, name)]) from None
+    except (ValueError, TypeError, AttributeError, RecursionError) as exc:  # a value ruamel cannot construct
+        raise ScenarioError([Problem("", f"YAML value cannot be read ({type(exc).__name__}: {str(exc)[:120]}); "
+                                     "remove any '!!' tag and write plain values", None, name)]) from None
     index = LineIndex()
     index.add((), 1)
     return _to_plain(data, (), index), index
