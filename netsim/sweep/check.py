@@ -21,9 +21,11 @@ _SWEEP_KEY = re.compile(r"^sweep\s*:", re.MULTILINE)
 
 def is_sweep_file(path: str | Path) -> bool:
     """True when the YAML file at ``path`` is a sweep (it has a top-level ``sweep:`` key)."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError):
+    from netsim.scenario.safe_yaml import YamlRefused, read_text
+
+    try:  # bounded and regular files only: a FIFO or /dev/zero must not hang here (issue 14)
+        text = read_text(str(path))
+    except (OSError, YamlRefused):
         return False
     return _SWEEP_KEY.search(text) is not None
 
