@@ -10,7 +10,9 @@ model by :mod:`netsim.scenario.validate`; after :func:`netsim.scenario.load_scen
 Public classes and their fields (times in ns)
 ---------------------------------------------
 ``Scenario``
-    ``name, description, seed, duration, plant: PlantSpec | None, io: dict[str, IOChannel],
+    ``name`` (at most ``MAX_NAME_LENGTH`` characters), ``description``, ``plugins`` (Python files, relative to
+    the scenario file, that register plugins: run only when the user allows it, see :mod:`netsim.trust`),
+    ``seed, duration, plant: PlantSpec | None, io: dict[str, IOChannel],
     signals: dict[str, SignalSpec], nodes: dict[str, NodeSpec], networks: dict[str, NetworkSpec],
     record: list[str] | None, metrics: list[MetricSpec], baseline: BaselineSpec | None,
     output: OutputSpec``; methods ``resolved_dict()``, ``node_networks(node)``, ``baseline_scenario()``;
@@ -47,7 +49,7 @@ Public classes and their fields (times in ns)
 ``BaselineSpec``
     ``overrides: dict[str, Any]`` (dotted path -> value).
 ``OutputSpec``
-    ``dir, plot``.
+    ``dir`` (relative to ``reports/``, cannot leave it), ``plot``.
 
 Every plugin spec (``PlantSpec``, ``TaskSpec``, ``HandlerSpec``, ``NetworkSpec``, ``SignalSpec``,
 ``MetricSpec``) has ``plugin()`` (the registered object) and ``validated_params()`` (its ``Params`` model
@@ -609,10 +611,36 @@ class BaselineSpec(SpecModel):
     overrides: dict[str, Any] = Field(default_factory=dict)
 
 
-class OutputSpec(SpecModel):
-    """Where the run folder goes (None: ``reports/<name>/<run-id>``) and whether to draw figures."""
+#: Longest scenario name (it becomes a folder name: ``reports/<name>/``).
+MAX_NAME_LENGTH = 100
 
-    dir: str | None = None
+
+def _output_dir(value: Any) -> Any:
+    """``output.dir``: a relative folder below the output root (``reports/``) that cannot leave it."""
+    if not isinstance(value, str):
+        return value
+    fix = "write a relative folder such as 'my_runs/case1' (it goes under reports/), or choose any folder with --out"
+    if not value.strip():
+        raise ValueError(f"output.dir is empty; {fix}")
+    if len(value) > 200:
+        raise ValueError(f"output.dir is {len(value)} characters long (at most 200); {fix}")
+    if "\x00" in value or "\\" in value or value.startswith(("/", "~")) or re.match(r"^[A-Za-z]:", value):
+        raise ValueError(f"output.dir '{value[:60]}' is not a relative folder; a scenario cannot choose where "
+                         f"its files go outside reports/: {fix}")
+    if any(part == ".." for part in value.split("/")):
+        raise ValueError(f"output.dir '{value[:60]}' leaves reports/ ('..'); {fix}")
+    return value
+
+
+class OutputSpec(SpecModel):
+    """Where the run folder goes and whether to draw figures.
+
+    ``dir`` is a folder relative to the output root ``reports/`` (no absolute path, no ``..``): a scenario
+    file cannot choose where files are written outside it; the user does, with ``--out`` (or ``out=``).
+    None: ``reports/<name>/<run-id>``.
+    """
+
+    dir: Annotated[str | None, BeforeValidator(_output_dir)] = None
     plot: bool = False
 
 
@@ -620,8 +648,9 @@ class OutputSpec(SpecModel):
 class Scenario(SpecModel):
     """A complete, validated scenario (see the module docstring for every field)."""
 
-    name: Name
+    name: Annotated[str, StringConstraints(pattern=NAME_PATTERN, max_length=MAX_NAME_LENGTH)]
     description: str = ""
+    plugins: list[str] = Field(default_factory=list)
     seed: int = Field(default=0, ge=0)
     duration: Duration
     plant: PlantSpec | None = None
