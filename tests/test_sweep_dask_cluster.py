@@ -315,3 +315,23 @@ def test_ctrl_c_of_a_dask_sweep_is_clean_like_a_pool_sweep_and_a_rerun_resumes(
     for folder, record in kept.items():
         assert (out / folder / "point.json").read_bytes() == record
     assert (out / "summary.csv").read_bytes() == expected
+
+
+def test_ctrl_c_while_the_local_dask_cluster_starts_is_clean(serial, tmp_path: Path) -> None:
+    path, _ = serial
+    out = tmp_path / "out"
+    proc = _sweep_cli([str(path), "--out", str(out), "--dask-local", "--workers", "2"])
+    try:
+        # dask-scratch/ is made just before the cluster starts its worker processes (a second or more)
+        _wait_for("the local cluster to start", lambda: (out / "dask-scratch").exists(), proc=proc)
+        os.killpg(proc.pid, signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=WAIT_S)
+        assert _all_ended([proc.pid]), "a worker process of the sweep outlived it"
+    finally:
+        _kill_group(proc)
+    # before: worker processes still starting Python printed "Fatal Python error: init_import_site" and
+    # KeyboardInterrupt tracebacks, and Dask's exit handler one for the half-built cluster
+    assert proc.returncode == 130, (proc.returncode, stderr)
+    assert "Traceback" not in stderr and "Fatal Python error" not in stderr, stderr
+    assert "run the same command again to resume" in stderr
+    assert (out / "summary.csv").exists()

@@ -25,6 +25,8 @@ import json
 import logging
 import os
 import signal
+import sys
+import threading
 import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from pathlib import Path
@@ -113,6 +115,71 @@ def dask_setup(worker: Any) -> None:  # noqa: ARG001 - the Dask preload hook's s
     """
     with contextlib.suppress(ValueError):  # not the main thread: leave it
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextlib.contextmanager
+def _stderr_to(path: Path | None) -> Iterator[None]:
+    """Point file descriptor 2 at ``path`` (``None``: the null device) while local worker processes start.
+
+    The worker processes inherit it for good: their output goes to ``<out>/dask-scratch/workers.log``, not
+    to the terminal. A Ctrl-C that reaches a worker still starting Python (before :func:`dask_setup` can
+    ignore it) would otherwise print a traceback per worker on the user's screen.
+    """
+    target = os.open(str(path) if path is not None else os.devnull, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    saved = os.dup(2)
+    with contextlib.suppress(Exception):
+        sys.stderr.flush()
+    os.dup2(target, 2)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(target)
+
+
+@contextlib.contextmanager
+def _sigint_deferred() -> Iterator[None]:
+    """Hold a Ctrl-C back until the block ends, then raise it (in the main thread; elsewhere do nothing).
+
+    A local cluster interrupted while it starts is left half-built to Dask's exit handler, which prints
+    tracebacks; held back, the Ctrl-C arrives as soon as the cluster is up (or has failed), and the sweep
+    closes it and stops cleanly. Dask clusters created in the block that could not finish starting are
+    closed here and removed from Dask's exit handler.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    before = _dask_clusters()
+    old = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    except BaseException:
+        _forget_clusters(_dask_clusters() - before)
+        if not caught:
+            raise
+    finally:
+        signal.signal(signal.SIGINT, old)
+    if caught:
+        raise KeyboardInterrupt
+
+
+def _dask_clusters() -> set[int]:
+    from distributed.deploy.spec import SpecCluster
+
+    return {id(c) for c in list(getattr(SpecCluster, "_instances", ()))}
+
+
+def _forget_clusters(ids: set[int]) -> None:
+    """Close the half-started clusters ``ids`` and take them off Dask's exit-time list."""
+    from distributed.deploy.spec import SpecCluster
+
+    instances = getattr(SpecCluster, "_instances", None)
+    for cluster in [c for c in list(instances or ()) if id(c) in ids]:
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=5)
+        instances.discard(cluster)
 
 
 #: Loggers of Dask and its network layer, quietened during a Dask sweep (the sweep reports faults itself).
@@ -294,21 +361,28 @@ def open_executor(
         with _quiet_dask_logs():
             from distributed import Client
 
-            cluster = None
+            cluster = client = None
             try:
                 if scheduler:
                     _probe_scheduler(scheduler, connect_timeout)
                     client = Client(scheduler, timeout=connect_timeout)
                     desc = f"dask scheduler {scheduler}"
                 else:
-                    cluster = _local_cluster(workers, scratch, dashboard, cluster_kwargs)
+                    in_process = not (cluster_kwargs or {}).get("processes", True)
+                    log_file = scratch / "workers.log" if scratch is not None else None
+                    if log_file is not None:
+                        scratch.mkdir(parents=True, exist_ok=True)
+                    with _sigint_deferred():
+                        with contextlib.nullcontext() if in_process else _stderr_to(log_file):
+                            cluster = _local_cluster(workers, scratch, dashboard, cluster_kwargs)
                     client = Client(cluster, timeout=connect_timeout)
-                    n_local = len(cluster.workers)
-                    desc = f"local dask cluster ({n_local} workers)"
+                    desc = f"local dask cluster ({len(cluster.workers)} workers)"
                     if dashboard is not None:
                         desc += f", dashboard {cluster.dashboard_link}"
             except BaseException:
-                if cluster is not None:
+                if client is not None:
+                    _close_quietly(client, cluster)
+                elif cluster is not None:
                     cluster.close()
                 raise
             try:
