@@ -13,8 +13,10 @@ interrupted sweep keeps every finished point.
 Faults on a Dask cluster: a worker that dies mid-point has its tasks rescheduled on the others by the
 scheduler (the points are pure: the same point gives the same record); a scheduler that goes away ends
 the sweep (:class:`SchedulerLost`, raised by :func:`netsim.sweep.run_sweep` after ``summary.csv`` is
-written). Worker processes of a local cluster ignore Ctrl-C (:func:`dask_setup`, as pool workers do): the
-sweep's own process stops the sweep, so one Ctrl-C gives one message, not a traceback per worker.
+written). Worker processes of a local cluster ignore Ctrl-C (:func:`dask_setup`, as pool workers do) and
+write their output to ``<out>/dask-scratch/workers.log``; a Ctrl-C while the cluster starts is held back
+until it is up. The sweep's own process stops the sweep, so one Ctrl-C gives one message, not a traceback
+per worker.
 """
 
 from __future__ import annotations

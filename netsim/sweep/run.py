@@ -6,7 +6,8 @@ Output folder layout::
     <out>/points/<index>-<key>/      one run folder per run (scenario.yaml, *.csv, meta.json) + point.json
     <out>/summary.csv                one row per run (see netsim.sweep.summary)
     <out>/optimum.json, surface.png  when the sweep file has a ``surface:`` section (netsim.surface)
-    <out>/dask-scratch/              Dask's scratch space when a local Dask cluster ran the sweep
+    <out>/dask-scratch/              Dask's scratch space when a local Dask cluster ran the sweep, and
+                                     workers.log: the output of its worker processes
 
 A run is *finished* when its ``point.json`` says ``ok`` with the same seed and the same scenario hash
 (:func:`netsim.scenario.scenario_hash` of the point's scenario with its seed, as in the run's
