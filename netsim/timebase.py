@@ -28,6 +28,7 @@ __all__ = [
     "MS",
     "S",
     "UNITS",
+    "MAX_TIME",
     "TimeParseError",
     "parse_time",
     "parse_duration",
@@ -53,6 +54,12 @@ UNITS: Final[dict[str, int]] = {
     "min": 60 * S,
     "h": 3600 * S,
 }
+
+#: The largest time a scenario may give (any time field, the duration included): 10**18 ns = 1e9 s, about
+#: 31.7 years of simulated time. Times are integer nanoseconds and end up in int64 columns (numpy, CSV
+#: readers); this limit keeps a sum of a few times (release = offset + k * period, end = start + duration)
+#: below the int64 limit of 9.22e18 ns. Anything longer is refused by :func:`parse_time`.
+MAX_TIME: Final[int] = 10**18
 
 _PATTERN = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*?)?\s*$")
 
@@ -108,8 +115,8 @@ def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int
     Raises
     ------
     TimeParseError
-        For a bare number other than 0, an unknown unit (with a suggestion), a missing number or unit, or a
-        negative value when not allowed.
+        For a bare number other than 0, an unknown unit (with a suggestion), a missing number or unit, a
+        negative value when not allowed, or a magnitude beyond :data:`MAX_TIME`.
     """
     if isinstance(value, bool):
         raise TimeParseError(f"expected a time such as '1 ms', got {value!r}")
@@ -132,7 +139,13 @@ def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int
             raise TimeParseError(f"unknown unit '{unit}'{tip}")
         scale = UNITS[unit]
         # decimal arithmetic: "1.0000005 s" is exactly 1000000500 ns, whatever its length
-        exact = Decimal(number) * scale
+        amount = Decimal(number)
+        if amount.copy_abs() > Decimal(MAX_TIME // scale):  # compared before multiplying: "1e999999 s" stays cheap
+            shown = value if len(value) <= 40 else value[:37] + "..."
+            raise TimeParseError(
+                f"time {shown!r} is beyond netsim's limit of 1e9 s (10^18 ns, about 31.7 years); write a shorter time"
+            )
+        exact = amount * scale
         ns = int(exact.to_integral_value(rounding=ROUND_HALF_EVEN))
     else:
         raise TimeParseError(f"expected a time such as '1 ms', got {type(value).__name__} {value!r}")

@@ -16,14 +16,21 @@ Examples
 
 from __future__ import annotations
 
+import math
 import re
-from typing import Annotated, Any
+from typing import Annotated, Any, Final
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, PlainSerializer
 
 from netsim.timebase import TimeParseError, format_time, parse_duration, parse_time
 
-__all__ = ["Time", "Duration", "SignedTime", "Bitrate", "StrictModel", "parse_bitrate"]
+__all__ = ["NUMBER_LIMIT", "Time", "Duration", "SignedTime", "Bitrate", "StrictModel", "parse_bitrate"]
+
+#: The largest magnitude of a number in a scenario (gains, rates, positions, initial states, noise levels):
+#: ``|x| <= 1e15``. Larger values overflow the float arithmetic of plants and controllers (a square of 1e160
+#: is already inf); NaN and inf are refused everywhere. Checked for every number of a scenario by
+#: :mod:`netsim.scenario.validate`.
+NUMBER_LIMIT: Final[float] = 1e15
 
 
 def _time(value: Any) -> int:
@@ -64,8 +71,8 @@ def parse_bitrate(value: Any) -> float:
         rate = float(m.group(1)) * _BITRATE_SCALE[m.group(2)]
     else:
         raise ValueError(f"expected a bit rate such as '80 kbit/s', got {value!r}")
-    if not rate > 0:
-        raise ValueError(f"bit rate must be positive, got {value!r}")
+    if not math.isfinite(rate) or not 0 < rate <= NUMBER_LIMIT:
+        raise ValueError(f"bit rate must be positive and at most {NUMBER_LIMIT:g} bit/s, got {value!r}")
     return rate
 
 
@@ -84,6 +91,7 @@ Bitrate = Annotated[float, BeforeValidator(parse_bitrate)]
 
 
 class StrictModel(BaseModel):
-    """Base of every parameter model: unknown keys are errors, values are validated on assignment."""
+    """Base of every parameter model: unknown keys are errors, values are validated on assignment, and a float
+    field refuses NaN and inf (also written as text, ``"nan"``)."""
 
-    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False)
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, allow_inf_nan=False)

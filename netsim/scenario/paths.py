@@ -38,6 +38,9 @@ __all__ = [
 
 PathPart = str | int
 
+_SHOWN = 60  # a name longer than this is cut in messages
+_LISTED = 30  # at most this many known names are listed
+
 _KEY = re.compile(r"[^.\[\]\s]+")
 _INDEX = re.compile(r"\[\s*([^\]]*?)\s*\]")
 
@@ -56,11 +59,13 @@ def did_you_mean(word: str, candidates: Iterable[str], *, what: str = "") -> str
         when nothing is close.
     """
     names = sorted({str(c) for c in candidates})
-    close = difflib.get_close_matches(str(word), names, n=1, cutoff=0.6)
+    close = difflib.get_close_matches(str(word)[:_SHOWN], [n for n in names if len(n) <= _SHOWN], n=1, cutoff=0.6)
     if close:
         return f"; did you mean '{close[0]}'?"
     if what:
-        return f" (known {what}: {', '.join(names)})" if names else f" (there are no {what})"
+        shown = [n if len(n) <= _SHOWN else f"{n[:_SHOWN - 3]}... ({len(n)} characters)" for n in names[:_LISTED]]
+        more = f" and {len(names) - _LISTED} more" if len(names) > _LISTED else ""
+        return f" (known {what}: {', '.join(shown)}{more})" if names else f" (there are no {what})"
     return ""
 
 

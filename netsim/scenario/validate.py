@@ -8,7 +8,10 @@ What is checked
 - Every plugin named in the scenario exists (plant ``model``, signal ``type``, task/handler ``program``,
   network ``type``, metric ``type``, node ``policy`` unless fp/rm/dm/edf), with a "did you mean"; its
   ``params`` fit the plugin's ``Params`` model (paths such as ``nodes.sensor.tasks[0].params.bits``).
-- Task and handler names are unique per node; ``wcet_handler``/``deadline_handler`` name handlers of the node.
+- The limits of :mod:`netsim.scenario.limits`: finite numbers within 1e15, names of at most 100 characters, a
+  non-empty ``nodes`` whose nodes each run something, unique task and handler names per node (the message names
+  the first definition), and a warning when the run is expected to simulate very many events.
+- ``wcet_handler``/``deadline_handler`` name handlers of the node.
 - A network's ``nodes`` exist; ``release: on_message:<net>`` and ``trigger: {on_message: <net>}`` name a
   network the node is attached to.
 - A periodic task has a period, an aperiodic or message-released task has none; under policy ``fp`` every
@@ -46,6 +49,7 @@ from typing import Any, Iterable
 from pydantic import BaseModel, ValidationError
 
 from netsim.errors import ConfigError
+from netsim.scenario.limits import LineOf, limit_problems
 from netsim.scenario.messages import problems_from_validation_error
 from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path, set_path
 from netsim.scenario.problems import WARNING, Problem, ScenarioError
@@ -317,19 +321,12 @@ class _Checker:
             except Exception as exc:  # noqa: BLE001
                 self.error([*base, "policy"], f"cannot load policy '{policy}': {type(exc).__name__}: {exc}")
         handlers = [h.get("name") for h in _l(node.get("handlers")) if isinstance(h, dict)]
-        seen: dict[str, str] = {}
         self.receivers: dict[str, str] = {}
         for kind in ("tasks", "handlers"):
             for i, item in enumerate(_l(node.get(kind))):
                 if not isinstance(item, dict):
                     continue
                 at: list[PathPart] = [*base, kind, i]
-                item_name = item.get("name")
-                if isinstance(item_name, str):
-                    if item_name in seen:
-                        self.error([*at, "name"], f"duplicate name '{item_name}' on node '{name}' (also {seen[item_name]}); task and handler names must be unique per node")
-                    else:
-                        seen[item_name] = format_path(at)
                 if kind == "tasks":
                     self.task(name, node, item, at, handlers)
                 else:
@@ -644,8 +641,16 @@ def _ports(factory: Any, params: Any) -> tuple[list[Any] | None, list[Any] | Non
     return side("input_names", "n_inputs"), side("output_names", "n_outputs")
 
 
-def check_raw(raw: dict[str, Any]) -> tuple[list[Problem], dict[str, Any]]:
+def check_raw(raw: dict[str, Any], line_of: LineOf | None = None) -> tuple[list[Problem], dict[str, Any]]:
     """Plugin and cross-reference problems of a raw scenario, and the validated plugin parameters.
+
+    Parameters
+    ----------
+    raw
+        The scenario as plain data.
+    line_of
+        ``line_of(path)``, the line of a YAML path: messages that point at a second place (the first definition
+        of a duplicate name) then give its line.
 
     Returns
     -------
@@ -658,4 +663,5 @@ def check_raw(raw: dict[str, Any]) -> tuple[list[Problem], dict[str, Any]]:
     """
     checker = _Checker(raw)
     checker.run()
+    checker.problems += limit_problems(raw, line_of)
     return checker.problems, checker.validated

@@ -197,6 +197,8 @@ def test_missing_required_keys():
     assert {(p.path, p.message) for p in _errors({"nodes": {}})} == {
         ("name", "missing required key 'name'"),
         ("duration", "missing required key 'duration'"),
+        ("nodes", "'nodes' is empty; a scenario needs at least one node with a task or a handler "
+                  "(add one, e.g. 'nodes: {cpu: {tasks: [...]}}')"),
     }
 
 

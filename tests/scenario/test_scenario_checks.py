@@ -101,8 +101,8 @@ def test_task_and_handler_names_are_unique_per_node(base):
     raw = base()
     raw["nodes"]["actuator"]["tasks"] = [{"name": "act", "program": "zzt_idle", "priority": 2, "period": "1 s"}]
     assert _problems(raw) == {
-        "nodes.actuator.handlers[0].name": "duplicate name 'act' on node 'actuator' (also nodes.actuator.tasks[0]); "
-        "task and handler names must be unique per node"
+        "nodes.actuator.handlers[0].name": "duplicate name 'act' on node 'actuator': first defined at "
+        "nodes.actuator.tasks[0]; task and handler names must be unique per node: rename one"
     }
 
 

@@ -1,0 +1,210 @@
+"""Limits every scenario must keep, checked on the raw data: numbers, names, lists, and the run's size.
+
+These checks walk the raw scenario (plain dicts from YAML) and report with YAML paths, so they reach numbers
+the schema keeps untyped (plugin parameters, matrices, ``x0``) as well as typed fields.
+
+What is checked
+---------------
+- Every number is finite and ``|x| <=`` :data:`netsim.units.NUMBER_LIMIT` (1e15); NaN and inf are refused
+  (``seed`` is exempt from the magnitude limit: it is an identifier, not a quantity).
+- Names (the scenario's ``name``, the keys of ``nodes``, ``networks``, ``signals``, ``io``, and task and
+  handler ``name`` fields) are at most :data:`NAME_MAX` characters (they become file and column names).
+- ``nodes``, when given, names at least one node; a node whose ``tasks`` is written as an empty list and that
+  has no handlers is refused, a node with neither key is a warning (it runs nothing); task and handler names are unique per node (the message names the first definition, with its line
+  when the caller gives a line lookup).
+- The expected number of events (:func:`expected_events`: ``duration / period`` summed over periodic tasks,
+  timer handlers and the plant's ``record_grid``) above :data:`EVENTS_WARN` is a warning with the estimate.
+
+Time fields beyond :data:`netsim.timebase.MAX_TIME` are refused where they are parsed (:mod:`netsim.units`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable, Final, Iterator
+
+from netsim.scenario.paths import PathPart, format_path
+from netsim.scenario.problems import WARNING, Problem
+from netsim.timebase import TimeParseError, parse_time
+from netsim.units import NUMBER_LIMIT
+
+__all__ = ["NAME_MAX", "EVENTS_WARN", "LineOf", "limit_problems", "expected_events"]
+
+#: Longest name (scenario, node, task, handler, network, signal, io channel), in characters.
+NAME_MAX: Final[int] = 100
+#: Expected event count above which validate warns (about a minute of simulation at 1e5 events/s and more).
+EVENTS_WARN: Final[float] = 1e7
+#: Sections whose keys are names.
+NAMED_SECTIONS: Final[tuple[str, ...]] = ("nodes", "networks", "signals", "io")
+#: Top-level keys whose contents are not checked here (free text; overrides are checked as they are applied;
+#: the output section belongs to the output rules).
+SKIPPED: Final[tuple[str, ...]] = ("description", "baseline", "output")
+
+#: ``line_of(path)``: the line of a YAML path, or None.
+LineOf = Callable[[str], "int | None"]
+
+
+def _numbers(node: Any, parts: tuple[PathPart, ...]) -> Iterator[tuple[tuple[PathPart, ...], float | int]]:
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if isinstance(key, str) and len(key) > NAME_MAX:
+                continue  # reported as a name; its path would be unreadable
+            yield from _numbers(value, (*parts, key if isinstance(key, (str, int)) else str(key)))
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            yield from _numbers(value, (*parts, i))
+    elif isinstance(node, (int, float)) and not isinstance(node, bool):
+        yield parts, node
+
+
+def _number_problem(value: float | int) -> str | None:
+    if isinstance(value, float) and math.isnan(value):
+        return f"NaN is not a usable number; write a finite number between -{NUMBER_LIMIT:g} and {NUMBER_LIMIT:g}"
+    if isinstance(value, float) and math.isinf(value):
+        return (f"{'-' if value < 0 else ''}infinity is not a usable number; write a finite number between "
+                f"-{NUMBER_LIMIT:g} and {NUMBER_LIMIT:g} (leave the key out for 'no limit' where that is allowed)")
+    if abs(value) > NUMBER_LIMIT:
+        shown = f"{value:.3g}" if isinstance(value, float) else f"an integer of {len(str(abs(value))) if abs(value) < 10**4000 else 'over 4000'} digits"
+        return f"{shown} is beyond netsim's limit for numbers (|x| <= {NUMBER_LIMIT:g}); write a smaller value"
+    return None
+
+
+def _short(name: str) -> str:
+    return name if len(name) <= 40 else f"{name[:37]}..."
+
+
+def _d(x: Any) -> dict[Any, Any]:
+    return x if isinstance(x, dict) else {}
+
+
+def _l(x: Any) -> list[Any]:
+    return x if isinstance(x, list) else []
+
+
+def _name_problems(raw: dict[str, Any]) -> Iterator[Problem]:
+    def too_long(name: Any, what: str) -> str | None:
+        if isinstance(name, str) and len(name) > NAME_MAX:
+            return (f"{what} '{_short(name)}' has {len(name)} characters; names are at most {NAME_MAX} "
+                    "characters (they become file and column names): use a shorter name")
+        return None
+
+    msg = too_long(raw.get("name"), "scenario name")
+    if msg:
+        yield Problem("name", msg)
+    for section in NAMED_SECTIONS:
+        for key in _d(raw.get(section)):
+            msg = too_long(key, f"{section} name")
+            if msg:
+                yield Problem(section, msg)  # the parent: the key itself would make an unreadable path
+    for node_name, node in _d(raw.get("nodes")).items():
+        if not isinstance(node_name, str) or len(node_name) > NAME_MAX:
+            continue
+        for kind in ("tasks", "handlers"):
+            for i, item in enumerate(_l(_d(node).get(kind))):
+                msg = too_long(_d(item).get("name"), kind[:-1] + " name")
+                if msg:
+                    yield Problem(format_path(["nodes", node_name, kind, i, "name"]), msg)
+
+
+def _structure_problems(raw: dict[str, Any], line_of: LineOf | None) -> Iterator[Problem]:
+    nodes = raw.get("nodes")
+    if "nodes" in raw and (nodes is None or nodes == {} or nodes == []):
+        yield Problem("nodes", "'nodes' is empty; a scenario needs at least one node with a task or a handler "
+                               "(add one, e.g. 'nodes: {cpu: {tasks: [...]}}')")
+    for node_name, node in _d(nodes).items():
+        if not isinstance(node, dict) or not isinstance(node_name, str) or len(node_name) > NAME_MAX:
+            continue
+        if not _l(node.get("tasks")) and not _l(node.get("handlers")) and \
+                all(isinstance(node.get(k), (list, type(None))) for k in ("tasks", "handlers")):
+            if isinstance(node.get("tasks"), list):  # written 'tasks: []': something was meant
+                yield Problem(format_path(["nodes", node_name, "tasks"]),
+                              f"node '{node_name}' has an empty 'tasks' list and no handlers; add a task (or a "
+                              "handler), or remove the node")
+            else:
+                yield Problem(format_path(["nodes", node_name]),
+                              f"node '{node_name}' runs no task and no handler (messages sent to it are dropped); "
+                              "add a task or a handler if it should do something", severity=WARNING)
+        first: dict[str, str] = {}
+        for kind in ("tasks", "handlers"):
+            for i, item in enumerate(_l(node.get(kind))):
+                name = _d(item).get("name")
+                if not isinstance(name, str):
+                    continue
+                at = format_path(["nodes", node_name, kind, i])
+                if name in first:
+                    line = line_of(first[name]) if line_of is not None else None
+                    where = f"{first[name]}" + (f", line {line}" if line is not None else "")
+                    yield Problem(f"{at}.name", f"duplicate name '{_short(name)}' on node '{node_name}': first "
+                                                f"defined at {where}; task and handler names must be unique per "
+                                                "node: rename one")
+                else:
+                    first[name] = at
+
+
+def _ns(value: Any) -> int | None:
+    try:
+        return parse_time(value) if value is not None else None
+    except (TimeParseError, TypeError):
+        return None
+
+
+def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]]:
+    """An estimate of the events a run of ``raw`` simulates, and its largest contributions.
+
+    ``duration / period`` summed over periodic tasks, timer-triggered handlers and the plant's
+    ``record_grid``; networks, messages and program-internal timers add more, so this is a lower bound.
+
+    Returns
+    -------
+    total
+        The estimate (0 when the duration cannot be read).
+    parts
+        ``(path, count)`` per contribution, largest first.
+    """
+    duration = _ns(raw.get("duration"))
+    if not duration:
+        return 0.0, []
+    parts: list[tuple[str, float]] = []
+
+    def add(path: list[PathPart], period: Any) -> None:
+        p = _ns(period)
+        if p:
+            parts.append((format_path(path), duration / p))
+
+    plant = _d(raw.get("plant"))
+    if "record_grid" in plant:
+        add(["plant", "record_grid"], plant.get("record_grid"))
+    for node_name, node in _d(raw.get("nodes")).items():
+        for i, task in enumerate(_l(_d(node).get("tasks"))):
+            task = _d(task)
+            if task.get("release", "periodic") == "periodic":
+                add(["nodes", str(node_name), "tasks", i, "period"], task.get("period"))
+        for i, handler in enumerate(_l(_d(node).get("handlers"))):
+            timer = _d(_d(_d(handler).get("trigger")).get("timer"))
+            if timer.get("period") is not None:
+                add(["nodes", str(node_name), "handlers", i, "trigger", "timer", "period"], timer.get("period"))
+    parts.sort(key=lambda p: -p[1])
+    return float(sum(c for _, c in parts)), parts
+
+
+def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[Problem]:
+    """Every limit ``raw`` breaks (see the module docstring); ``line_of`` adds lines to cross references."""
+    problems: list[Problem] = []
+    for key, value in raw.items():
+        if key in SKIPPED:
+            continue
+        for parts, number in _numbers(value, (key,)):
+            if parts == ("seed",) and isinstance(number, int):
+                continue
+            msg = _number_problem(number)
+            if msg:
+                problems.append(Problem(format_path(list(parts)), msg))
+    problems += _name_problems(raw)
+    problems += _structure_problems(raw, line_of)
+    total, parts = expected_events(raw)
+    if total > EVENTS_WARN:
+        top = ", ".join(f"{path}: {count:.3g}" for path, count in parts[:3])
+        problems.append(Problem("duration", f"this run simulates at least {total:.3g} events (duration / period "
+                                            f"summed: {top}); it may take very long: shorten 'duration' or lengthen "
+                                            "those periods if that was not meant", severity=WARNING))
+    return problems
