@@ -7,7 +7,7 @@ What is checked
 ---------------
 - Every number is finite and ``|x| <=`` :data:`netsim.units.NUMBER_LIMIT` (1e15); NaN and inf are refused
   (``seed`` is exempt from the magnitude limit: it is an identifier, not a quantity).
-- Names (the scenario's ``name``, the keys of ``nodes``, ``networks``, ``signals``, ``io``, and task and
+- Names (the keys of ``nodes``, ``networks``, ``signals``, ``io``, and task and
   handler ``name`` fields) are at most :data:`NAME_MAX` characters (they become file and column names).
 - ``nodes``, when given, names at least one node; a node whose ``tasks`` is written as an empty list and that
   has no handlers is refused, a node with neither key is a warning (it runs nothing); task and handler names are unique per node (the message names the first definition, with its line
@@ -25,13 +25,15 @@ from typing import Any, Callable, Final, Iterator
 
 from netsim.scenario.paths import PathPart, format_path
 from netsim.scenario.problems import WARNING, Problem
+from netsim.scenario.schema import MAX_NAME_LENGTH
 from netsim.timebase import TimeParseError, parse_time
 from netsim.units import NUMBER_LIMIT
 
 __all__ = ["NAME_MAX", "EVENTS_WARN", "LineOf", "limit_problems", "expected_events"]
 
-#: Longest name (scenario, node, task, handler, network, signal, io channel), in characters.
-NAME_MAX: Final[int] = 100
+#: Longest name (node, task, handler, network, signal, io channel; the schema limits the scenario's own name to
+#: the same), in characters.
+NAME_MAX: Final[int] = MAX_NAME_LENGTH
 #: Expected event count above which validate warns (about a minute of simulation at 1e5 events/s and more).
 EVENTS_WARN: Final[float] = 1e7
 #: Sections whose keys are names.
@@ -88,9 +90,6 @@ def _name_problems(raw: dict[str, Any]) -> Iterator[Problem]:
                     "characters (they become file and column names): use a shorter name")
         return None
 
-    msg = too_long(raw.get("name"), "scenario name")
-    if msg:
-        yield Problem("name", msg)
     for section in NAMED_SECTIONS:
         for key in _d(raw.get(section)):
             msg = too_long(key, f"{section} name")

@@ -49,7 +49,7 @@ from typing import Any, Iterable
 from pydantic import BaseModel, ValidationError
 
 from netsim.errors import ConfigError
-from netsim.scenario.limits import LineOf, limit_problems
+from netsim.scenario.limits import NAME_MAX, LineOf, limit_problems
 from netsim.scenario.messages import problems_from_validation_error
 from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path, set_path
 from netsim.scenario.problems import WARNING, Problem, ScenarioError
@@ -202,7 +202,7 @@ class _Checker:
         self.signal_specs()
         self.network_specs()
         for name, node in _d(self.raw.get("nodes")).items():
-            if isinstance(name, str) and isinstance(node, dict):
+            if isinstance(name, str) and len(name) <= NAME_MAX and isinstance(node, dict):  # limits: long names
                 self.node(name, node)
         self.metrics()
         self.record(outputs)

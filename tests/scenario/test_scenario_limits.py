@@ -1,0 +1,172 @@
+"""Limits of a scenario: absurd times and numbers, long and empty names, empty lists, duplicates, run size."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from ruamel.yaml import YAML
+
+from netsim.scenario import check_scenario
+from netsim.scenario.limits import EVENTS_WARN, NAME_MAX, expected_events
+from netsim.timebase import MAX_TIME, S, TimeParseError, parse_time
+from netsim.units import NUMBER_LIMIT
+
+
+def _errors(raw):
+    return {p.path: p.message for p in check_scenario(raw) if p.is_error}
+
+
+def _warnings(raw):
+    return {p.path: p.message for p in check_scenario(raw) if not p.is_error}
+
+
+@pytest.mark.parametrize("text", ["3e10 s", "1e300 s", "1e20 ns", "99999999999999999999 s", "1e999999999 s",
+                                  "1000000000.000000001 s", "-2e9 s"])
+def test_times_beyond_the_limit_are_refused_with_the_limit(text):
+    with pytest.raises(TimeParseError, match=r"beyond netsim's limit of 1e9 s .*write a shorter time"):
+        parse_time(text, allow_negative=True)
+
+
+def test_the_time_limit_itself_is_accepted():
+    # MAX_TIME is 10**18 ns = 1e9 s exactly (documented in netsim.timebase)
+    assert MAX_TIME == 10**18
+    assert parse_time("1e9 s") == 10**18 and parse_time("1000000000 s") == MAX_TIME
+
+
+def test_absurd_duration_and_period_are_refused_at_their_paths(base):
+    raw = base()
+    raw["duration"] = "1e300 s"
+    raw["nodes"]["sensor"]["tasks"][0]["period"] = "1e20 ns"
+    errors = _errors(raw)
+    assert "beyond netsim's limit" in errors["duration"]
+    assert "beyond netsim's limit" in errors["nodes.sensor.tasks[0].period"]
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf, 1e308, 10**30])
+def test_non_finite_and_huge_numbers_are_refused_everywhere(base, bad):
+    """Typed fields (signal value), untyped plugin parameters (plant gain) and list items (x0)."""
+    raw = base()
+    raw["plant"]["params"]["gain"] = bad
+    raw["plant"]["x0"] = [0.0, bad]
+    raw["signals"]["r"]["value"] = bad
+    errors = _errors(raw)
+    for path in ("plant.params.gain", "plant.x0[1]", "signals.r.value"):
+        assert path in errors, (path, errors)
+    assert f"{NUMBER_LIMIT:g}" in errors["plant.params.gain"]  # the message gives the valid range
+
+
+def test_nan_written_as_text_is_refused_by_float_fields(base):
+    """YAML reads a plain ``nan`` as the text 'nan'; pydantic would turn it into a float NaN."""
+    raw = base()
+    raw["signals"]["r"]["value"] = "nan"
+    assert "signals.r.value" in _errors(raw)
+
+
+def test_numbers_at_the_limit_are_fine(base):
+    raw = base()
+    raw["plant"]["params"]["gain"] = NUMBER_LIMIT
+    assert _errors(raw) == {}
+
+
+def test_a_huge_seed_is_an_identifier_not_a_quantity(base):
+    raw = base()
+    raw["seed"] = 2**80
+    assert "seed" not in _errors(raw)
+
+
+def test_a_million_character_name_is_refused_at_validate_with_a_short_message(base):
+    raw = base()
+    long = "n" * 10**6
+    raw["nodes"][long] = raw["nodes"].pop("actuator")
+    raw["name"] = "s" * 10**6
+    problems = [p for p in check_scenario(raw) if p.is_error]
+    by_path = {p.path: p.message for p in problems}
+    assert f"at most {NAME_MAX} characters" in by_path["nodes"] and "1000000 characters" in by_path["nodes"]
+    assert f"at most {NAME_MAX} characters" in by_path["name"]  # the schema's limit (MAX_NAME_LENGTH)
+    # nothing echoes the name whole (the old "known nodes" list did)
+    assert max(len(str(p)) for p in problems) < 1000
+
+
+def test_a_name_of_the_limit_is_fine(base):
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"][0]["name"] = "t" * NAME_MAX
+    assert _errors(raw) == {}
+    raw["nodes"]["sensor"]["tasks"][0]["name"] = "t" * (NAME_MAX + 1)
+    assert list(_errors(raw)) == ["nodes.sensor.tasks[0].name"]
+
+
+def test_empty_nodes_is_refused(base):
+    raw = base()
+    raw["nodes"] = {}
+    raw["networks"] = {}
+    raw["io"] = {}
+    raw["metrics"] = []
+    assert "is empty" in _errors(raw)["nodes"]
+
+
+def test_empty_task_list_without_handlers_is_refused_and_an_idle_node_warns(base):
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"] = []
+    assert "empty 'tasks' list" in _errors(raw)["nodes.sensor.tasks"]
+    raw = base()
+    raw["nodes"]["idle"] = {"policy": "fp"}
+    assert _errors(raw) == {}
+    assert "runs no task and no handler" in _warnings(raw)["nodes.idle"]
+
+
+@pytest.mark.xfail(strict=True, reason="needs the loader to pass its line index: check_raw(raw, index.line_of)")
+def test_duplicate_task_names_name_the_first_definition_with_its_line(tmp_path, base):
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"].append(dict(raw["nodes"]["sensor"]["tasks"][0]))
+    path = tmp_path / "dup.yaml"
+    with open(path, "w") as fh:
+        YAML(typ="safe", pure=True).dump(raw, fh)
+    lines = path.read_text().splitlines()
+    first = next(i for i, ln in enumerate(lines, 1) if ln.strip() == "- execution: 0.5 ms")  # tasks[0] starts here
+    (dup,) = [p for p in check_scenario(path) if p.is_error]
+    assert dup.path == "nodes.sensor.tasks[1].name"
+    assert f"first defined at nodes.sensor.tasks[0], line {first}" in dup.message
+
+
+def test_duplicate_node_keys_are_refused_with_their_line(tmp_path):
+    path = tmp_path / "dupnode.yaml"
+    path.write_text("name: d\nduration: 1 s\nnodes:\n  a: {tasks: []}\n  a: {tasks: []}\n")
+    (p,) = check_scenario(path)
+    assert p.line == 5 and "duplicate key" in p.message
+
+
+def test_duplicate_task_names_name_the_first_definition(base):
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"].append(dict(raw["nodes"]["sensor"]["tasks"][0]))
+    assert _errors(raw) == {"nodes.sensor.tasks[1].name": "duplicate name 'sample' on node 'sensor': first defined at "
+                            "nodes.sensor.tasks[0]; task and handler names must be unique per node: rename one"}
+
+
+def test_check_raw_gives_the_line_of_the_first_definition_when_it_can(base):
+    from netsim.scenario.validate import check_raw
+
+    raw = base()
+    raw["nodes"]["sensor"]["tasks"].append(dict(raw["nodes"]["sensor"]["tasks"][0]))
+    lines = {"nodes.sensor.tasks[0]": 17}
+    problems, _ = check_raw(raw, lines.get)
+    assert [p.message for p in problems if p.path == "nodes.sensor.tasks[1].name"] == [
+        "duplicate name 'sample' on node 'sensor': first defined at nodes.sensor.tasks[0], line 17; task and "
+        "handler names must be unique per node: rename one"]
+
+
+def test_expected_event_count_warns_with_the_estimate(base):
+    raw = base()
+    raw["duration"] = "1000 s"
+    raw["nodes"]["sensor"]["tasks"][0]["period"] = "10 us"
+    total, parts = expected_events(raw)
+    # 1000 s / 10 us = 1e8 jobs of the sampler (the only periodic item of the base scenario)
+    assert total == pytest.approx(1000 * S / 10_000) and total > EVENTS_WARN
+    assert parts[0][0] == "nodes.sensor.tasks[0].period"
+    warning = _warnings(raw)["duration"]
+    assert "1e+08 events" in warning and "shorten 'duration'" in warning
+    assert _errors(raw) == {}
+
+
+def test_the_base_scenario_does_not_warn_about_its_size(base):
+    assert "duration" not in _warnings(base())
