@@ -428,9 +428,9 @@ def _close_quietly(client: Any, cluster: Any) -> None:
 
 
 def _write_json(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, sort_keys=True, allow_nan=True), encoding="utf-8")
-    os.replace(tmp, path)
+    from netsim.safe_write import write_atomic  # written after the run folder: a point without it is unfinished
+
+    write_atomic(path, json.dumps(data, indent=1, sort_keys=True, allow_nan=True))
 
 
 def read_record(folder: Path) -> dict[str, Any] | None:
