@@ -410,7 +410,7 @@ class SimEnv:
     @property
     def now(self) -> int:
         """Current simulation time in nanoseconds."""
-        return self.sim.now
+        return int(self.sim.now)
 
     def rng(self, name: str) -> np.random.Generator:
         """The random stream ``name`` (created on first use, then the same object every call)."""
