@@ -142,9 +142,13 @@ def build_parser() -> argparse.ArgumentParser:
     common.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
                         help="more log output (-vv: debug)")
     common.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help="only errors")
+    # issue 14: code from a scenario's plugins: files runs only when the user says so
+    trust = argparse.ArgumentParser(add_help=False)
+    trust.add_argument("--allow-plugins", action="store_true",
+                       help="run the Python files the scenario's plugins: list names (only if you trust them)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    p = sub.add_parser("run", parents=[common], help="run one scenario and write its run folder",
+    p = sub.add_parser("run", parents=[common, trust], help="run one scenario and write its run folder",
                        epilog=_RUN_EPILOG,
                        formatter_class=_Formatter, description="Validate and run one scenario.")
     p.add_argument("file", metavar="FILE", help="scenario YAML file")
@@ -157,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="no progress bar (there is none either when stderr is not a terminal)")
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("batch", parents=[common], help="run many scenarios in parallel, write summary.csv",
+    p = sub.add_parser("batch", parents=[common, trust], help="run many scenarios in parallel, write summary.csv",
                        epilog=_BATCH_EPILOG,
                        formatter_class=_Formatter, description="Run many scenarios (parallel processes).")
     p.add_argument("paths", nargs="+", metavar="FILE|DIR", help="scenario files or folders of them")
@@ -166,7 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_batch)
 
-    p = sub.add_parser("sweep", parents=[common], help="run a parameter sweep (locally or on a dask cluster)",
+    p = sub.add_parser("sweep", parents=[common, trust], help="run a parameter sweep (locally or on a dask cluster)",
                        epilog=_SWEEP_EPILOG,
                        formatter_class=_Formatter, description="Run a sweep file: factors over scenario fields.")
     p.add_argument("file", metavar="FILE", help="sweep YAML file")
@@ -188,7 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-plots", action="store_true", help="tables only")
     p.set_defaults(func=_cmd_report)
 
-    p = sub.add_parser("validate", parents=[common], help="check scenario files; exit code = number of problems",
+    p = sub.add_parser("validate", parents=[common, trust], help="check scenario files; exit code = number of problems",
                        epilog=_VALIDATE_EPILOG, formatter_class=_Formatter,
                        description="Check scenario files completely without running them.")
     p.add_argument("files", nargs="+", metavar="FILE", help="scenario YAML files")
@@ -521,6 +525,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from netsim.errors import ConfigError, NetsimError
 
     previous = _terminate_as_interrupt()
+    from netsim.trust import ENV_VAR
+
+    trust_before = os.environ.get(ENV_VAR)
+    if getattr(args, "allow_plugins", False):
+        os.environ[ENV_VAR] = "1"  # this command and the batch/sweep worker processes it starts
     try:
         return func(args)
     except KeyboardInterrupt as exc:
@@ -548,6 +557,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         _partial_folder(exc)
         raise
     finally:
+        if trust_before is None:
+            os.environ.pop(ENV_VAR, None)
+        else:
+            os.environ[ENV_VAR] = trust_before
         if previous is not None:
             import signal
 

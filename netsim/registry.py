@@ -4,6 +4,20 @@ The engine never imports ``models/``; case-study modules register their plants, 
 programs and the like under a *kind* and a name, and a scenario names them (``plant: {model: hdd}``) or
 gives an import path (``"models.hdd:HddPlant"``). ``netsim list`` prints the registry.
 
+Where registered things come from (issue 14: a scenario file is data, it cannot name arbitrary code):
+
+* netsim's own plugin modules and ``models`` (:data:`PLUGIN_MODULES`);
+* installed packages that declare a ``netsim.plugins`` entry point (each entry point names a module,
+  imported by :func:`load_plugins`; installing a package is the user's decision);
+* plugin files, loaded by :func:`load_plugin_file` only when the scenario's ``plugins:`` list names them and
+  the user allowed it (:mod:`netsim.trust`).
+
+A ``"module:attr"`` path (:func:`resolve`) is only another way to name a registered object: it must resolve
+to an object registered under the kind, or to a subclass of the kind's base class (:data:`KIND_BASES`, e.g.
+:class:`netsim.plant.Plant`). ``"os:system"`` or ``"subprocess:Popen"`` is refused without being called, and a
+module that is not already imported is imported only when it is one of netsim's own (``netsim.*``,
+``models.*``) or a ``netsim.plugins`` entry point.
+
 Kinds used by netsim: ``plant``, ``controller``, ``estimator``, ``trigger``, ``network``, ``policy``,
 ``program`` (task/handler bodies that scenario tasks run), ``signal`` (reference/disturbance shapes),
 ``metric`` (functions computing a run's metrics from its tables),
@@ -18,14 +32,20 @@ Examples
 from __future__ import annotations
 
 import difflib
+import hashlib
 import importlib
+import importlib.util
 import logging
+import re
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, TypeVar
 
 from netsim.errors import ConfigError
 
-__all__ = ["Entry", "register", "lookup", "entries", "kinds", "load_plugins", "resolve", "is_builtin"]
+__all__ = ["Entry", "KIND_BASES", "register", "lookup", "entries", "kinds", "load_plugins", "load_plugin_file",
+           "plugin_file_loaded", "resolve", "is_builtin", "ENTRY_POINT_GROUP"]
 
 KINDS = (
     "plant",
@@ -41,6 +61,19 @@ KINDS = (
 )
 
 T = TypeVar("T")
+
+#: The base class (module, class name) a ``module:attr`` path of a kind may name besides registered objects.
+KIND_BASES: dict[str, tuple[str, str]] = {
+    "plant": ("netsim.plant", "Plant"),
+    "signal": ("netsim.signals", "Signal"),
+    "network": ("netsim.network.pipeline", "Network"),
+    "policy": ("netsim.kernel.policies", "Policy"),
+}
+
+#: Entry-point group of installed packages that bring netsim plugins (each entry point names a module).
+ENTRY_POINT_GROUP = "netsim.plugins"
+
+_DOTTED = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
 
 
 @dataclass(frozen=True)
@@ -59,6 +92,12 @@ _PLUGIN_FAILURES: list[tuple[str, str]] = []
 _log = logging.getLogger(__name__)
 
 #: Modules imported by :func:`load_plugins` so their ``register`` calls run.
+#: Modules imported from installed packages' ``netsim.plugins`` entry points (filled by :func:`load_plugins`).
+_ENTRY_POINT_MODULES: list[str] = []
+#: Plugin files already executed: resolved path -> module name.
+_PLUGIN_FILES: dict[str, str] = {}
+
+
 PLUGIN_MODULES: list[str] = [
     "netsim.kernel",
     "netsim.network",
@@ -106,7 +145,71 @@ def load_plugins() -> list[tuple[str, str]]:
         except Exception as exc:  # a broken plugin must not hide the others
             _PLUGIN_FAILURES.append((mod, f"{type(exc).__name__}: {exc}"))
             _log.warning("could not load plugin module %s: %s", mod, exc)
+    for mod in _entry_point_modules():
+        try:
+            importlib.import_module(mod)
+            _ENTRY_POINT_MODULES.append(mod)
+        except Exception as exc:  # noqa: BLE001 - an installed plugin package that is broken
+            _PLUGIN_FAILURES.append((mod, f"{type(exc).__name__}: {exc}"))
+            _log.warning("could not load plugin module %s (entry point %s): %s", mod, ENTRY_POINT_GROUP, exc)
     return list(_PLUGIN_FAILURES)
+
+
+def _entry_point_modules() -> list[str]:
+    """Modules named by the ``netsim.plugins`` entry points of installed packages (``module`` or ``module:x``)."""
+    from importlib import metadata
+
+    try:
+        points = metadata.entry_points(group=ENTRY_POINT_GROUP)
+    except Exception:  # noqa: BLE001 - broken package metadata must not stop netsim
+        _log.warning("could not read the %s entry points", ENTRY_POINT_GROUP, exc_info=True)
+        return []
+    return sorted({ep.value.partition(":")[0].strip() for ep in points})
+
+
+def plugin_file_loaded(path: str | Path) -> bool:
+    """True when the plugin file ``path`` (by resolved path) already ran in this process."""
+    return str(Path(path).resolve()) in _PLUGIN_FILES
+
+
+def load_plugin_file(path: str | Path) -> str:
+    """Execute the Python file ``path`` once as a module, so that its ``register`` calls run.
+
+    Only :mod:`netsim.scenario.loader` calls this, for the files a scenario's ``plugins:`` list names and only
+    when the user allowed plugins (:mod:`netsim.trust`). The same file (by resolved path) runs once per process.
+
+    Returns
+    -------
+    str
+        The module name the file was loaded as (``netsim_plugin_<stem>_<hash>``, also in ``sys.modules``).
+
+    Raises
+    ------
+    ConfigError
+        When the file is missing or raises while it runs (the error is named, the traceback is logged).
+    """
+    real = Path(path).resolve()
+    key = str(real)
+    if key in _PLUGIN_FILES:
+        return _PLUGIN_FILES[key]
+    if not real.is_file():
+        raise ConfigError(f"plugin file not found: {path}; fix the path in the scenario's plugins: list "
+                          "(relative to the scenario file)")
+    stem = re.sub(r"[^A-Za-z0-9_]", "_", real.stem)[:40]
+    name = f"netsim_plugin_{stem}_{hashlib.sha256(key.encode()).hexdigest()[:8]}"
+    spec = importlib.util.spec_from_file_location(name, real)
+    if spec is None or spec.loader is None:
+        raise ConfigError(f"cannot load plugin file {path}: not a Python source file")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # noqa: BLE001 - the user's plugin file may raise anything
+        del sys.modules[name]
+        _log.debug("plugin file %s failed", path, exc_info=True)
+        raise ConfigError(f"plugin file {path} failed to load ({type(exc).__name__}: {exc}); fix the file") from None
+    _PLUGIN_FILES[key] = name
+    return name
 
 
 def entries(kind: str) -> list[Entry]:
@@ -129,7 +232,7 @@ def lookup(kind: str, name: str) -> Any:
         When the name is unknown (with the closest registered name) or the path cannot be imported.
     """
     if ":" in name:
-        return resolve(name)
+        return resolve(name, kind)
     load_plugins()
     table = _REGISTRY[kind]
     if name in table:
@@ -151,17 +254,64 @@ def is_builtin(obj: Any) -> bool:
     return any(module == m or module.startswith(m + ".") for m in PLUGIN_MODULES)
 
 
-def resolve(path: str) -> Any:
-    """Import ``"package.module:attribute"`` and return the attribute."""
+def _trusted_module(module_name: str) -> bool:
+    """Whether ``module_name`` may be imported to resolve a path: netsim's own modules and entry points."""
+    roots = ["netsim", *PLUGIN_MODULES, *_ENTRY_POINT_MODULES, *_PLUGIN_FILES.values()]
+    return any(module_name == r or module_name.startswith(r + ".") for r in roots)
+
+
+def _base(kind: str) -> type | None:
+    where = KIND_BASES.get(kind)
+    if where is None:
+        return None
+    return getattr(importlib.import_module(where[0]), where[1])
+
+
+def _is_registered(kind: str, obj: Any) -> bool:
+    return any(entry.obj is obj for entry in _REGISTRY[kind].values())
+
+
+def resolve(path: str, kind: str) -> Any:
+    """The registered plugin of ``kind`` that ``"package.module:attribute"`` names.
+
+    Nothing is called, and a module is imported only when it is already imported or is one of netsim's own,
+    a ``netsim.plugins`` entry point or a loaded plugin file; the object must be registered under ``kind``
+    or be a subclass of the kind's base class (:data:`KIND_BASES`).
+
+    Raises
+    ------
+    ConfigError
+        For a malformed path, a module that is not trusted and not loaded, a missing attribute, or an
+        object that is not a registered ``kind`` (``"os:system"``).
+    """
+    if kind not in _REGISTRY:
+        raise ValueError(f"unknown registry kind {kind!r}; known: {', '.join(KINDS)}")
     module_name, _, attr = path.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ImportError as exc:
-        raise ConfigError(f"cannot import module '{module_name}' from '{path}': {exc}") from None
+    shown = path if len(path) <= 80 else path[:80] + "..."
+    listing = f"`netsim list {kind}s`"
+    if not _DOTTED.match(module_name) or not _DOTTED.match(attr) or "__" in path:  # no __main__, __class__
+        raise ConfigError(f"'{shown}' is not a plugin path; write a registered {kind} name (see {listing}) or "
+                          "'package.module:Class'")
+    load_plugins()
+    module = sys.modules.get(module_name)
+    if module is None:
+        if not _trusted_module(module_name):
+            raise ConfigError(
+                f"'{shown}' names module '{module_name}', which netsim does not import for a scenario: name a "
+                f"registered {kind} (see {listing}), or list the file that registers it in the scenario's "
+                "'plugins:' and run with --allow-plugins")
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as exc:
+            raise ConfigError(f"cannot import module '{module_name}' from '{shown}': {exc}") from None
     try:
         obj: Any = module
         for part in attr.split("."):
             obj = getattr(obj, part)
     except AttributeError:
         raise ConfigError(f"module '{module_name}' has no attribute '{attr}'") from None
-    return obj
+    base = _base(kind)
+    if _is_registered(kind, obj) or (base is not None and isinstance(obj, type) and issubclass(obj, base)):
+        return obj
+    what = f"a registered {kind}" + (f" or a subclass of {base.__module__}.{base.__name__}" if base else "")
+    raise ConfigError(f"'{shown}' is not {what}; a scenario may name only registered plugins (see {listing})")

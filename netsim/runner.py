@@ -1,8 +1,9 @@
 """Run a scenario: load and validate, build, simulate, collect the tables, compute metrics, write the run folder.
 
-``run(source)`` is what ``netsim run FILE`` and ``netsim.run(...)`` call. The run folder goes to ``out``, else
-the scenario's ``output.dir``, else ``reports/<scenario>/<run-id>/`` (run-id = UTC time stamp + the first 8
-hex digits of the scenario hash) under the current directory.
+``run(source)`` is what ``netsim run FILE`` and ``netsim.run(...)`` call. The run folder goes to ``out`` (the
+user's choice, anywhere), else ``reports/<output.dir>`` (a scenario's ``output.dir`` is relative to the output
+root ``reports/`` and cannot leave it, issue 14), else ``reports/<scenario>/<run-id>/`` (run-id = UTC time stamp
++ the first 8 hex digits of the scenario hash) under the current directory.
 
 Failures are recorded, never lost:
 
@@ -101,6 +102,31 @@ def default_out_dir(name: str, scenario_hash: str, root: str | Path = "reports")
 
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
     return make_unique_dir(Path(root) / name / f"{stamp}-{scenario_hash[:8]}")
+
+
+#: The output root: default run folders and a scenario's ``output.dir`` live below it.
+OUTPUT_ROOT = "reports"
+
+
+def scenario_out_dir(output_dir: str, root: str | Path = OUTPUT_ROOT) -> Path:
+    """``root/output_dir`` for a scenario's ``output.dir``, refused when it would leave ``root``.
+
+    The schema already refuses absolute paths and ``..``; this also catches a symlink inside ``root`` that
+    points elsewhere.
+
+    Raises
+    ------
+    ConfigError
+        When the folder resolves outside ``root``.
+    """
+    from netsim.errors import ConfigError
+
+    base = Path(root)
+    folder = base / output_dir
+    if not folder.resolve().is_relative_to(base.resolve()):
+        raise ConfigError(f"output.dir '{output_dir[:80]}' resolves outside {root}/ (through a symlink?); a "
+                          "scenario writes only below reports/: choose another output.dir, or the folder with --out")
+    return folder
 
 
 def _mark_folder(exc: BaseException, folder: Path) -> None:
@@ -244,6 +270,7 @@ def run(
     plot: bool = False,
     write: bool = True,
     progress: Callable[[int, int], None] | None = None,
+    allow_plugins: bool | None = None,
 ) -> RunResult:
     """Run one scenario and (by default) write its run folder.
 
@@ -252,7 +279,8 @@ def run(
     source
         Scenario file path, raw mapping, or validated :class:`~netsim.scenario.schema.Scenario`.
     out
-        Run folder (default: the scenario's ``output.dir`` or ``reports/<name>/<run-id>``).
+        Run folder, anywhere (default: ``reports/<output.dir>`` when the scenario gives ``output.dir``, else
+        ``reports/<name>/<run-id>``).
     seed
         Overrides the scenario seed.
     overrides
@@ -264,6 +292,9 @@ def run(
     progress
         Optional ``progress(t_ns, t_end_ns)`` called about every 1 % of the run's simulated time (not during a
         baseline run); results are identical with and without it.
+    allow_plugins
+        Whether the Python files the scenario's ``plugins:`` list names may run (None: the user's settings,
+        :mod:`netsim.trust`); a scenario naming files that are not allowed is refused (``ScenarioError``).
 
     Returns
     -------
@@ -294,12 +325,12 @@ def run(
     ov = dict(overrides or {})
     if seed is not None:
         ov["seed"] = int(seed)
-    scenario = load_scenario(source, overrides=ov or None)
+    scenario = load_scenario(source, overrides=ov or None, allow_plugins=allow_plugins)
     digest = scenario_hash(scenario)
     folder: Path | None = None
     if write:
         folder = check_out_dir(out if out is not None else (
-            scenario.output.dir if scenario.output.dir else default_out_dir(scenario.name, digest)))
+            scenario_out_dir(scenario.output.dir) if scenario.output.dir else default_out_dir(scenario.name, digest)))
         folder.mkdir(parents=True, exist_ok=True)  # before the run: incomplete (no meta.json) until written
 
     base_sc = scenario.baseline_scenario()

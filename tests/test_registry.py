@@ -20,17 +20,23 @@ def test_unknown_name_suggests_the_closest_registered_one():
         lookup("signal", "test_registry_shap")
 
 
-def test_module_path_resolves_without_registration():
-    from netsim import timebase
+def test_module_path_names_a_registered_object():
+    assert lookup("signal", f"{__name__}:_Shape") is _Shape
 
-    assert lookup("plant", "netsim.timebase:parse_time") is timebase.parse_time
+
+def test_module_path_to_an_unregistered_function_is_refused():
+    # issue 14: a path is another spelling of a registered plugin, never an arbitrary callable
+    with pytest.raises(ConfigError, match="is not a registered plant or a subclass of netsim.plant.Plant"):
+        lookup("plant", "netsim.timebase:parse_time")
 
 
 def test_bad_module_path_is_a_config_error():
+    with pytest.raises(ConfigError, match="which netsim does not import for a scenario"):
+        resolve("no_such_module_xyz:Thing", "plant")
     with pytest.raises(ConfigError, match="cannot import module"):
-        resolve("no_such_module_xyz:Thing")
+        resolve("netsim.no_such_module_xyz:Thing", "plant")
     with pytest.raises(ConfigError, match="has no attribute"):
-        resolve("netsim.timebase:no_such_thing")
+        resolve("netsim.timebase:no_such_thing", "plant")
 
 
 def test_unknown_kind_is_rejected():

@@ -29,6 +29,7 @@ import io
 import json
 import logging
 import os
+from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from pydantic import BaseModel, ValidationError
@@ -134,7 +135,7 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
     from ruamel.yaml import YAML
     from ruamel.yaml.error import MarkedYAMLError, YAMLError
 
-    from netsim.scenario.safe_yaml import YamlRefused, check_events, read_text
+    from netsim.scenario.safe_yaml import YamlRefused, check_events, check_flow_depth, read_text
 
     name = os.fspath(path)
     try:
@@ -145,6 +146,7 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
         raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None
     yaml = YAML(typ="rt", pure=True)
     try:
+        check_flow_depth(text)
         check_events(yaml.parse(io.StringIO(text)))  # depth, tags, alias expansion: before anything is built
         data = yaml.load(io.StringIO(text))
     except YamlRefused as exc:
@@ -172,7 +174,50 @@ def _plain_copy(data: Any) -> Any:
     return _to_plain(copy.deepcopy(data), (), LineIndex())
 
 
-def _gather(source: Source, overrides: Mapping[str, Any] | None) -> tuple[list[Problem], Scenario | None]:
+def _plugin_files(raw: dict[str, Any], file: str | None, allow: bool | None) -> list[Problem]:
+    """Run the plugin files ``raw["plugins"]`` names, if the user allows it; the problems otherwise.
+
+    Each entry is resolved relative to the scenario file (the current folder for a mapping) and written back
+    as an absolute path, so a baseline or a sweep point loaded from the raw data finds the same file. A file
+    this process already ran (the user allowed it before) is not asked about again.
+    """
+    from netsim import registry
+    from netsim.trust import plugins_allowed
+
+    entries = raw.get("plugins")
+    if not isinstance(entries, list):
+        return []  # absent, or a wrong type the schema reports
+    base = Path(file).parent if file else Path.cwd()
+    problems: list[Problem] = []
+    resolved: list[Any] = []
+    for i, entry in enumerate(entries):
+        if not isinstance(entry, str) or not entry.strip():
+            resolved.append(entry)
+            if isinstance(entry, str):
+                problems.append(Problem(f"plugins[{i}]", "empty plugin file name; write the path of a .py file"))
+            continue
+        path = (base / entry).resolve()
+        resolved.append(str(path))
+        where = f"plugins[{i}]"
+        if path.suffix != ".py":
+            problems.append(Problem(where, f"a plugin file is a Python file ending in .py, not '{entry[:80]}'"))
+        elif not path.is_file():
+            problems.append(Problem(where, f"plugin file not found: {path}; fix the path (relative to the "
+                                    "scenario file)"))
+        elif registry.plugin_file_loaded(path) or plugins_allowed(allow):
+            try:
+                registry.load_plugin_file(path)
+            except ConfigError as exc:
+                problems.append(Problem(where, exc.message))
+        else:
+            problems.append(Problem(where, f"this scenario loads code from {path}; rerun with --allow-plugins if "
+                                    "you trust it (Python: allow_plugins=True)"))
+    raw["plugins"] = resolved
+    return problems
+
+
+def _gather(source: Source, overrides: Mapping[str, Any] | None,
+            allow_plugins: bool | None = None) -> tuple[list[Problem], Scenario | None]:
     """Every problem of ``source`` (located) and the scenario when there is no error."""
     file: str | None = None
     index = LineIndex()
@@ -210,6 +255,7 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None) -> tuple[list[P
             set_path(raw, key, _plain_copy(value))
         except ConfigError as exc:
             problems.append(Problem(key, f"cannot apply override: {exc.message}"))
+    problems += _plugin_files(raw, file, allow_plugins)  # before any plugin name is looked up
 
     scenario: Scenario | None = None
     try:
@@ -252,7 +298,8 @@ def _attach(scenario: Scenario, validated: Mapping[str, Any]) -> None:
             spec.attach_validated(validated[path])
 
 
-def check_scenario(source: Source, overrides: Mapping[str, Any] | None = None) -> list[Problem]:
+def check_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
+                   allow_plugins: bool | None = None) -> list[Problem]:
     """Every problem (errors and warnings) in a scenario file or dict; never raises for user mistakes.
 
     Parameters
@@ -261,17 +308,21 @@ def check_scenario(source: Source, overrides: Mapping[str, Any] | None = None) -
         Path of a YAML file, a raw mapping, or a :class:`Scenario`.
     overrides
         ``{"dotted.path": value}`` applied to the raw data before validation.
+    allow_plugins
+        Whether the plugin files the scenario's ``plugins:`` names may run (None: the user's settings,
+        :func:`netsim.trust.plugins_allowed`). Refused files are error problems.
 
     Returns
     -------
     list[Problem]
         Sorted by line; empty when the scenario is valid and clean.
     """
-    problems, _ = _gather(source, overrides)
+    problems, _ = _gather(source, overrides, allow_plugins)
     return problems
 
 
-def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None) -> Scenario:
+def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
+                  allow_plugins: bool | None = None) -> Scenario:
     """Load and validate a scenario; warnings are logged.
 
     Parameters
@@ -281,13 +332,16 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None) ->
         unless ``overrides`` are given).
     overrides
         ``{"dotted.path": value}`` applied before validation (``{"networks.can.bitrate": "1 Mbit/s"}``).
+    allow_plugins
+        Whether the plugin files the scenario's ``plugins:`` names may run (None: the user's settings,
+        :func:`netsim.trust.plugins_allowed`; a scenario naming a file that is not allowed does not load).
 
     Raises
     ------
     ScenarioError
         Listing every problem (with path, line and file) when there is at least one error.
     """
-    problems, scenario = _gather(source, overrides)
+    problems, scenario = _gather(source, overrides, allow_plugins)
     if scenario is None:
         raise ScenarioError(problems or [Problem("", "invalid scenario")])
     for p in problems:
@@ -315,6 +369,8 @@ def resolved_dict(scenario: Scenario) -> dict[str, Any]:
     scenario files, so the result loads back into an equal scenario.
     """
     data = scenario.model_dump(mode="json")
+    if not data.get("plugins"):
+        data.pop("plugins", None)  # most scenarios have none: their resolved form (and hash) stays as it was
     for path, spec in scenario.plugin_specs():
         params = _params_json(spec)
         parts = parse_path(path)

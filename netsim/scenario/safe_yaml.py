@@ -25,7 +25,8 @@ import stat
 from dataclasses import dataclass
 from typing import Any, Iterable
 
-__all__ = ["MAX_FILE_BYTES", "MAX_DEPTH", "MAX_VALUES", "MAX_CHARS", "YamlRefused", "read_text", "check_events"]
+__all__ = ["MAX_FILE_BYTES", "MAX_DEPTH", "MAX_VALUES", "MAX_CHARS", "YamlRefused", "read_text", "check_flow_depth",
+           "check_events"]
 
 #: Largest scenario file read (bytes). The shipped scenarios are under 20 kB.
 MAX_FILE_BYTES = 2 * 1024 * 1024
@@ -104,6 +105,33 @@ def read_text(name: str) -> str:
     except UnicodeDecodeError as exc:
         raise YamlRefused(f"the file is not UTF-8 text (byte 0x{data[exc.start]:02x} cannot be decoded); "
                           "save it as UTF-8", data.count(b"\n", 0, exc.start) + 1) from None
+
+
+_BRACKETS = re.compile(r"[\[\]{}]")
+
+
+def check_flow_depth(text: str) -> None:
+    """Refuse text whose ``[``/``{`` brackets open more than :data:`MAX_DEPTH` levels.
+
+    ruamel's scanner takes time quadratic in the depth of nested flow collections (2 s for 1000 levels) before
+    it yields the first event, so this cheap count runs first. Brackets inside quoted text count too: a real
+    scenario never comes near the limit.
+
+    Raises
+    ------
+    YamlRefused
+        With the line of the bracket that went past the limit.
+    """
+    depth = 0
+    for m in _BRACKETS.finditer(text):
+        if m.group() in "[{":
+            depth += 1
+            if depth > MAX_DEPTH:
+                raise YamlRefused(f"the data nests more than {MAX_DEPTH} levels deep (counting '[' and '{{'); a "
+                                  "scenario nests a few levels (flatten the structure)",
+                                  text.count("\n", 0, m.start()) + 1)
+        elif depth:
+            depth -= 1
 
 
 @dataclass

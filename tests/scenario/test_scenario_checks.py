@@ -336,12 +336,16 @@ def test_a_broken_plugin_module_becomes_a_warning_not_a_crash(tmp_path, monkeypa
     sys.modules.pop("zzt_broken_plugins", None)
 
 
-def test_module_path_plugins_resolve(tmp_path, monkeypatch, base):
-    (tmp_path / "zzt_user_plugins.py").write_text(
+def test_plugin_files_register_programs_when_allowed(tmp_path, base):
+    # issue 14: code comes from a file the scenario's plugins: names, and runs only when allowed
+    plugin = tmp_path / "zzt_user_plugins.py"
+    plugin.write_text(
         textwrap.dedent(
             """
+            from netsim.registry import register
             from netsim.units import StrictModel
 
+            @register("program", "zzt_user_program")
             class MyProgram:
                 class Params(StrictModel):
                     gain: float
@@ -351,15 +355,14 @@ def test_module_path_plugins_resolve(tmp_path, monkeypatch, base):
             """
         )
     )
-    monkeypatch.syspath_prepend(str(tmp_path))
     raw = base()
-    raw["nodes"]["controller"]["tasks"][0].update(program="zzt_user_plugins:MyProgram", params={"gain": 2})
-    assert load_scenario(raw).nodes["controller"].tasks[0].validated_params().gain == 2.0
-    raw["nodes"]["controller"]["tasks"][0]["program"] = "zzt_user_plugins:Missing"
+    raw["plugins"] = [str(plugin)]
+    raw["nodes"]["controller"]["tasks"][0].update(program="zzt_user_program", params={"gain": 2})
+    assert load_scenario(raw, allow_plugins=True).nodes["controller"].tasks[0].validated_params().gain == 2.0
+    raw["nodes"]["controller"]["tasks"][0]["program"] = "zzt_user_progam"
     assert _problems(raw) == {
-        "nodes.controller.tasks[0].program": "module 'zzt_user_plugins' has no attribute 'Missing'"
+        "nodes.controller.tasks[0].program": "unknown program 'zzt_user_progam'; did you mean 'zzt_user_program'?"
     }
-    sys.modules.pop("zzt_user_plugins", None)
 
 
 def test_a_node_has_one_receiver_per_network(base):

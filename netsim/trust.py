@@ -1,0 +1,71 @@
+"""Whether the user allows scenarios to load code from the plugin files they name (issue 14).
+
+A scenario's ``plugins:`` list names Python files that register plugins. netsim runs such a file only when the
+user said so, in one of these ways (the first that gives an answer wins):
+
+1. the caller's own choice: ``--allow-plugins`` on the command line (``run``, ``validate``, ``batch``,
+   ``sweep``), ``allow_plugins=True`` in :func:`netsim.run` / :func:`netsim.load_scenario`
+   (``allow_plugins=False`` refuses even when the settings below allow);
+2. the environment variable ``NETSIM_ALLOW_PLUGINS`` (``1``/``true``/``yes`` allow, ``0``/``false``/``no``
+   refuse); ``--allow-plugins`` sets it for the worker processes of a batch or a sweep;
+3. the per-user file ``$XDG_CONFIG_HOME/netsim/config.toml`` (default ``~/.config/netsim/config.toml``) with
+   ``allow_plugins = true``.
+
+Otherwise plugin files are refused: validation reports "this scenario loads code from <file>; rerun with
+--allow-plugins if you trust it".
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+
+__all__ = ["ENV_VAR", "config_path", "plugins_allowed"]
+
+#: Environment variable that allows (or refuses) plugin files.
+ENV_VAR = "NETSIM_ALLOW_PLUGINS"
+
+_log = logging.getLogger(__name__)
+_YES = {"1", "true", "yes", "on"}
+_NO = {"0", "false", "no", "off", ""}
+
+
+def config_path() -> Path:
+    """The per-user config file: ``$XDG_CONFIG_HOME/netsim/config.toml`` or ``~/.config/netsim/config.toml``."""
+    root = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
+    return Path(root) / "netsim" / "config.toml"
+
+
+def _from_config() -> bool:
+    import tomllib
+
+    path = config_path()
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        return False
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        _log.warning("ignoring %s: %s", path, exc)
+        return False
+    value = data.get("allow_plugins", False)
+    if not isinstance(value, bool):
+        _log.warning("ignoring allow_plugins in %s: write allow_plugins = true or false", path)
+        return False
+    return value
+
+
+def plugins_allowed(explicit: bool | None = None) -> bool:
+    """True when plugin files may run: ``explicit`` if given, else the environment, else the user's config."""
+    if explicit is not None:
+        return bool(explicit)
+    env = os.environ.get(ENV_VAR)
+    if env is not None:
+        text = env.strip().lower()
+        if text in _YES:
+            return True
+        if text not in _NO:
+            _log.warning("ignoring %s=%r: use 1 or 0", ENV_VAR, env)
+        return False
+    return _from_config()
