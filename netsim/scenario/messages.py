@@ -159,7 +159,7 @@ def _message(err: dict[str, Any], root: type[BaseModel] | None) -> tuple[list[Pa
         return path, f"unknown key '{key}'{hint}"
     if kind == "missing":
         key = str(loc[-1]) if loc else "?"
-        return path, f"missing required key '{key}'"
+        return path, f"missing required key '{key}'; add '{key}: ...' there"
     if loc and loc[-1] == "[key]":
         if kind == "string_pattern_mismatch":
             return path, f"invalid name {show_value(value)}: use only letters, digits, '_' and '-'"

@@ -195,8 +195,8 @@ def test_top_level_that_is_not_a_mapping(tmp_path):
 
 def test_missing_required_keys():
     assert {(p.path, p.message) for p in _errors({"nodes": {}})} == {
-        ("name", "missing required key 'name'"),
-        ("duration", "missing required key 'duration'"),
+        ("name", "missing required key 'name'; add 'name: ...' there"),
+        ("duration", "missing required key 'duration'; add 'duration: ...' there"),
         ("nodes", "'nodes' is empty; a scenario needs at least one node with a task or a handler "
                   "(add one, e.g. 'nodes: {cpu: {tasks: [...]}}')"),
     }
