@@ -195,7 +195,7 @@ class Sampler:
         channel: str
         network: str | None = None
         to: Destination
-        bits: int = 80
+        bits: int = Field(80, ge=1, le=10**9)
         priority: int = 0
         tag: str = "y"
         key: str = "y"
@@ -334,10 +334,10 @@ class Interference:
     class Params(StrictModel):
         network: str
         to: Destination
-        bits: int = 80
+        bits: int = Field(80, ge=1, le=10**9)
         priority: int = 0
-        share: float = 1.0
-        rate: float | None = None
+        share: float = Field(1.0, ge=0, le=1)
+        rate: float | None = Field(None, gt=0)
         tag: str = "interference"
 
         @field_validator("to")

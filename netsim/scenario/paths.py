@@ -65,7 +65,7 @@ def did_you_mean(word: str, candidates: Iterable[str], *, what: str = "") -> str
     if what:
         shown = [n if len(n) <= _SHOWN else f"{n[:_SHOWN - 3]}... ({len(n)} characters)" for n in names[:_LISTED]]
         more = f" and {len(names) - _LISTED} more" if len(names) > _LISTED else ""
-        return f" (known {what}: {', '.join(shown)}{more})" if names else f" (there are no {what})"
+        return f" (known {what}: {', '.join(shown)}{more})" if names else f" (there are no {what}: define one first, or remove this reference)"
     return ""
 
 
