@@ -21,7 +21,7 @@ def test_output_dir_cannot_leave_the_output_root(scenario, folder):
     assert "--out" in errors["output.dir"]
 
 
-@pytest.mark.parametrize("name", ["../evil", "a/b", "/abs", "x" * 1_000_000])
+@pytest.mark.parametrize("name", ["x" * 101, "x" * 1_000_000])  # '/' and '..' were refused already
 def test_a_name_that_cannot_be_a_folder_name_is_refused_at_validate(scenario, name):
     raw = scenario()
     raw["name"] = name
@@ -58,6 +58,7 @@ def test_a_symlink_under_reports_does_not_lead_out(tmp_path, monkeypatch, scenar
 
 
 def test_planted_symlinks_in_the_run_folder_are_replaced_not_followed(tmp_path, scenario):
+    # a guard: netsim.safe_write already replaced planted links before issue 14's changes (this passed before)
     from netsim.runner import run
 
     victim = tmp_path / "victim.txt"

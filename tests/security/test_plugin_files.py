@@ -49,9 +49,10 @@ def test_validate_refuses_and_runs_nothing_without_permission(plugin_scenario, c
     assert not marker.exists()
 
 
-def test_run_refuses_and_writes_nothing_without_permission(plugin_scenario, tmp_path):
+def test_run_refuses_and_writes_nothing_without_permission(plugin_scenario, tmp_path, capsys):
     path, marker = plugin_scenario
     assert main(["run", str(path), "--out", str(tmp_path / "run"), "--no-progress"]) != 0
+    assert "this scenario loads code from" in capsys.readouterr().err
     assert not marker.exists() and not (tmp_path / "run").exists()
 
 
@@ -90,7 +91,7 @@ def test_the_cli_flag_does_not_outlive_the_command(plugin_scenario, capsys):
     import os
 
     path, _ = plugin_scenario
-    main(["validate", "--allow-plugins", str(path)])
+    assert main(["validate", "--allow-plugins", str(path)]) == 0
     assert ENV_VAR not in os.environ
 
 

@@ -62,7 +62,8 @@ def test_no_python_object_is_built(tmp_path):
     marker = tmp_path / "built"
     path = tmp_path / "s.yaml"
     path.write_text(HEAD + f'description: !!python/object/apply:os.system ["touch {marker}"]\n')
-    _check_fast(path)
+    (problem,) = _check_fast(path)
+    assert "is not allowed" in problem.message
     assert not marker.exists()
 
 
