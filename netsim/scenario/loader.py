@@ -135,7 +135,7 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
     from ruamel.yaml import YAML
     from ruamel.yaml.error import MarkedYAMLError, YAMLError
 
-    from netsim.scenario.safe_yaml import YamlRefused, check_events, check_flow_depth, read_text
+    from netsim.scenario.safe_yaml import YamlRefused, check_events, check_flow_depth, needs_event_check, read_text
 
     name = os.fspath(path)
     try:
@@ -147,7 +147,8 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
     yaml = YAML(typ="rt", pure=True)
     try:
         check_flow_depth(text)
-        check_events(yaml.parse(io.StringIO(text)))  # depth, tags, alias expansion: before anything is built
+        if needs_event_check(text):
+            check_events(yaml.parse(io.StringIO(text)))  # depth, tags, alias expansion: before anything is built
         data = yaml.load(io.StringIO(text))
     except YamlRefused as exc:
         raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import Any, Iterable
 
 __all__ = ["MAX_FILE_BYTES", "MAX_DEPTH", "MAX_VALUES", "MAX_CHARS", "YamlRefused", "read_text", "check_flow_depth",
-           "check_events"]
+           "needs_event_check", "check_events"]
 
 #: Largest scenario file read (bytes). The shipped scenarios are under 20 kB.
 MAX_FILE_BYTES = 2 * 1024 * 1024
@@ -132,6 +132,22 @@ def check_flow_depth(text: str) -> None:
                                   text.count("\n", 0, m.start()) + 1)
         elif depth:
             depth -= 1
+
+
+_INDENT = re.compile(r"^[ ]+", re.MULTILINE)
+
+
+def needs_event_check(text: str) -> bool:
+    """False when :func:`check_events` cannot find anything in ``text`` (then the second parse is skipped).
+
+    Without ``&`` there is no anchor, so no alias expands; without ``!`` there is no tag; and when no line is
+    indented more than :data:`MAX_DEPTH` spaces, block nesting is at most ``2 * (MAX_DEPTH + 1)`` levels (a
+    nested block is indented deeper, except a list directly under its key), far below what ruamel's composer
+    can recurse, with flow nesting bounded by :func:`check_flow_depth`. Most scenario files take this path.
+    """
+    if "&" in text or "!" in text:
+        return True
+    return max((len(m.group()) for m in _INDENT.finditer(text)), default=0) > MAX_DEPTH
 
 
 @dataclass

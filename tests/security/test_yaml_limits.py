@@ -29,6 +29,8 @@ CASES = {
                                          + "]\n", "aliases are expanded"),
     "nesting_1000_deep": (HEAD + "description: " + "[" * 1000 + "]" * 1000 + "\n", "levels deep"),
     "mapping_nesting_1000_deep": (HEAD + "x-d: " + "{a: " * 1000 + "1" + "}" * 1000 + "\n", "levels deep"),
+    "block_nesting_1000_deep": (HEAD + "x-d:\n" + "".join(" " * (i + 1) + f"k{i}:\n" for i in range(1000)) + " " * 1001
+                                + "v\n", "levels deep"),
     "float_tag_on_text": (HEAD + "seed: !!float abc\n", "tagged !!float"),
     "int_tag_on_0x": (HEAD + "seed: !!int 0x\n", "tagged !!int"),
     "recursive_merge_key": (HEAD + "x-a: &a\n  b: 1\n  <<: *a\n", "inside its own anchor"),
