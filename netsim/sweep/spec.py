@@ -299,14 +299,24 @@ def _read_yaml(path: Path, *, sweep_file: bool = False) -> Any:
     from ruamel.yaml import YAML
     from ruamel.yaml.error import YAMLError
 
-    try:
-        text = path.read_text(encoding="utf-8")
+    from netsim.scenario.safe_yaml import YamlRefused, check_events, check_flow_depth, read_text
+
+    try:  # issue 14: regular files only, bounded size, depth, tags and alias expansion
+        text = read_text(str(path))
     except OSError as exc:
         raise ConfigError(f"cannot read '{path}': {exc.strerror or exc}") from None
+    except YamlRefused as exc:
+        where = f" (line {exc.line})" if exc.line else ""
+        raise ConfigError(f"'{path}'{where}: {exc.message}") from None
     if sweep_file:
         text = quote_flow_paths(text)
     try:
+        check_flow_depth(text)
+        check_events(YAML(typ="safe", pure=True).parse(text))
         return YAML(typ="safe", pure=True).load(text)
+    except YamlRefused as exc:
+        where = f" (line {exc.line})" if exc.line else ""
+        raise ConfigError(f"'{path}'{where}: {exc.message}") from None
     except YAMLError as exc:
         first = str(exc).splitlines()[0]
         mark = getattr(exc, "problem_mark", None)
@@ -370,6 +380,8 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
         raw = _read_yaml(base_path)
         if not isinstance(raw, dict):
             raise ConfigError(f"{where}: base scenario '{base_path}' is not a mapping")
+        if isinstance(raw.get("plugins"), list):  # plugin files are named relative to the base scenario file
+            raw["plugins"] = [str(base_path.parent / p) if isinstance(p, str) else p for p in raw["plugins"]]
     else:
         raw = base
     _check_paths(spec, raw, where)
