@@ -102,3 +102,15 @@ def test_cli_validate_of_a_fifo_exits_non_zero(tmp_path, capsys):
     os.mkfifo(path)
     assert main(["validate", str(path)]) != 0
     assert "FIFO" in capsys.readouterr().out
+
+
+def test_a_sweep_whose_base_is_an_alias_bomb_is_refused_quickly(tmp_path):
+    from netsim.errors import ConfigError
+    from netsim.sweep.spec import load_sweep
+
+    (tmp_path / "base.yaml").write_text(_laughs())
+    (tmp_path / "sweep.yaml").write_text("sweep: s\nbase: base.yaml\nfactors:\n  sd: {paths: [seed], values: [1, 2]}\n")
+    t0 = time.perf_counter()
+    with pytest.raises(ConfigError, match="aliases are expanded") as info:
+        load_sweep(tmp_path / "sweep.yaml")
+    assert time.perf_counter() - t0 < 1.0 and len(str(info.value)) < 400
