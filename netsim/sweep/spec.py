@@ -119,7 +119,7 @@ class SurfaceSpec(StrictModel):
 class SweepSpec(StrictModel):
     """A sweep file (see the module docstring and the README section "Sweep files")."""
 
-    sweep: str = Field(pattern=r"^[A-Za-z0-9_-]+$")
+    sweep: str = Field(pattern=r"^[A-Za-z0-9_-]+$", max_length=100)  # a folder name (issue 14)
     base: str
     description: str = ""
     seed: int = Field(default=0, ge=0)
