@@ -70,3 +70,13 @@ def test_planted_symlinks_in_the_run_folder_are_replaced_not_followed(tmp_path, 
     run(scenario(), out=folder)
     assert victim.read_text() == "keep me"
     assert not (folder / "meta.json").is_symlink() and (folder / "meta.json").stat().st_size > 0
+
+
+def test_a_sweep_name_that_cannot_be_a_folder_name_is_refused(tmp_path):
+    from netsim.errors import ConfigError
+    from netsim.sweep.spec import load_sweep
+
+    with pytest.raises(ConfigError) as info:
+        load_sweep({"sweep": "s" * 1_000_000, "base": "b.yaml", "factors": {"sd": {"paths": ["seed"], "values": [1]}}},
+                   base={"name": "b", "duration": "1 s"})
+    assert "100" in str(info.value) and len(str(info.value)) < 400
