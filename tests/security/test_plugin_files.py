@@ -103,3 +103,22 @@ def test_a_plugin_entry_that_is_not_a_python_file_is_refused(tmp_path, scenario,
                 if p.is_error}
     assert "ending in .py" in problems["plugins[0]"]
     assert "plugin file not found" in problems["plugins[1]"]
+
+
+def test_batch_and_sweep_pass_the_permission_to_their_workers(plugin_scenario, tmp_path):
+    import csv
+
+    path, marker = plugin_scenario
+    assert main(["batch", str(path), "--out", str(tmp_path / "b1"), "--no-progress", "--workers", "1"]) != 0
+    with open(tmp_path / "b1" / "summary.csv") as fh:
+        assert "this scenario loads code from" in next(csv.DictReader(fh))["error"]
+    assert not marker.exists()
+    sweep = tmp_path / "sw.yaml"
+    sweep.write_text("sweep: sw\nbase: s.yaml\nfactors:\n  dur: {paths: [duration], values: [50 ms, 60 ms]}\n")
+    assert main(["sweep", str(sweep), "--out", str(tmp_path / "sw1"), "--no-progress", "--workers", "1"]) != 0
+    assert not marker.exists()
+    assert main(["sweep", "--allow-plugins", str(sweep), "--out", str(tmp_path / "sw2"), "--no-progress",
+                 "--workers", "2"]) == 0
+    assert marker.exists()
+    assert main(["batch", "--allow-plugins", str(path), "--out", str(tmp_path / "b2"), "--no-progress",
+                 "--workers", "2"]) == 0
