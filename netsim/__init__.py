@@ -2,6 +2,10 @@
 
 The public entry points are imported lazily so that ``import netsim`` (and ``netsim --help``) stays fast:
 ``netsim.run``, ``netsim.load_scenario``, ``netsim.report``, ``netsim.sweep``.
+
+``netsim.run(..., allow_plugins=True)`` and ``netsim.load_scenario(..., allow_plugins=True)`` let a scenario run
+the plugin files its ``plugins:`` list names (default: the user's settings, :mod:`netsim.trust`; see the
+README's "Security" section).
 """
 
 from __future__ import annotations

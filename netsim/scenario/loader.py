@@ -175,6 +175,9 @@ def _plain_copy(data: Any) -> Any:
     return _to_plain(copy.deepcopy(data), (), LineIndex())
 
 
+_NOT_ALLOWED = "this scenario loads code from"
+
+
 def _plugin_files(raw: dict[str, Any], file: str | None, allow: bool | None) -> list[Problem]:
     """Run the plugin files ``raw["plugins"]`` names, if the user allows it; the problems otherwise.
 
@@ -211,8 +214,8 @@ def _plugin_files(raw: dict[str, Any], file: str | None, allow: bool | None) -> 
             except ConfigError as exc:
                 problems.append(Problem(where, exc.message))
         else:
-            problems.append(Problem(where, f"this scenario loads code from {path}; rerun with --allow-plugins if "
-                                    "you trust it (Python: allow_plugins=True)"))
+            problems.append(Problem(where, f"{_NOT_ALLOWED} {path}; rerun with --allow-plugins if you trust it "
+                                    "(Python: allow_plugins=True)"))
     raw["plugins"] = resolved
     return problems
 
@@ -256,7 +259,11 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None,
             set_path(raw, key, _plain_copy(value))
         except ConfigError as exc:
             problems.append(Problem(key, f"cannot apply override: {exc.message}"))
-    problems += _plugin_files(raw, file, allow_plugins)  # before any plugin name is looked up
+    refused = _plugin_files(raw, file, allow_plugins)  # before any plugin name is looked up
+    problems += refused
+    if any(_NOT_ALLOWED in p.message for p in refused):
+        # the names the file registers are unknown until it runs: listing them as unknown would only be noise
+        return done(problems), None
 
     scenario: Scenario | None = None
     try:

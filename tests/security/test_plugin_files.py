@@ -122,3 +122,9 @@ def test_batch_and_sweep_pass_the_permission_to_their_workers(plugin_scenario, t
     assert marker.exists()
     assert main(["batch", "--allow-plugins", str(path), "--out", str(tmp_path / "b2"), "--no-progress",
                  "--workers", "2"]) == 0
+
+
+def test_a_refused_plugin_file_is_the_only_problem_reported(plugin_scenario):
+    path, _ = plugin_scenario
+    problems = [p for p in check_scenario(path) if p.is_error]
+    assert [p.path for p in problems] == ["plugins[0]"]  # not also "unknown program" for what the file registers
