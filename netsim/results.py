@@ -428,7 +428,7 @@ class RunResult:
         meta = json.loads((folder / "meta.json").read_text(encoding="utf-8")) if (folder / "meta.json").exists() else {}
         scenario = None
         if (folder / "scenario.yaml").exists():
-            import yaml
+            from netsim.scenario.loader import read_yaml  # bounded and tag-free: a run folder may come from anyone
 
-            scenario = yaml.safe_load((folder / "scenario.yaml").read_text(encoding="utf-8"))
+            scenario = read_yaml(folder / "scenario.yaml")[0]
         return cls(signals, jobs, messages, metrics, meta, scenario, out_dir=folder)
