@@ -114,3 +114,16 @@ def test_a_sweep_whose_base_is_an_alias_bomb_is_refused_quickly(tmp_path):
     with pytest.raises(ConfigError, match="aliases are expanded") as info:
         load_sweep(tmp_path / "sweep.yaml")
     assert time.perf_counter() - t0 < 1.0 and len(str(info.value)) < 400
+
+
+def test_reading_a_run_folder_with_an_alias_bomb_is_refused_quickly(tmp_path, scenario):
+    from netsim.errors import ConfigError
+    from netsim.results import RunResult
+    from netsim.runner import run
+
+    run(scenario(), out=tmp_path / "run")
+    (tmp_path / "run" / "scenario.yaml").write_text(_laughs())  # a run folder someone mailed
+    t0 = time.perf_counter()
+    with pytest.raises(ConfigError, match="aliases are expanded"):
+        RunResult.read(tmp_path / "run")
+    assert time.perf_counter() - t0 < 1.0
