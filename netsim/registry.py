@@ -35,6 +35,7 @@ import difflib
 import hashlib
 import importlib
 import importlib.util
+import inspect
 import logging
 import re
 import sys
@@ -288,7 +289,7 @@ def resolve(path: str, kind: str) -> Any:
         raise ValueError(f"unknown registry kind {kind!r}; known: {', '.join(KINDS)}")
     module_name, _, attr = path.partition(":")
     shown = path if len(path) <= 80 else path[:80] + "..."
-    listing = f"`netsim list {kind}s`"
+    listing = f"`netsim list {'policies' if kind == 'policy' else kind + 's'}`"
     if not _DOTTED.match(module_name) or not _DOTTED.match(attr) or "__" in path:  # no __main__, __class__
         raise ConfigError(f"'{shown}' is not a plugin path; write a registered {kind} name (see {listing}) or "
                           "'package.module:Class'")
@@ -312,6 +313,8 @@ def resolve(path: str, kind: str) -> Any:
         raise ConfigError(f"module '{module_name}' has no attribute '{attr}'") from None
     base = _base(kind)
     if _is_registered(kind, obj) or (base is not None and isinstance(obj, type) and issubclass(obj, base)):
+        if inspect.isabstract(obj):
+            raise ConfigError(f"'{shown}' is an abstract base class; name a concrete {kind} (see {listing})")
         return obj
     what = f"a registered {kind}" + (f" or a subclass of {base.__module__}.{base.__name__}" if base else "")
     raise ConfigError(f"'{shown}' is not {what}; a scenario may name only registered plugins (see {listing})")

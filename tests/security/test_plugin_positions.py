@@ -89,3 +89,10 @@ def test_a_registered_class_may_still_be_named_by_its_path(scenario):
     raw = scenario()
     raw["nodes"]["computer"]["policy"] = "netsim.kernel.policies:FixedPriority"  # a Policy subclass
     assert _errors(raw) == {}
+
+
+def test_an_abstract_base_class_is_refused_at_validate(scenario):
+    # it passed validate and raised TypeError (a traceback) when the run built the kernel
+    raw = scenario()
+    raw["nodes"]["computer"]["policy"] = "netsim.kernel.policies:Policy"
+    assert "abstract base class" in _errors(raw)["nodes.computer.policy"]
