@@ -13,7 +13,8 @@ What is checked
   has no handlers is refused, a node with neither key is a warning (it runs nothing); task and handler names are unique per node (the message names the first definition, with its line
   when the caller gives a line lookup).
 - The expected number of events (:func:`expected_events`: ``duration / period`` summed over periodic tasks,
-  timer handlers and the plant's ``record_grid``) above :data:`EVENTS_WARN` is a warning with the estimate.
+  timer handlers, polling encoders and the plant's ``record_grid``) above :data:`EVENTS_WARN` is a warning
+  with the estimate.
 
 Time fields beyond :data:`netsim.timebase.MAX_TIME` are refused where they are parsed (:mod:`netsim.units`).
 """
@@ -150,8 +151,8 @@ def _ns(value: Any) -> int | None:
 def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]]:
     """An estimate of the events a run of ``raw`` simulates, and its largest contributions.
 
-    ``duration / period`` summed over periodic tasks, timer-triggered handlers and the plant's
-    ``record_grid``; networks, messages and program-internal timers add more, so this is a lower bound.
+    ``duration / period`` summed over periodic tasks, timer-triggered handlers, polling encoders' ``tick`` and
+    the plant's ``record_grid``; networks, messages and program-internal timers add more, so this is a lower bound.
 
     Returns
     -------
@@ -173,6 +174,9 @@ def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]
     plant = _d(raw.get("plant"))
     if "record_grid" in plant:
         add(["plant", "record_grid"], plant.get("record_grid"))
+    for name, channel in _d(raw.get("io")).items():
+        if _d(channel).get("type") == "encoder" and _d(channel).get("mode") == "polling":
+            add(["io", str(name), "tick"], _d(channel).get("tick"))  # exact mode accounts ticks in closed form
     for node_name, node in _d(raw.get("nodes")).items():
         for i, task in enumerate(_l(_d(node).get("tasks"))):
             task = _d(task)

@@ -424,7 +424,18 @@ class SignalSpec(PluginSpec):
 
 # --------------------------------------------------------------------------------------------- nodes
 class TaskSpec(PluginSpec):
-    """A task on a node: the program it runs, when it is released and how long it executes."""
+    """A task on a node: the program it runs, when it is released and how long it executes.
+
+    Every task needs ``name`` and ``program``. What else each kind of release requires (checked by
+    :mod:`netsim.scenario.validate`, each with its path):
+
+    - ``release: periodic`` (the default when ``period`` is given): ``period`` is required; ``offset``,
+      ``deadline`` (default: the period) are optional.
+    - ``release: aperiodic`` (the default without ``period``): no ``period``; released by program code.
+    - ``release: on_message:<network>``: no ``period``; the node must be attached to ``<network>`` and has one
+      receiver per network.
+    - Under policy ``fp`` every task needs a ``priority``; a ``wcet_handler`` needs a ``wcet``.
+    """
 
     plugin_kind: ClassVar[str] = "program"
     name: Name
