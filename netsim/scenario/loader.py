@@ -35,7 +35,7 @@ from typing import Any, Mapping, Sequence
 from pydantic import BaseModel, ValidationError
 
 from netsim.errors import ConfigError
-from netsim.scenario.messages import problems_from_validation_error
+from netsim.scenario.messages import problems_from_validation_error, shorten_problem
 from netsim.scenario.paths import PathPart, parse_path, set_path
 from netsim.scenario.problems import ERROR, Problem, ScenarioError, sort_problems
 from netsim.scenario.schema import PluginSpec, Scenario
@@ -200,12 +200,19 @@ def _plugin_files(raw: dict[str, Any], file: str | None, allow: bool | None) -> 
             if isinstance(entry, str):
                 problems.append(Problem(f"plugins[{i}]", "empty plugin file name; write the path of a .py file"))
             continue
-        path = (base / entry).resolve()
-        resolved.append(str(path))
         where = f"plugins[{i}]"
+        try:
+            path = (base / entry).resolve()
+            exists = path.is_file()
+        except (OSError, ValueError) as exc:  # a name too long for the file system, a NUL byte
+            resolved.append(entry)
+            problems.append(Problem(where, f"cannot use this plugin file name ({exc.__class__.__name__}); write "
+                                    "the path of a .py file"))
+            continue
+        resolved.append(str(path))
         if path.suffix != ".py":
             problems.append(Problem(where, f"a plugin file is a Python file ending in .py, not '{entry[:80]}'"))
-        elif not path.is_file():
+        elif not exists:
             problems.append(Problem(where, f"plugin file not found: {path}; fix the path (relative to the "
                                     "scenario file)"))
         elif registry.plugin_file_loaded(path) or plugins_allowed(allow):
@@ -242,7 +249,7 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None,
         return [Problem("", f"expected a scenario file path or mapping, got {type(source).__name__}")], None
 
     def done(problems: list[Problem]) -> list[Problem]:
-        located = [p.located(index.line_of(p.path), file) for p in problems]
+        located = [shorten_problem(p.located(index.line_of(p.path), file)) for p in problems]
         return sort_problems(located)
 
     if raw is None:

@@ -128,3 +128,10 @@ def test_a_refused_plugin_file_is_the_only_problem_reported(plugin_scenario):
     path, _ = plugin_scenario
     problems = [p for p in check_scenario(path) if p.is_error]
     assert [p.path for p in problems] == ["plugins[0]"]  # not also "unknown program" for what the file registers
+
+
+def test_a_plugin_file_name_too_long_for_the_file_system_is_a_problem_not_a_traceback(scenario):
+    raw = scenario()
+    raw["plugins"] = ["k" * 1_000_000 + ".py"]
+    (problem,) = [p for p in check_scenario(raw, allow_plugins=True) if p.is_error]
+    assert problem.path == "plugins[0]" and "cannot use this plugin file name" in problem.message
