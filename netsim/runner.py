@@ -155,11 +155,9 @@ def _collect(sim: Any, t_end_ns: int) -> RunResult:
 
 
 def _event_count(env: Any) -> int | None:
-    counter = getattr(env.sim, "_eid", None)
-    try:
-        return int(next(counter)) if counter is not None else None
-    except Exception:  # noqa: BLE001
-        return None
+    """Entries the event loop scheduled during the run (:meth:`netsim.env.EventLoop.events_scheduled`)."""
+    counted = getattr(env.sim, "events_scheduled", None)
+    return int(counted()) if counted is not None else None
 
 
 def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
