@@ -333,6 +333,10 @@ def hdd_et(design_params: dict | HddControlParams, *, reference, trigger):
                        dob=None if dob is None else DisturbanceObserver(dob), trigger=trigger)
 
 
+#: ``netsim validate`` checks a scenario's ``design_params`` with this model (``EtController.Params.nested_params``).
+hdd_et.Params = HddControlParams  # type: ignore[attr-defined]
+
+
 hdd_et.Params = HddControlParams  # type: ignore[attr-defined]
 
 # the case-study report registers itself as kind "report" "hdd"

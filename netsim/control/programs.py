@@ -43,7 +43,7 @@ from netsim.control.cascade import CascadeActions
 from netsim.control.controller_trigger import ControllerTrigger
 from netsim.control.packets import ControlPacket, PlayoutBuffer
 from netsim.control.triggers import AnyOf, MaxIntervalTrigger, MixedTrigger, ReferenceChangeTrigger, SendOnDelta, TimeTriggered
-from netsim.errors import BuildError
+from netsim.errors import BuildError, ConfigError
 from netsim.kernel import requests as rq
 from netsim.kernel.requests import Request
 from netsim.registry import lookup, register
@@ -153,6 +153,15 @@ class EtController:
         step_on: Literal["arrival", "every_period"] = Field(
             "arrival", description="arrival: step at each received measurement (section 3.2.4, eq 28; default); "
             "every_period: a periodic task stepping every T on the last received measurement (no estimator)")
+
+        def nested_params(self) -> list[tuple[str, Any, dict]]:
+            """``(field, Params model or None, raw)`` of parameters a plugin named here validates itself: the
+            ``design``'s own ``Params`` (when it declares one) checks ``design_params`` at validate, not at build."""
+            try:
+                factory = lookup("controller", self.design)
+            except ConfigError:
+                return []  # build reports the unknown design
+            return [("design_params", getattr(factory, "Params", None), self.design_params)]
 
     @staticmethod
     def canonical_params(params: dict) -> dict:

@@ -178,8 +178,28 @@ class _Checker:
         except Exception as exc:  # noqa: BLE001 - a plugin validator that crashes is reported at its path
             self.error(prefix, f"parameters rejected: {type(exc).__name__}: {exc}")
             return None
+        self.nested(model, prefix)
         self.validated[key] = model
         return model
+
+    def nested(self, model: Any, prefix: list[PathPart]) -> None:
+        """Parameters a plugin hands to another plugin (``design_params`` of a controller design), checked with
+        that plugin's ``Params`` when the model names them (``nested_params()``)."""
+        nested = getattr(model, "nested_params", None)
+        if not callable(nested):
+            return
+        try:
+            items = nested()
+        except Exception as exc:  # noqa: BLE001 - a plugin's own hook that crashes is reported at its path
+            self.error(prefix, f"parameters rejected: {type(exc).__name__}: {exc}")
+            return
+        for field, cls, raw in items:
+            if not (isinstance(cls, type) and issubclass(cls, BaseModel)) or not isinstance(raw, dict):
+                continue
+            try:
+                cls.model_validate(raw)
+            except ValidationError as exc:
+                self.problems += problems_from_validation_error(exc, prefix=[*prefix, field], model=cls)
 
     def network_ref(self, node: str, net: Any, at: list[PathPart]) -> bool:
         """Check that ``net`` is a network ``node`` is attached to; True when it is."""
