@@ -280,7 +280,7 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None,
 
     from netsim.scenario.validate import check_raw
 
-    more, validated = check_raw(raw)
+    more, validated = check_raw(raw, index.line_of)  # duplicate names quote the line of the first definition
     problems += more
     if scenario is not None and not any(p.severity == ERROR for p in problems):
         _attach(scenario, validated)

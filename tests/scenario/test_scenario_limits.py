@@ -115,7 +115,6 @@ def test_empty_task_list_without_handlers_is_refused_and_an_idle_node_warns(base
     assert "runs no task and no handler" in _warnings(raw)["nodes.idle"]
 
 
-@pytest.mark.xfail(strict=True, reason="needs the loader to pass its line index: check_raw(raw, index.line_of)")
 def test_duplicate_task_names_name_the_first_definition_with_its_line(tmp_path, base):
     raw = base()
     raw["nodes"]["sensor"]["tasks"].append(dict(raw["nodes"]["sensor"]["tasks"][0]))
