@@ -356,9 +356,19 @@ class _Checker:
                 raw = {} if raw is None else raw
                 model = self.params(program, raw, [*at, "params"], format_path(at))
                 values = _values(model) if model is not None else _d(raw)
+                if kind == "tasks" and item.get("period") is None:
+                    self.pid_period(model, [*at, "params"])
                 self.conventions(name, values, [*at, "params"])
                 if getattr(program, "interference_source", False) is True:
                     self.interference(name, values, [*at, "params"])
+
+    def pid_period(self, model: Any, at: list[PathPart]) -> None:
+        """A PID program in a task without a period needs its own sampling period ``h`` (PID.from_params's rule)."""
+        from netsim.control.pid import PIDParams
+
+        if isinstance(model, PIDParams) and model.h is None:
+            self.error(at, "this PID controller runs in a task without a period, so it has no sampling period; "
+                           "add 'h: 10 ms' (say) to params, or give the task a period")
 
     def task(self, node_name: str, node: dict[str, Any], task: dict[str, Any], at: list[PathPart], handlers: list[Any]) -> None:
         period = task.get("period")

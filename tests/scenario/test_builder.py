@@ -102,8 +102,15 @@ def test_recorded_reference_is_sampled_at_its_jumps_only():
 def test_program_that_cannot_be_built_gives_build_error_with_yaml_path():
     sc = _base(nodes={"c": {"tasks": [{"name": "ctl", "program": "controller", "release": "aperiodic", "priority": 1,
                                        "params": {"channel": "y", "output_channel": "u", "K": 1.0}}]}})
+    # validate refuses it first (it makes the same check build makes: an aperiodic PID needs its sampling period h)
+    from netsim.scenario import ScenarioError
+    from netsim.scenario.schema import Scenario
+
+    with pytest.raises(ScenarioError) as refused:
+        load_scenario(sc)
+    assert [p.path for p in refused.value.errors] == ["nodes.c.tasks[0].params"]
+    # build, given the unvalidated scenario, still names the task in its BuildError
     with pytest.raises(BuildError) as err:
-        build(load_scenario(sc))
-    # an aperiodic PID needs its sampling period h
+        build(Scenario.model_validate(sc))
     assert err.value.path == "nodes.c.tasks[0]"
     assert "h" in err.value.message

@@ -79,6 +79,10 @@ CASES = [
     ("plant_state_of_the_wrong_size",  # LTIPlant.set_state, called by build after the plant is made
      [("  params: {gain: 1000, a: 1}\n", "  params: {gain: 1000, a: 1}\n  x0: [0, 0, 0]\n")],
      "plant.x0", "x0: [0, 0, 0]", "state must have 2 entries, got 3"),
+    ("pid_in_a_task_without_a_period_and_without_h",  # PID.from_params: "PID needs a sampling period"
+     [("program: actuator\n        params: {network: can, channel: u}",
+       "program: controller\n        params: {channel: y, output_channel: u, K: 1.0}")],
+     "nodes.m.tasks[0].params", "params: {channel: y, output_channel: u", "has no sampling period; add 'h: 10 ms'"),
     ("network_task_without_to",
      [("network: can, to: m, bits: 80", "network: can, bits: 80")],
      f"{TASK}.params.to", "network: can, bits: 80", "'to' is missing"),
