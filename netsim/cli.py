@@ -17,9 +17,7 @@ from __future__ import annotations
 
 import os
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("MKL_NUM_THREADS", "1")
+import netsim  # noqa: F401  (first: one BLAS thread and the same OpenBLAS kernels everywhere, netsim.blas)
 
 import argparse  # noqa: E402
 import logging  # noqa: E402
