@@ -1,6 +1,6 @@
 """How ``build`` calls each kind of plugin, and a check that a plugin can be called that way.
 
-A scenario may name a plugin by a ``"module:Class"`` path (``"netsim.plant_lti:LTIPlant"``); since issue 14 the
+A scenario may name a plugin by a ``"module:Class"`` path (``"netsim.plant.lti:LTIPlant"``); since issue 14 the
 path must lead to a registered object of the kind or a subclass of the kind's base class
 (:func:`netsim.registry.resolve`), never an arbitrary callable. ``build`` calls it with the arguments of its
 kind; a class whose constructor needs other arguments would fail only when the run starts, so

@@ -11,7 +11,7 @@ from netsim.env import SimEnv
 from netsim.errors import ConfigError
 from netsim.io import Encoder, encoder_step
 from netsim.plant import DiscretePlant, LTIPlant, NonlinearPlant
-from netsim.plant_nonlinear import stick_slip_modes
+from netsim.plant.nonlinear import stick_slip_modes
 from netsim.timebase import MS, S, US
 
 

@@ -4,7 +4,7 @@ import numpy as np
 
 from netsim.env import SimEnv
 from netsim.kernel import Kernel
-from netsim.plant_lti import LTIPlant
+from netsim.plant.lti import LTIPlant
 from netsim.timebase import MS
 
 

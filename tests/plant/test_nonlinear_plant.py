@@ -10,7 +10,7 @@ import pytest
 from netsim.env import SimEnv
 from netsim.errors import ConfigError, DivergenceError, SimulationError
 from netsim.plant import NonlinearPlant
-from netsim.plant_nonlinear import Mode, stick_slip_modes
+from netsim.plant.nonlinear import Mode, stick_slip_modes
 from netsim.signals import make_signal
 from netsim.timebase import MS, S
 

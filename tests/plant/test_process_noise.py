@@ -9,7 +9,7 @@ from scipy.linalg import expm
 
 from netsim.env import SimEnv
 from netsim.plant import LTIPlant
-from netsim.plant_lti import van_loan, zoh_transition
+from netsim.plant.lti import van_loan, zoh_transition
 from netsim.timebase import MS, S
 
 

@@ -67,7 +67,7 @@ CASES = [
      [("y: {type: adc, output: 0}", "y: {type: adc, output: 3}")],
      "io.y.output", "output: 3", "plant output index 3 out of range: the plant has 1 output"),
     ("plugin_path_whose_constructor_needs_other_arguments",
-     [("model: dc_servo", 'model: "netsim.plant_lti:LTIPlant"')],
+     [("model: dc_servo", 'model: "netsim.plant.lti:LTIPlant"')],
      "plant.model", "LTIPlant", "cannot be built from a scenario: build calls LTIPlant(params), but it takes (A, B, C)"),
     ("time_as_a_bare_number",
      [("period: 100 ms", "period: 5")],

@@ -27,7 +27,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from netsim.errors import ConfigError, SimulationError
-from netsim.plant import NEVER, Plant, _Source, _vector
+from netsim.plant.base import Plant
+from netsim.plant.disturbance import _Source
+from netsim.plant.shared import NEVER, _vector
 from netsim.timebase import S
 
 __all__ = ["NonlinearPlant", "Mode", "Guard", "stick_slip_modes"]
