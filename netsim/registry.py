@@ -2,15 +2,23 @@
 
 The engine never imports ``models/``; case-study modules register their plants, controllers, task
 programs and the like under a *kind* and a name, and a scenario names them (``plant: {model: hdd}``) or
-gives an import path (``"models.hdd:HddPlant"``). ``netsim list`` prints the registry.
+gives an import path (``"models.hdd:HddPlant"``). ``netsim list`` prints the registry, ``netsim list KIND
+NAME`` one plugin's parameters (:func:`param_rows`).
 
 Where registered things come from (issue 14: a scenario file is data, it cannot name arbitrary code):
 
-* netsim's own plugin modules and ``models`` (:data:`PLUGIN_MODULES`);
+* netsim's own plugin modules (:data:`PLUGIN_MODULES`): :func:`load_plugins` imports every module of each
+  listed package (``netsim.network``, ``models``, ...), so a new medium, program or case study is one file plus
+  its ``@register`` line; no ``__init__`` has to import it. ``tests/test_registry.py`` reads every module of
+  ``netsim/`` and ``models/`` and fails when one that registers something is not covered by the list;
 * installed packages that declare a ``netsim.plugins`` entry point (each entry point names a module,
   imported by :func:`load_plugins`; installing a package is the user's decision);
 * plugin files, loaded by :func:`load_plugin_file` only when the scenario's ``plugins:`` list names them and
   the user allowed it (:mod:`netsim.trust`).
+
+A module that fails to import is never skipped silently: :func:`load_plugins` returns it with its error
+(``netsim validate`` and ``netsim list`` print it as a warning). A name registered twice for two different
+objects is an error (a plugin cannot shadow a built-in by accident).
 
 A ``"module:attr"`` path (:func:`resolve`) is only another way to name a registered object: it must resolve
 to an object registered under the kind, or to a subclass of the kind's base class (:data:`KIND_BASES`, e.g.
@@ -18,10 +26,26 @@ to an object registered under the kind, or to a subclass of the kind's base clas
 module that is not already imported is imported only when it is one of netsim's own (``netsim.*``,
 ``models.*``) or a ``netsim.plugins`` entry point.
 
-Kinds used by netsim: ``plant``, ``controller``, ``estimator``, ``trigger``, ``network``, ``policy``,
-``program`` (task/handler bodies that scenario tasks run), ``signal`` (reference/disturbance shapes),
-``metric`` (functions computing a run's metrics from its tables),
-``report`` (case-study report generators).
+Kinds (:data:`KINDS`), each looked up where a scenario names it:
+
+``plant``
+    ``plant: {model: NAME}``.
+``controller``
+    control designs a program builds by name (``et_controller``'s ``design:``; issue 16's control laws).
+``estimator``
+    state estimators (:class:`netsim.control.interface.StateEstimator`: ``correct``, ``predict``, ``x_hat``)
+    that a controller program names as ``estimator: {type: NAME, ...}`` (issue 16: Kalman, Luenberger, EKF).
+    Algorithms built only inside one case study (the cart's event estimators, the HDD's DOB) are not
+    registered: no scenario can name them.
+``network``, ``policy``, ``program``, ``signal``, ``metric``
+    ``networks: {x: {type: NAME}}``, a node's ``policy:``, a task's ``program:``, ``signals: {x: {type: NAME}}``,
+    ``metrics: [{type: NAME}]``.
+``report``
+    ``netsim report NAME`` (case-study report generators).
+
+Each plugin describes its parameters with a nested pydantic ``Params`` model; ``netsim validate`` checks a
+scenario's parameters with it and ``netsim list KIND NAME`` prints it. A field states its unit with
+``Field(..., json_schema_extra={"unit": "rad/s"})``; time and bit-rate fields (:mod:`netsim.units`) carry theirs.
 
 Examples
 --------
@@ -37,22 +61,23 @@ import importlib
 import importlib.util
 import inspect
 import logging
+import pkgutil
 import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, TypeVar
+from typing import Annotated, Any, Callable, Literal, TypeVar, Union, get_args, get_origin
 
 from netsim.errors import ConfigError
 
-__all__ = ["Entry", "KIND_BASES", "register", "lookup", "entries", "kinds", "load_plugins", "load_plugin_file",
-           "plugin_file_loaded", "resolve", "is_builtin", "ENTRY_POINT_GROUP"]
+__all__ = ["Entry", "KINDS", "KIND_BASES", "PLUGIN_MODULES", "ParamRow", "register", "lookup", "entries", "kinds",
+           "load_plugins", "load_plugin_file", "plugin_file_loaded", "resolve", "is_builtin", "is_plugin_module",
+           "params_model", "param_rows", "ENTRY_POINT_GROUP"]
 
 KINDS = (
     "plant",
     "controller",
     "estimator",
-    "trigger",
     "network",
     "policy",
     "program",
@@ -66,7 +91,7 @@ T = TypeVar("T")
 #: The base class (module, class name) a ``module:attr`` path of a kind may name besides registered objects.
 KIND_BASES: dict[str, tuple[str, str]] = {
     "plant": ("netsim.plant", "Plant"),
-    "signal": ("netsim.signals", "Signal"),
+    "signal": ("netsim.io.signals", "Signal"),
     "network": ("netsim.network.pipeline", "Network"),
     "policy": ("netsim.kernel.policies", "Policy"),
 }
@@ -92,31 +117,51 @@ _PLUGINS_LOADED = False
 _PLUGIN_FAILURES: list[tuple[str, str]] = []
 _log = logging.getLogger(__name__)
 
-#: Modules imported by :func:`load_plugins` so their ``register`` calls run.
 #: Modules imported from installed packages' ``netsim.plugins`` entry points (filled by :func:`load_plugins`).
 _ENTRY_POINT_MODULES: list[str] = []
 #: Plugin files already executed: resolved path -> module name.
 _PLUGIN_FILES: dict[str, str] = {}
 
 
+#: netsim's own plugin modules and packages. :func:`load_plugins` imports each, and every module below a
+#: listed package (a new file in ``netsim/network/`` or ``models/`` registers without being imported anywhere).
+#: The application layer (CLI, scenario loading, runner, sweeps, plots) is not listed: it uses plugins and
+#: defines none, and ``tests/test_registry.py`` fails when a module outside these registers something.
 PLUGIN_MODULES: list[str] = [
     "netsim.kernel",
     "netsim.network",
     "netsim.control",
     "netsim.metrics",
     "netsim.runtime_metrics",
-    "netsim.signals",
+    "netsim.io.signals",
     "netsim.programs",
     "models",
 ]
 
 
+def _origin(obj: Any) -> str:
+    """``module:qualname`` of ``obj`` (what a duplicate-name error names)."""
+    module = getattr(obj, "__module__", None) or "?"
+    return f"{module}:{getattr(obj, '__qualname__', None) or type(obj).__name__}"
+
+
 def register(kind: str, name: str, summary: str = "") -> Callable[[T], T]:
-    """Decorator registering ``obj`` under ``kind``/``name`` with a one-line ``summary``."""
+    """Decorator registering ``obj`` under ``kind``/``name`` with a one-line ``summary``.
+
+    Raises
+    ------
+    ValueError
+        For an unknown kind, or a name already registered for another object (another ``module:qualname``;
+        the same definition imported again replaces its entry).
+    """
     if kind not in _REGISTRY:
         raise ValueError(f"unknown registry kind {kind!r}; known: {', '.join(KINDS)}")
 
     def deco(obj: T) -> T:
+        old = _REGISTRY[kind].get(name)
+        if old is not None and old.obj is not obj and _origin(old.obj) != _origin(obj):
+            raise ValueError(f"{kind} '{name}' is already registered by {_origin(old.obj)}; register "
+                             f"{_origin(obj)} under another name")
         doc_lines = (getattr(obj, "__doc__", None) or "").strip().splitlines()
         text = summary or (doc_lines[0] if doc_lines else "")
         _REGISTRY[kind][name] = Entry(kind, name, text, obj)
@@ -125,34 +170,53 @@ def register(kind: str, name: str, summary: str = "") -> Callable[[T], T]:
     return deco
 
 
-def load_plugins() -> list[tuple[str, str]]:
-    """Import the modules that register things (idempotent).
+def is_plugin_module(module_name: str) -> bool:
+    """True when :func:`load_plugins` imports ``module_name`` (it is, or is below, a :data:`PLUGIN_MODULES` entry)."""
+    return any(module_name == m or module_name.startswith(m + ".") for m in PLUGIN_MODULES)
 
-    Each module is imported on its own: one that is missing or broken does not stop the others. Returns the
-    ``(module, error)`` pairs of the modules that failed (also logged), so callers can report them.
+
+def _failed(module_name: str, exc: BaseException, where: str = "") -> None:
+    _PLUGIN_FAILURES.append((module_name, f"{type(exc).__name__}: {exc}"))
+    _log.warning("could not load plugin module %s%s: %s", module_name, where, exc)
+
+
+def _import_tree(module_name: str) -> None:
+    """Import ``module_name`` and, for a package, every module below it (sorted; ``__main__`` excepted).
+
+    A module that fails to import is recorded in ``_PLUGIN_FAILURES`` and its siblings are still imported.
+    """
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as exc:  # noqa: BLE001 - recorded and reported (a broken module must not hide the others)
+        _failed(module_name, exc)
+        return
+    path = getattr(module, "__path__", None)
+    if path is None:
+        return
+    for info in sorted(pkgutil.iter_modules(path), key=lambda i: i.name):
+        if info.name != "__main__":
+            _import_tree(f"{module_name}.{info.name}")
+
+
+def load_plugins() -> list[tuple[str, str]]:
+    """Import netsim's plugin modules (:data:`PLUGIN_MODULES`, packages walked) and the entry points (idempotent).
+
+    Each module is imported on its own: one that is missing or broken does not stop the others, and none is
+    skipped silently. Returns the ``(module, error)`` pairs of the modules that failed (also logged), so
+    callers can report them.
     """
     global _PLUGINS_LOADED
     if _PLUGINS_LOADED:
         return list(_PLUGIN_FAILURES)
     _PLUGINS_LOADED = True
     for mod in PLUGIN_MODULES:
-        try:
-            importlib.import_module(mod)
-        except ModuleNotFoundError as exc:
-            if exc.name is not None and mod.startswith(exc.name):
-                continue  # an optional plugin package that is not there
-            _PLUGIN_FAILURES.append((mod, f"{type(exc).__name__}: {exc}"))
-            _log.warning("could not load plugin module %s: %s", mod, exc)
-        except Exception as exc:  # a broken plugin must not hide the others
-            _PLUGIN_FAILURES.append((mod, f"{type(exc).__name__}: {exc}"))
-            _log.warning("could not load plugin module %s: %s", mod, exc)
+        _import_tree(mod)
     for mod in _entry_point_modules():
         try:
             importlib.import_module(mod)
             _ENTRY_POINT_MODULES.append(mod)
-        except Exception as exc:  # noqa: BLE001 - an installed plugin package that is broken
-            _PLUGIN_FAILURES.append((mod, f"{type(exc).__name__}: {exc}"))
-            _log.warning("could not load plugin module %s (entry point %s): %s", mod, ENTRY_POINT_GROUP, exc)
+        except Exception as exc:  # noqa: BLE001 - an installed plugin package that is broken: reported
+            _failed(mod, exc, f" (entry point {ENTRY_POINT_GROUP})")
     return list(_PLUGIN_FAILURES)
 
 
@@ -316,5 +380,5 @@ def resolve(path: str, kind: str) -> Any:
         if inspect.isabstract(obj):
             raise ConfigError(f"'{shown}' is an abstract base class; name a concrete {kind} (see {listing})")
         return obj
-    what = f"a registered {kind}" + (f" or a subclass of {base.__module__}.{base.__name__}" if base else "")
+    what = f"a registered {kind}" + (f" or a subclass of {'.'.join(KIND_BASES[kind])}" if base else "")
     raise ConfigError(f"'{shown}' is not {what}; a scenario may name only registered plugins (see {listing})")

@@ -5,7 +5,7 @@ import math
 import pytest
 
 from netsim.errors import ConfigError
-from netsim.signals import make_signal
+from netsim.io.signals import make_signal
 from netsim.timebase import MS, S
 
 

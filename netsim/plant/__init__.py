@@ -18,7 +18,7 @@ Three plant types share the :class:`Plant` interface:
 Disturbances
 ------------
 :meth:`Plant.add_disturbance` adds a signal to one input (the plant sees ``held input + disturbances``).
-Piecewise-constant signals (:mod:`netsim.signals` constant/step/square/table, plain numbers) switch
+Piecewise-constant signals (:mod:`netsim.io.signals` constant/step/square/table, plain numbers) switch
 exactly at their jump instants: the plant splits its propagation there. A sinusoid is exact on an LTI plant
 (a harmonic oscillator is appended to the state). An :class:`LTIDisturbance` is a disturbance model of its
 own (eq. (2) of Cuenca et al.): continuous ones are appended to the state of an LTI plant, discrete ones

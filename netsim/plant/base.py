@@ -192,7 +192,7 @@ class Plant(abc.ABC):
         """Add ``signal`` to input ``input`` (the plant sees held input + disturbances).
 
         ``signal``: a number, a signal spec ``{type: step, at: ..., value: ...}``, a
-        :class:`netsim.signals.Signal`, an :class:`LTIDisturbance`, or any callable ``t_ns -> value``
+        :class:`netsim.io.signals.Signal`, an :class:`LTIDisturbance`, or any callable ``t_ns -> value``
         (sampled and held at propagation instants). Must be called before the plant first advances.
         """
         if self._started:

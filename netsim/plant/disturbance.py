@@ -150,7 +150,7 @@ def _classify(index: int, signal: Any) -> _Source:
             raise ConfigError(f"disturbance value must be finite, got {signal!r}")
         return _Source(index, "piecewise", signal=lambda t, v=value: v)
     if isinstance(signal, dict):
-        from netsim.signals import make_signal
+        from netsim.io.signals import make_signal
 
         signal = make_signal(signal)
     if not callable(signal):

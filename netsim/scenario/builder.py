@@ -6,7 +6,7 @@ them; :meth:`Simulation.run` runs the event loop; :mod:`netsim.results` collects
 What :func:`build` does, in order:
 
 1. a :class:`~netsim.env.SimEnv` with the scenario seed and the ``record:`` filter;
-2. the scenario signals (:func:`netsim.signals.make_signal` semantics);
+2. the scenario signals (:func:`netsim.io.signals.make_signal` semantics);
 3. the plant from its registered factory (``factory(params)``); each ``disturbances`` entry (plant input ->
    signal) is added with ``plant.add_disturbance`` (exact switching at the signal's jumps); the plant is bound
    to the env (recording its outputs on ``record_grid``; its state/input at events when ``record`` is

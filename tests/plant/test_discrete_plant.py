@@ -95,7 +95,7 @@ def test_process_noise_draws_from_the_named_stream():
 def test_sine_disturbance_on_a_discrete_plant_is_held_over_each_step_from_its_start():
     # x+ = x + u with u = sin(2 pi 250 t) sampled at the start of each 1 ms step (as a held input would be):
     # u(0) = 0, u(1 ms) = 1, u(2 ms) = 0, u(3 ms) = -1, u(4 ms) = 0, so x at k ms = 0, 0, 1, 1, 0, 0 (by hand)
-    from netsim.signals import make_signal
+    from netsim.io.signals import make_signal
     from netsim.timebase import MS
 
     plant = DiscretePlant([[1.0]], [[1.0]], [[1.0]], [[0.0]], 1 * MS)

@@ -12,7 +12,7 @@ from scipy.linalg import expm
 from netsim.env import SimEnv
 from netsim.errors import BuildError, ConfigError, DivergenceError, SimulationError
 from netsim.plant import LTIDisturbance, LTIPlant
-from netsim.signals import make_signal
+from netsim.io.signals import make_signal
 from netsim.timebase import MS, S, US
 
 

@@ -11,7 +11,7 @@ from netsim.env import SimEnv
 from netsim.errors import ConfigError, DivergenceError, SimulationError
 from netsim.plant import NonlinearPlant
 from netsim.plant.nonlinear import Mode, stick_slip_modes
-from netsim.signals import make_signal
+from netsim.io.signals import make_signal
 from netsim.timebase import MS, S
 
 G_L = 9.81  # g / l of a 1 m pendulum

@@ -11,7 +11,7 @@ import pytest
 
 from netsim.env import SimEnv
 from netsim.plant import DiscretePlant, LTIDisturbance, LTIPlant
-from netsim.signals import make_signal
+from netsim.io.signals import make_signal
 from netsim.timebase import MS, S, US
 
 AD = np.array([[0.9, 0.2], [-0.1, 0.8]])

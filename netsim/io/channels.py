@@ -2,7 +2,7 @@
 
 A kernel attaches a channel with ``kernel.attach_analog_in(name, adc.read)`` and
 ``kernel.attach_analog_out(name, dac.write)``; encoders call ``on_edge(count, direction, stamp_ns)`` at the
-ISR tick that sees an edge (see :mod:`netsim.encoder`).
+ISR tick that sees an edge (see :mod:`netsim.io.encoder`).
 
 ADC pipeline: plant output at the request instant -> + Gaussian noise -> saturation -> quantization
 (``step * round(v / step)``). DAC pipeline: value -> saturation -> resolution (``res * round(v / res)``)
@@ -16,10 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from netsim.encoder import Encoder, encoder_step
+from netsim.io.encoder import Encoder, encoder_step
 from netsim.errors import ConfigError
 
-__all__ = ["ADC", "DAC", "Encoder", "encoder_step", "saturation_limits", "quantize"]
+__all__ = ["ADC", "DAC", "saturation_limits", "quantize"]
 
 
 def saturation_limits(name: str, saturation: Any) -> tuple[float, float] | None:
