@@ -34,7 +34,6 @@ LIST_KINDS: dict[str, str] = {
     "plants": "plant",
     "controllers": "controller",
     "estimators": "estimator",
-    "triggers": "trigger",
     "networks": "network",
     "policies": "policy",
     "programs": "program",

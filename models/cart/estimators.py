@@ -28,8 +28,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from netsim.registry import register
-
 from models.cart.encoding import Quantizer
 from models.cart.tuning import Tuning
 
@@ -184,7 +182,6 @@ class EventEstimator:
         s.t = t
 
 
-@register("estimator", "cart_basic_event", "cart Basic Event Estimator: velocity from edge time stamps")
 class BasicEventEstimator(EventEstimator):
     """Basic Event Estimator (VI-B.1): estimates constant between events, ``v_hat = dp/dt`` at events."""
 
@@ -193,12 +190,10 @@ class BasicEventEstimator(EventEstimator):
     dt_limit = False
 
 
-@register("estimator", "cart_position_prediction", "cart Event Estimator with Position Prediction (updates between events)")
 class PositionPredictionEstimator(EventEstimator):
     """Event Estimator with Position Prediction and measurement updates between events (VI-B.2, 3)."""
 
 
-@register("estimator", "cart_full_event", "cart Full Event Estimator, eqs (9)-(11), LTI-mode timeout 2 Tfilter")
 class FullEventEstimator(EventEstimator):
     """Full Event Estimator (VI-B.4, 5): eqs 9-11 with the LTI-mode timeout and the ``dt >= Tfilter`` limit."""
 

@@ -15,12 +15,10 @@ import numpy as np
 
 from netsim.control.triggers import Norm, mtm_fires
 from netsim.errors import ConfigError
-from netsim.registry import register
 
 __all__ = ["ControllerTrigger"]
 
 
-@register("trigger", "controller_et", "controller-side mixed ET condition on the control action, eq (22)")
 class ControllerTrigger:
     """Eq (22) with thresholds ``sigma_c``, ``delta_c``; ``enabled=False`` sends every time (TTS)."""
 

@@ -63,7 +63,6 @@ from typing import Literal
 import numpy as np
 
 from netsim.errors import BuildError, ConfigError
-from netsim.registry import register
 
 __all__ = [
     "DobDesign",
@@ -317,7 +316,6 @@ def design_dob(Ap, Bp, Cp, cnum, cden, T: float, *, form: DobForm = "estimator",
     return DobDesign(Ad, Bd, Cd, Dd, T, float(gam), form, radius, rho)
 
 
-@register("estimator", "dob", "disturbance observer of Fig. 3: D(z) = [D1, D2] from the H-infinity problem (17)")
 class DisturbanceObserver:
     """Runtime DOB: ``d_hat_k = step(u_{k-1}, y_hat_k)``; snapshot/restore for the NUMRE cascade.
 

@@ -23,7 +23,6 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 
 from netsim.errors import ConfigError
-from netsim.registry import register
 
 __all__ = [
     "SensorTrigger",
@@ -96,7 +95,6 @@ class _Base(abc.ABC):
         return fire
 
 
-@register("trigger", "time_triggered", "plain periodic sampling: send every `every` periods (TTS)")
 class TimeTriggered(_Base):
     """Time-triggered sampling: send at every ``every``-th period (``every=1``: every sample)."""
 
@@ -110,7 +108,6 @@ class TimeTriggered(_Base):
         return k % self.every == 0
 
 
-@register("trigger", "pet", "periodic event-triggered mixed mechanism, eq (6)")
 class MixedTrigger(_Base):
     """PET condition eq (6): send when ``||y_bar - y_k|| > sigma_s ||y_k|| + delta_s``."""
 
@@ -128,7 +125,6 @@ class MixedTrigger(_Base):
         return mtm_fires(self.last_y, y, self.sigma, self.delta, self.norm)
 
 
-@register("trigger", "max_interval", "time-triggered safety condition, eq (7)")
 class MaxIntervalTrigger(_Base):
     """TT safety condition eq (7): send when ``k - k_lm == k_max`` (``k_lm``: last send)."""
 
@@ -144,7 +140,6 @@ class MaxIntervalTrigger(_Base):
         return k - self.last_k >= self.k_max
 
 
-@register("trigger", "reference_change", "send k_max periods after each reference change, eq (8)")
 class ReferenceChangeTrigger(_Base):
     """Eq (8): send when ``k - k_lr == k_max``, ``k_lr`` the last instant the reference changed.
 
@@ -173,7 +168,6 @@ class ReferenceChangeTrigger(_Base):
         return self._k_lr is not None and k - self._k_lr == self.k_max
 
 
-@register("trigger", "send_on_delta", "send when |y - y_last| > delta (Lebesgue sampling baseline)")
 class SendOnDelta(_Base):
     """Send-on-delta: send when ``||y - y_bar|| > delta`` (plain norm)."""
 
