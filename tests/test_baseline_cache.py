@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 import netsim.runner as runner
-from netsim.control.programs import EtController, EtSensor
+from netsim.programs.event_triggered import EtController, EtSensor
 from netsim.scenario.builder import build
 from netsim.scenario.loader import load_scenario
 

@@ -13,8 +13,7 @@ Event-triggered multi-rate control of Cuenca, Zheng, Tomizuka, Sanchez:
 * :mod:`~netsim.control.reference_loop` -- a plain-numpy closed loop of the scheme;
 * :mod:`~netsim.control.kalman` -- discrete Kalman helpers.
 
-Importing this package also imports :mod:`netsim.control.programs` so that the task/handler programs
-(kind ``"program"``) and the triggers (kind ``"trigger"``) are registered.
+The task and handler programs that run these objects inside kernels live in :mod:`netsim.programs`.
 """
 
 from __future__ import annotations
@@ -62,6 +61,3 @@ __all__ = [
     "mtm_fires",
     "simulate_loop",
 ]
-
-# the task/handler programs register themselves (kind "program") when imported
-from netsim.control import programs as _programs  # noqa: E402,F401
