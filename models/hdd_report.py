@@ -310,7 +310,7 @@ def _quote(rows: dict[str, dict], gpi: pd.DataFrame | None, gpi_meta: dict, gpi4
         return sum(abs(r[c] - P.loc[2, c]) / P.loc[2, c] for c in ("Nsc", "Nca", "ISEP", "NE"))
 
     q.add("c2_closer", "closer to" if dist(ev) < dist(ar) else "farther from", source="case2_every vs case2")
-    from netsim.metrics import controller_computation
+    from netsim.metrics.et import controller_computation
 
     q.add("c2ev_Cc", ev["Cc_pct"], ".3g", "case2_every:et.Cc (eq 28)")
     q.add("c2ev_Ccjobs", controller_computation(ev["ctrl_jobs"] / 464, 2, 1), ".3g",

@@ -70,7 +70,7 @@ from typing import Annotated, Any, Callable, Literal, TypeVar, Union, get_args, 
 
 from netsim.errors import ConfigError
 
-__all__ = ["Entry", "KINDS", "KIND_BASES", "PLUGIN_MODULES", "ParamRow", "register", "lookup", "entries", "kinds",
+__all__ = ["Entry", "KINDS", "KIND_BASES", "PLUGIN_MODULES", "ParamRow", "TIME_UNIT", "register", "lookup", "entries", "kinds",
            "load_plugins", "load_plugin_file", "plugin_file_loaded", "resolve", "is_builtin", "is_plugin_module",
            "params_model", "param_rows", "ENTRY_POINT_GROUP"]
 
@@ -132,7 +132,6 @@ PLUGIN_MODULES: list[str] = [
     "netsim.network",
     "netsim.control",
     "netsim.metrics",
-    "netsim.runtime_metrics",
     "netsim.io.signals",
     "netsim.programs",
     "models",
@@ -389,7 +388,7 @@ class ParamRow:
 
     ``name`` is dotted for the fields of a nested model (``delay.mean``); ``default`` is ``"required"`` when the
     field has none; ``unit`` is the field's declared unit (``json_schema_extra={"unit": ...}``), ``"time"`` for
-    time fields (written with a unit: ``20 us``) and ``"bit/s"`` for bit rates (:mod:`netsim.units`).
+    time fields (:data:`TIME_UNIT`: written with a unit, ``20 us``) and ``"bit/s"`` for bit rates (:mod:`netsim.units`).
     """
 
     name: str
@@ -397,6 +396,10 @@ class ParamRow:
     default: str
     unit: str
     description: str
+
+
+#: The unit :func:`param_rows` gives time fields: they are written with any of these (``20 us``, ``1.5 ms``).
+TIME_UNIT = "ns|us|ms|s"
 
 
 def params_model(obj: Any) -> type | None:
@@ -411,8 +414,8 @@ def _unit_type(metadata: list[Any]) -> tuple[str, str] | None:
     """``(type, unit)`` of a :mod:`netsim.units` field from its validators, else ``None``."""
     from netsim import units
 
-    known = {units._time: ("time", "time"), units._duration: ("duration", "time"),
-             units._signed: ("signed time", "time"), units.parse_bitrate: ("bit rate", "bit/s")}
+    known = {units._time: ("time", TIME_UNIT), units._duration: ("duration", TIME_UNIT),
+             units._signed: ("signed time", TIME_UNIT), units.parse_bitrate: ("bit rate", "bit/s")}
     for item in metadata:
         func = getattr(item, "func", None)
         if func in known:
@@ -443,6 +446,7 @@ def _type_name(tp: Any) -> str:
 
 
 def _default_text(field: Any, unit: str) -> str:
+    from pydantic import BaseModel
     from pydantic_core import PydanticUndefined
 
     if field.default_factory is not None:
@@ -456,7 +460,9 @@ def _default_text(field: Any, unit: str) -> str:
         value = field.default
     if value is None:
         return "null"
-    if unit == "time" and isinstance(value, int) and not isinstance(value, bool):
+    if isinstance(value, BaseModel):
+        value = value.model_dump(mode="json")
+    if unit == TIME_UNIT and isinstance(value, int) and not isinstance(value, bool):
         from netsim.timebase import format_time
 
         return format_time(value)

@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from netsim.errors import ConfigError
-from netsim.runtime_metrics import job_outcome_counts
+from netsim.metrics.runtime import job_outcome_counts
 
 __all__ = [
     "report",
@@ -157,7 +157,7 @@ def _metrics(folder: Path) -> dict[str, float]:
     if not path.exists():
         return {}
     frame = pd.read_csv(path)
-    from netsim.metrics import canonical_metric_names
+    from netsim.metrics.et import canonical_metric_names
 
     # run folders of older versions used unprefixed names (Nsc, GPI, ...): read them under today's names
     return canonical_metric_names({str(k): float(v) for k, v in zip(frame["metric"], frame["value"])})

@@ -241,7 +241,7 @@ class _WarningCapture(logging.Handler):
 def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | None) -> dict[str, float]:
     """The run's metrics; warnings a metric logs (e.g. et_control's 'h is shorter than a packet gap') are also
     kept in ``result.meta["warnings"]``."""
-    from netsim.runtime_metrics import compute_metrics, generic_metrics
+    from netsim.metrics.runtime import compute_metrics, generic_metrics
 
     t_end_ns = int(round(result.meta["t_end_s"] * S))
     capture = _WarningCapture()
@@ -440,7 +440,7 @@ def _baseline(base_sc: Any) -> RunResult:
     baseline, base_sim, base_fail = simulate(base_sc)
     if base_fail is not None and not isinstance(base_fail, DivergenceError):
         raise base_fail
-    from netsim.runtime_metrics import generic_metrics
+    from netsim.metrics.runtime import generic_metrics
 
     t_base = int(round(baseline.meta["t_end_s"] * S))
     baseline.metrics = pd.Series(generic_metrics(baseline, base_sim, t_base), dtype=float, name="value")

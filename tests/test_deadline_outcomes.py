@@ -19,7 +19,7 @@ from netsim.kernel.records import deadline_verdict
 from netsim.report import report
 from netsim.results import jobs_table
 from netsim.runner import run
-from netsim.runtime_metrics import generic_metrics
+from netsim.metrics.runtime import generic_metrics
 from netsim.timebase import MS
 
 

@@ -9,7 +9,7 @@ import pytest
 
 from netsim import registry
 from netsim.errors import ConfigError
-from netsim.metrics import (
+from netsim.metrics.et import (
     computation_saving_pct,
     controller_computation,
     et_control,
@@ -94,7 +94,7 @@ def test_et_control_weights_must_be_three_non_negative_numbers_summing_to_one(we
 
 
 def test_et_control_period_is_a_time_with_units():
-    from netsim.metrics import EtControlParams
+    from netsim.metrics.et import EtControlParams
     from netsim.timebase import US
 
     assert EtControlParams.model_validate({"period": "20 us"}).period == 20 * US

@@ -9,7 +9,7 @@ import pytest
 from netsim.kernel.records import deadline_verdict
 from netsim.errors import ConfigError
 from netsim.results import RunResult, jobs_table, messages_table, signals_table
-from netsim.runtime_metrics import chain_latencies, control_error, generic_metrics, latency
+from netsim.metrics.runtime import chain_latencies, control_error, generic_metrics, latency
 from netsim.timebase import MS
 from types import SimpleNamespace as NS
 

@@ -37,7 +37,6 @@ from typing import Annotated, Any, Callable, Generator
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-import netsim.runtime_metrics  # noqa: F401 - registers the 'metric' entries (registry.PLUGIN_MODULES lacks it)
 from netsim.control.pid import PID, PIDParams
 from netsim.registry import register
 from netsim.units import StrictModel, Time

@@ -220,7 +220,7 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
     and ``et.GPI`` (eq 29); when recorded, ``et.N_max`` (largest multiplicity) and ``et.played_past_packet``
     (periods the actuator played past its packet's end, i.e. ``h < N_max``), and from the messages table
     ``et.u_gap_max`` (the longest run of periods one packet had to cover). Eq (23) is a root of a sum over samples, not the time integral ``<y>.ISE`` of
-    :func:`netsim.runtime_metrics.control_error`.
+    :func:`netsim.metrics.et.runtime.control_error`.
     """
     p = _et_params(params)
     sig = result.signals
