@@ -1,17 +1,6 @@
-"""Case-study models: plants, estimators, controllers and task programs registered by name.
+"""Case-study models: plants, controllers, task programs, metrics and reports registered by name.
 
-Importing this package registers every case study with :mod:`netsim.registry`.
+Every module of this package is imported by :func:`netsim.registry.load_plugins` (``models`` is one of
+:data:`netsim.registry.PLUGIN_MODULES`), so a case study is a module or package here plus its ``@register``
+lines: nothing has to be listed in this file.
 """
-
-from __future__ import annotations
-
-import importlib
-
-_CASE_STUDIES = ["models.dc_servo", "models.hdd", "models.cart", "models.pendulum", "models.unicycle"]
-
-for _name in _CASE_STUDIES:
-    try:
-        importlib.import_module(_name)
-    except ModuleNotFoundError as _exc:  # a case study not written yet
-        if _exc.name != _name:
-            raise

@@ -6,6 +6,10 @@ pipeline in :mod:`netsim.network.pipeline`; the modules :mod:`~netsim.network.li
 :mod:`~netsim.network.can`, :mod:`~netsim.network.tdma`, :mod:`~netsim.network.csma_cd`,
 :mod:`~netsim.network.ethernet`, :mod:`~netsim.network.round_robin`, :mod:`~netsim.network.fdma` and
 :mod:`~netsim.network.wireless` (IEEE 802.15.4 and 802.11b radios) model the media.
+
+A new medium is one module here with a ``@register("network", NAME)`` class (copy
+:mod:`~netsim.network.fdma`, the smallest): :func:`netsim.registry.load_plugins` imports every module of this
+package, so it registers without being imported below; export it here only if Python users need its class.
 """
 
 from netsim.network.can import CanBus, can_frame_bits
