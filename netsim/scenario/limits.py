@@ -17,11 +17,18 @@ What is checked
   with the estimate.
 
 Time fields beyond :data:`netsim.timebase.MAX_TIME` are refused where they are parsed (:mod:`netsim.units`).
+
+Integers written with more digits than Python converts from text (``sys.get_int_max_str_digits()``, 4300 by
+default) cannot be read exactly: the YAML constructor of :func:`round_trip_constructor` reads them as a placeholder
+of the same sign with 4300 digits, far beyond the number limit, so they are refused here with their path and
+line like any other too-large number (before: a message naming only the file). ``seed`` is an identifier, not a
+quantity: it is exempt from the number limit but must stay below :data:`SEED_LIMIT`.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any, Callable, Final, Iterator
 
 from netsim.scenario.paths import PathPart, format_path
@@ -30,13 +37,16 @@ from netsim.scenario.schema import MAX_NAME_LENGTH
 from netsim.timebase import TimeParseError, parse_time
 from netsim.units import NUMBER_LIMIT
 
-__all__ = ["NAME_MAX", "EVENTS_WARN", "LineOf", "limit_problems", "expected_events"]
+__all__ = ["NAME_MAX", "EVENTS_WARN", "SEED_LIMIT", "LineOf", "limit_problems", "expected_events",
+           "round_trip_constructor", "long_integer_placeholder"]
 
 #: Longest name (node, task, handler, network, signal, io channel; the schema limits the scenario's own name to
 #: the same), in characters.
 NAME_MAX: Final[int] = MAX_NAME_LENGTH
 #: Expected event count above which validate warns (about a minute of simulation at 1e5 events/s and more).
 EVENTS_WARN: Final[float] = 1e7
+#: ``seed`` is below this (numpy's seed sequences take any size, but 128 bits is their pool's entropy).
+SEED_LIMIT: Final[int] = 2**128
 #: Sections whose keys are names.
 NAMED_SECTIONS: Final[tuple[str, ...]] = ("nodes", "networks", "signals", "io")
 #: Top-level keys whose contents are not checked here (free text; overrides are checked as they are applied;
@@ -60,6 +70,13 @@ def _numbers(node: Any, parts: tuple[PathPart, ...]) -> Iterator[tuple[tuple[Pat
         yield parts, node
 
 
+def _digits(value: int) -> str:
+    """How many digits ``value`` has, in words, without converting a huge integer to text."""
+    if abs(value) < 10**4000:
+        return f"{len(str(abs(value)))} digits"
+    return "over 4000 digits"
+
+
 def _number_problem(value: float | int) -> str | None:
     if isinstance(value, float) and math.isnan(value):
         return f"NaN is not a usable number; write a finite number between -{NUMBER_LIMIT:g} and {NUMBER_LIMIT:g}"
@@ -67,7 +84,7 @@ def _number_problem(value: float | int) -> str | None:
         return (f"{'-' if value < 0 else ''}infinity is not a usable number; write a finite number between "
                 f"-{NUMBER_LIMIT:g} and {NUMBER_LIMIT:g} (leave the key out for 'no limit' where that is allowed)")
     if abs(value) > NUMBER_LIMIT:
-        shown = f"{value:.3g}" if isinstance(value, float) else f"an integer of {len(str(abs(value))) if abs(value) < 10**4000 else 'over 4000'} digits"
+        shown = f"{value:.3g}" if isinstance(value, float) else f"an integer of {_digits(value)}"
         return f"{shown} is beyond netsim's limit for numbers (|x| <= {NUMBER_LIMIT:g}); write a smaller value"
     return None
 
@@ -198,10 +215,14 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[P
             continue
         for parts, number in _numbers(value, (key,)):
             if parts == ("seed",) and isinstance(number, int):
-                continue
+                if number >= SEED_LIMIT:
+                    problems.append(Problem("seed", f"the seed is an integer of {_digits(number)}; write an integer "
+                                                    f"between 0 and 2^128 - 1 ({SEED_LIMIT - 1:.4g})",
+                                            supersedes=True))
+                continue  # a negative seed is the schema's (seed >= 0)
             msg = _number_problem(number)
-            if msg:
-                problems.append(Problem(format_path(list(parts)), msg))
+            if msg:  # the value is unusable: other messages about it would only repeat that
+                problems.append(Problem(format_path(list(parts)), msg, supersedes=True))
     problems += _name_problems(raw)
     problems += _structure_problems(raw, line_of)
     total, parts = expected_events(raw)
@@ -211,3 +232,55 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[P
                                             f"summed: {top}); it may take very long: shorten 'duration' or lengthen "
                                             "those periods if that was not meant", severity=WARNING))
     return problems
+
+
+def round_trip_constructor() -> type:
+    """ruamel.yaml's round-trip constructor, reading integers with too many digits as a refusable placeholder.
+
+    Python converts at most ``sys.get_int_max_str_digits()`` digits of text to an integer and raises
+    ``ValueError`` beyond (a guard against slow conversions); ruamel would pass that error up with no line.
+    This constructor reads such an integer as :func:`long_integer_placeholder`, which :func:`limit_problems`
+    refuses at its path. Use it as ``YAML(typ="rt").Constructor = round_trip_constructor()``.
+
+    Returns
+    -------
+    type
+        A subclass of ``ruamel.yaml.constructor.RoundTripConstructor``.
+    """
+    global _CONSTRUCTOR
+    if _CONSTRUCTOR is None:
+        from ruamel.yaml.constructor import RoundTripConstructor
+
+        class _BoundedIntConstructor(RoundTripConstructor):
+            def construct_bounded_int(self, node: Any) -> Any:
+                try:
+                    return RoundTripConstructor.construct_yaml_int(self, node)
+                except ValueError:
+                    text = str(node.value).replace("_", "").strip()
+                    digits = sum(ch.isdigit() for ch in text)
+                    if digits <= _max_str_digits():
+                        raise
+                    return long_integer_placeholder(text.startswith("-"))
+
+        _BoundedIntConstructor.add_constructor("tag:yaml.org,2002:int",
+                                               _BoundedIntConstructor.construct_bounded_int)
+        _CONSTRUCTOR = _BoundedIntConstructor
+    return _CONSTRUCTOR
+
+
+_CONSTRUCTOR: type | None = None
+
+
+def long_integer_placeholder(negative: bool) -> int:
+    """What a YAML constructor returns for an integer with more digits than Python reads from text.
+
+    ``-/+ 10 ** (limit - 1)``: the written sign, and the most digits Python turns back into text (so a later
+    message can show it), far beyond :data:`netsim.units.NUMBER_LIMIT`, so :func:`limit_problems` refuses it
+    at its YAML path and line ("an integer of over 4000 digits ...; write a smaller value").
+    """
+    return (-1 if negative else 1) * 10 ** (_max_str_digits() - 1)
+
+
+def _max_str_digits() -> int:
+    limit = sys.get_int_max_str_digits()
+    return limit if limit > 0 else 4300  # 0: no limit was set (then ValueError never comes here)

@@ -136,6 +136,7 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
     from ruamel.yaml.error import MarkedYAMLError, YAMLError
 
     from netsim.scenario.safe_yaml import YamlRefused, check_events, check_flow_depth, needs_event_check, read_text
+    from netsim.scenario.limits import round_trip_constructor
 
     name = os.fspath(path)
     try:
@@ -145,6 +146,7 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
     except YamlRefused as exc:
         raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None
     yaml = YAML(typ="rt", pure=True)
+    yaml.Constructor = round_trip_constructor()  # a 5000-digit integer is refused at its path (limits.py)
     try:
         check_flow_depth(text)
         if needs_event_check(text):

@@ -70,6 +70,8 @@ def show_value(value: Any, limit: int = 60) -> str:
         return "a mapping"
     if isinstance(value, list):
         return "a list"
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**60:
+        return "an integer of over 60 digits"  # repr of a huge integer is slow, and refused beyond 4300 digits
     text = repr(value)
     return text if len(text) <= limit else text[: limit - 3] + "..."
 

@@ -34,6 +34,10 @@ class Problem:
         The scenario file, when the scenario came from a file.
     severity
         ``"error"`` (the scenario cannot run) or ``"warning"`` (it runs, but look again).
+    supersedes
+        True when this problem says all there is to say about the value at ``path`` (a NaN or a 5000-digit
+        number): :func:`sort_problems` then drops the other errors at the same path, which would only describe
+        the same unusable value from another angle.
     """
 
     path: str
@@ -41,6 +45,7 @@ class Problem:
     line: int | None = None
     file: str | None = None
     severity: str = ERROR
+    supersedes: bool = False
 
     @property
     def is_error(self) -> bool:
@@ -67,11 +72,18 @@ class Problem:
 
 
 def sort_problems(problems: Iterable[Problem]) -> list[Problem]:
-    """Problems without duplicates, ordered by file and line (problems without a line keep their order, last)."""
+    """Problems without duplicates, ordered by file and line (problems without a line keep their order, last).
+
+    An error at the path of a problem with ``supersedes=True`` is dropped (see :class:`Problem`).
+    """
+    problems = list(problems)
+    final = {(p.file, p.path) for p in problems if p.supersedes and p.is_error}
     seen: set[tuple[str, str, str]] = set()
     unique: list[Problem] = []
     for p in problems:
         key = (p.path, p.message, p.severity)
+        if (p.file, p.path) in final and p.is_error and not p.supersedes:
+            continue
         if key not in seen:
             seen.add(key)
             unique.append(p)

@@ -169,3 +169,54 @@ def test_expected_event_count_warns_with_the_estimate(base):
 
 def test_the_base_scenario_does_not_warn_about_its_size(base):
     assert "duration" not in _warnings(base())
+
+
+def _write_with_long_integer(tmp_path, base, where):
+    """``base()`` as a YAML file with a 5000-digit integer (more than Python reads from text) at ``where``."""
+    raw = base()
+    node = raw
+    for part in where[:-1]:
+        node = node[part]
+    node[where[-1]] = "LONG_INTEGER"
+    path = tmp_path / "long.yaml"
+    with open(path, "w") as fh:
+        YAML(typ="safe", pure=True).dump(raw, fh)
+    text = path.read_text()
+    path.write_text(text.replace("LONG_INTEGER", "9" * 5000))
+    line = next(i for i, ln in enumerate(text.splitlines(), 1) if "LONG_INTEGER" in ln)
+    return path, line
+
+
+@pytest.mark.parametrize("where", [("plant", "params", "gain"), ("io", "y", "output"),
+                                  ("networks", "bus", "min_frame_bits")])
+def test_an_integer_with_more_digits_than_python_reads_is_refused_at_its_path_and_line(tmp_path, base, where):
+    """Before: the file's name only ('YAML value cannot be read (ValueError: Exceeds the limit (4300 digits)'),
+    and a traceback from the io check once the integer was read. One message: the other checks' views of the same
+    unusable value are dropped (Problem.supersedes)."""
+    path, line = _write_with_long_integer(tmp_path, base, where)
+    (p,) = check_scenario(path)
+    assert p.path == ".".join(where) and p.line == line
+    assert "over 4000 digits" in p.message and "write a smaller value" in p.message
+    assert len(str(p)) < 300
+
+
+def test_a_seed_with_5000_digits_is_refused_at_its_path(tmp_path, base):
+    path, line = _write_with_long_integer(tmp_path, base, ("seed",))
+    (p,) = check_scenario(path)
+    assert (p.path, p.line) == ("seed", line) and "between 0 and 2^128 - 1" in p.message
+
+
+def test_a_seed_is_below_2_to_the_128(base):
+    raw = base()
+    raw["seed"] = 2**128 - 1  # the largest seed (limits.SEED_LIMIT - 1)
+    assert _errors(raw) == {}
+    raw["seed"] = 2**128
+    assert "between 0 and 2^128 - 1" in _errors(raw)["seed"]
+
+
+def test_a_refused_number_is_the_only_message_at_its_path(base):
+    """NaN in a typed field: the limit's message, not also the schema's view of the same value."""
+    raw = base()
+    raw["signals"]["r"]["value"] = math.nan
+    problems = [p for p in check_scenario(raw) if p.path == "signals.r.value"]
+    assert [p.message.split(";")[0] for p in problems] == ["NaN is not a usable number"]
