@@ -304,7 +304,7 @@ def _bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: list[str
 
 def _sweep_surface(folder: Path, out: Path, plots: bool) -> pd.DataFrame | None:
     """Re-make the surface of a sweep folder with a ``surface:`` section; the optimum as a one-row table."""
-    from netsim.surface import surface_from_summary
+    from netsim.sweep.surface import surface_from_summary
     from netsim.sweep.spec import SweepSpec
 
     info = json.loads((folder / "sweep.json").read_text(encoding="utf-8"))

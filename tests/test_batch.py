@@ -3,7 +3,7 @@
 import pandas as pd
 import yaml
 
-from netsim.batch import expand_paths, run_batch
+from netsim.sweep.batch import expand_paths, run_batch
 
 
 def _write(path, name, **extra):

@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from netsim.errors import ConfigError
-from netsim.surface import describe_optimum, find_optimum, load_surface, surface_from_summary
+from netsim.sweep.surface import describe_optimum, find_optimum, load_surface, surface_from_summary
 
 
 def _summary(path: Path, z: np.ndarray, xs: np.ndarray, ys: np.ndarray, *, replicates: int = 1,

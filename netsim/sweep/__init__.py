@@ -8,7 +8,8 @@ Examples
 >>> print(result.describe())                                           # doctest: +SKIP
 
 The sweep file format is described in :mod:`netsim.sweep.spec`; the output folder in :mod:`netsim.sweep.run`;
-the ``summary.csv`` columns in :mod:`netsim.sweep.summary`.
+the ``summary.csv`` columns in :mod:`netsim.sweep.summary`; the GPI surface and its optimum in
+:mod:`netsim.sweep.surface`; ``netsim batch`` (many scenario files in parallel) in :mod:`netsim.sweep.batch`.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ Output folder layout::
     <out>/sweep.json                 which sweep this folder holds (name, file, factors, number of runs)
     <out>/points/<index>-<key>/      one run folder per run (scenario.yaml, *.csv, meta.json) + point.json
     <out>/summary.csv                one row per run (see netsim.sweep.summary)
-    <out>/optimum.json, surface.png  when the sweep file has a ``surface:`` section (netsim.surface)
+    <out>/optimum.json, surface.png  when the sweep file has a ``surface:`` section (netsim.sweep.surface)
     <out>/dask-scratch/              Dask's scratch space when a local Dask cluster ran the sweep, and
                                      workers.log: the output of its worker processes
 
@@ -111,7 +111,7 @@ class SweepResult:
             f"{self.executor}, {self.wall_time_s:.1f} s)\nsummary: {self.summary_path}"
         )
         if self.optimum:
-            from netsim.surface import describe_optimum
+            from netsim.sweep.surface import describe_optimum
 
             text += "\n" + describe_optimum(self.optimum)
         return text
@@ -535,7 +535,7 @@ def _collect(
     files = {"summary": summary_path}
     optimum = None
     if sweep.spec.surface is not None and not interrupted and n_ok:
-        from netsim.surface import surface_from_summary
+        from netsim.sweep.surface import surface_from_summary
 
         surf = sweep.spec.surface
         logx = surf.logx if surf.logx is not None else sweep.spec.factors[surf.x].is_log

@@ -64,7 +64,7 @@ def test_bench_hdd_gpi_sweep_local_pool(tmp_path: Path) -> None:
     print(f"direct run_point: {direct:.3f} s/point; through the pool: {per_point:.3f} s/point-worker "
           f"-> overhead {per_point - direct:+.3f} s/point ({per_point / direct:.2f}x)")
     if res.optimum:
-        from netsim.surface import describe_optimum
+        from netsim.sweep.surface import describe_optimum
 
         print(describe_optimum(res.optimum))
     assert res.n_runs == n

@@ -103,7 +103,7 @@ def test_malformed_set_is_a_usage_error(tmp_path, capsys, good):
 def test_batch_expands_folders_and_skips_sweep_files(tmp_path, monkeypatch, capsys, good):
     import pandas as pd
 
-    rec = _fake_module(monkeypatch, "batch", "run_batch", (pd.DataFrame({"status": ["ok", "ok", "error"]}), 1))
+    rec = _fake_module(monkeypatch, "sweep.batch", "run_batch", (pd.DataFrame({"status": ["ok", "ok", "error"]}), 1))
     folder = tmp_path / "sc"
     folder.mkdir()
     write(folder, "b.yaml", good)
