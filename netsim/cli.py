@@ -108,6 +108,8 @@ examples:
   netsim list                 everything, grouped by kind
   netsim list plants          registered plant models
   netsim list programs        task/handler programs a scenario can run
+  netsim list network can     one plugin: what it is, where it is defined, its parameters with
+                              types, defaults and units (from its Params model)
 
 kinds: """ + ", ".join(LIST_KINDS)
 
@@ -199,8 +201,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("list", parents=[common], help="list registered plants, programs, networks, ...",
                        epilog=_LIST_EPILOG,
-                       formatter_class=_Formatter, description="List registered building blocks.")
+                       formatter_class=_Formatter, description="List registered building blocks, or show one "
+                       "plugin's parameters.")
     p.add_argument("kind", nargs="?", metavar="KIND", help="one kind (plural or singular), e.g. plants")
+    p.add_argument("name", nargs="?", metavar="NAME", help="one plugin of KIND: print its parameters")
     p.set_defaults(func=_cmd_list)
     return parser
 
@@ -277,6 +281,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         from netsim.results import check_out_dir
 
         check_out_dir(args.out)  # a bad --out is refused before anything runs
+    if args.seed is not None:
+        overrides["seed"] = args.seed  # applied to the raw tree with the --set values: one validation
     try:
         scenario = load_scenario(args.file, overrides or None)
     except ScenarioError as exc:
@@ -288,7 +294,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     show = not (args.no_progress or args.quiet) and sys.stderr.isatty()
     with _RunProgress(scenario.name, enabled=show) as progress:
-        result = run(scenario, out=args.out, seed=args.seed, plot=args.plot, progress=progress.callback)
+        result = run(scenario, out=args.out, plot=args.plot, progress=progress.callback)
     meta = getattr(result, "meta", {}) or {}
     status = str(meta.get("status", "ok"))
     out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
@@ -392,7 +398,7 @@ def _expand_batch(paths: Sequence[str]) -> list[Path]:
 
 def _cmd_batch(args: argparse.Namespace) -> int:
     files = _expand_batch(args.paths)
-    from netsim.sweep.batch import run_batch
+    from netsim.batch import run_batch
 
     from netsim.status import count_statuses
 
@@ -475,6 +481,9 @@ def _cmd_list(args: argparse.Namespace) -> int:
         kinds = list(LIST_KINDS.values())
     for problem in plugin_load_problems():
         print(f"warning: {problem.message}", file=sys.stderr)
+    if args.name is not None:
+        _print_plugin(kinds[0], args.name)
+        return EXIT_OK
     for kind in kinds:
         items = registry.entries(kind)
         if args.kind is None:
@@ -487,6 +496,39 @@ def _cmd_list(args: argparse.Namespace) -> int:
         for e in items:
             print(f"{indent}{e.name:<{width}}  {e.summary}".rstrip())
     return EXIT_OK
+
+
+def _print_plugin(kind: str, name: str) -> None:
+    """``netsim list KIND NAME``: the plugin's summary, where it is defined, and its parameters as a table."""
+    from netsim import registry
+
+    obj = registry.lookup(kind, name)  # ConfigError (exit 2) with the closest name when unknown
+    same = [e for e in registry.entries(kind) if e.obj is obj]
+    entry = next((e for e in same if e.name == name), same[0] if same else None)
+    shown = entry.name if entry is not None else name
+    summary = entry.summary if entry is not None else ""
+    print(f"{shown} ({kind}){': ' + summary if summary else ''}")
+    aliases = [e.name for e in same if e.name != shown]
+    if aliases:
+        print(f"also named: {', '.join(aliases)}")
+    print(f"defined in: {getattr(obj, '__module__', '?')}:{getattr(obj, '__qualname__', type(obj).__name__)}")
+    model = registry.params_model(obj)
+    if model is None:
+        print("parameters: none declared (it has no Params model)")
+        return
+    rows = registry.param_rows(model)
+    if not rows:
+        print("parameters: none")
+        return
+    print("parameters:")
+    header = ("name", "type", "default", "unit", "description")
+    table = [header, *((r.name, r.type, r.default, r.unit, r.description) for r in rows)]
+    widths = [min(max(len(row[i]) for row in table), cap) for i, cap in enumerate((28, 36, 24, 8))]
+    for row in table:
+        cells = [f"{cell:<{w}}" if len(cell) <= w else cell for cell, w in zip(row[:4], widths)]
+        print(("  " + "  ".join(cells) + "  " + row[4]).rstrip())
+    if any(r.unit == registry.TIME_UNIT for r in rows):
+        print("times are written with their unit: 20 us, 1.5 ms, 2 s")
 
 
 # --------------------------------------------------------------------------------------------- main
