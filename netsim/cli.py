@@ -398,7 +398,7 @@ def _expand_batch(paths: Sequence[str]) -> list[Path]:
 
 def _cmd_batch(args: argparse.Namespace) -> int:
     files = _expand_batch(args.paths)
-    from netsim.batch import run_batch
+    from netsim.sweep.batch import run_batch
 
     from netsim.status import count_statuses
 
