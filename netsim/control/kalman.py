@@ -1,19 +1,27 @@
-"""Discrete Kalman filter helpers (steady state by the discrete Riccati equation, and one step).
+"""Discrete Kalman filter: helpers (steady state by the discrete Riccati equation, one step) and a filter object.
 
 Plain numpy/scipy: the steady-state prior covariance solves the filter DARE
 ``M = A M A' + W - A M C' (C M C' + V)^-1 C M A'`` with :func:`scipy.linalg.solve_discrete_are`
 (the dual of the LQR equation), and the gain used for a correction from a prior is
 ``K = M C' (C M C' + V)^-1``.
+
+:class:`KalmanFilter` is the general filter of the control toolbox (time-varying or steady-state gain,
+prediction-only steps, delayed measurements fused at their sample time); the helper functions are the ones
+the HDD study's NUMRE filter uses and are unchanged.
 """
 
 from __future__ import annotations
 
+from collections import deque
+from typing import Any
+
 import numpy as np
 import scipy.linalg as sla
 
-from netsim.errors import ConfigError
+from netsim.control.design_checks import as_input_matrix, as_matrix, as_vector, check_detectable, check_square, check_weight
+from netsim.errors import ConfigError, SimulationError
 
-__all__ = ["steady_state_prior", "kalman_gain", "riccati_step"]
+__all__ = ["KalmanFilter", "steady_state_prior", "kalman_gain", "riccati_step"]
 
 
 def steady_state_prior(A: np.ndarray, C: np.ndarray, W: np.ndarray, V: np.ndarray) -> np.ndarray:
@@ -50,3 +58,231 @@ def riccati_step(M: np.ndarray, A: np.ndarray, C: np.ndarray, W: np.ndarray, V: 
     S = C @ M @ C.T + np.atleast_2d(V)
     AM = A @ M
     return AM @ A.T + W - AM @ C.T @ np.linalg.solve(S, C @ M @ A.T)
+
+
+class _Sample:
+    """What the filter remembers of one sample ``k``: the prior, the measurements fused at ``k``, the input."""
+
+    __slots__ = ("k", "x_prior", "P_prior", "ys", "u")
+
+    def __init__(self, k: int, x_prior: np.ndarray, P_prior: np.ndarray) -> None:
+        self.k = k
+        self.x_prior = x_prior
+        self.P_prior = P_prior
+        self.ys: list[np.ndarray] = []
+        self.u: np.ndarray | None = None
+
+
+class KalmanFilter:
+    """Discrete Kalman filter for ``x[k+1] = A x[k] + B u[k] + w[k]``, ``y[k] = C x[k] + v[k]``.
+
+    ``w ~ N(0, Q)`` and ``v ~ N(0, R)`` are white and independent. The filter lives on the sampling grid
+    ``k = 0, 1, ...``: :meth:`correct` fuses a measurement, :meth:`predict` moves to the next sample with the
+    input held over the period (see :mod:`netsim.control.interface` for the order a loop calls them in).
+
+    Parameters
+    ----------
+    A, B, C
+        Discrete model (``n x n``, ``n x m``, ``p x n``). ``B`` may be ``None`` (no input, ``m = 0``).
+    Q, R
+        Process and measurement noise covariances (``n x n`` positive semidefinite, ``p x p`` positive
+        definite); a scalar means a multiple of the identity and a vector a diagonal.
+    x0, P0
+        Prior mean and covariance of ``x[0]`` (defaults: zeros and the identity; for the steady-state filter
+        ``P0`` is ignored).
+    steady_state
+        ``False`` (default): time-varying filter, the covariance is propagated and the gain recomputed at each
+        correction. ``True``: the constant gain ``K = M C' (C M C' + R)^-1`` where ``M`` solves the filter DARE
+        (computed once here, :func:`steady_state_prior`); the covariance is not propagated.
+    history
+        How many samples back a delayed measurement may be fused (0: only measurements of the current sample).
+
+    Notes
+    -----
+    *Missing measurements.* A sample without :meth:`correct` is a prediction-only step: the estimate is the
+    model propagation ``x <- A x + B u`` and (time-varying filter) ``P <- A P A' + Q``.
+
+    *Delayed measurements* (method: re-filtering from a short history). For each of the last ``history``
+    samples the filter keeps the prior ``(x, P)`` at that sample, the measurements fused there and the input
+    applied after it. A measurement whose sample index ``k_s`` is older than the current sample is fused at
+    ``k_s``: the filter goes back to the stored prior at ``k_s``, fuses every measurement of ``k_s`` (the new
+    one included), then repeats the predictions with the stored inputs and the corrections already made at
+    ``k_s + 1 ... k``. For a linear filter the result equals, to rounding, the filter that had received the
+    measurement on time; it costs ``k - k_s`` predictions and corrections per late measurement.
+
+    *Stale and duplicate measurements* are never fused: one measurement per sample index is fused (a second
+    one for the same ``k`` is a duplicate), and one older than ``history`` samples is stale. Both make
+    :meth:`correct` return ``False`` and are counted in :attr:`duplicates` and :attr:`stale`.
+
+    The feed-through ``D`` is taken as zero (the measurement at ``k`` is taken before ``u[k]`` is computed).
+    """
+
+    def __init__(
+        self,
+        A: Any,
+        B: Any,
+        C: Any,
+        Q: Any,
+        R: Any,
+        *,
+        x0: Any = None,
+        P0: Any = None,
+        steady_state: bool = False,
+        history: int = 0,
+    ) -> None:
+        self.A = as_matrix("A", A)
+        n = check_square("A", self.A)
+        self.B = np.zeros((n, 0)) if B is None else as_input_matrix("B", B, n)
+        self.C = as_matrix("C", C, (None, n))
+        self.n, self.m, self.p = n, self.B.shape[1], self.C.shape[0]
+        self.Q = check_weight("Q", Q, n, definite=False)
+        self.R = check_weight("R", R, self.p, definite=True)
+        if int(history) != history or history < 0:
+            raise ConfigError(f"history must be a whole number of samples >= 0, got {history!r}")
+        self.history = int(history)
+        check_detectable(self.A, self.C)
+        self.steady_state = bool(steady_state)
+        self.x0 = np.zeros(n) if x0 is None else as_vector("x0", x0, n)
+        if self.steady_state:
+            M = steady_state_prior(self.A, self.C, self.Q, self.R)
+            self.K_ss = kalman_gain(M, self.C, self.R)
+            self.M_ss = M
+            self.P_ss = M - self.K_ss @ self.C @ M  # posterior covariance in steady state
+            self.P0 = M
+            closed = (np.eye(n) - self.K_ss @ self.C) @ self.A
+            if np.max(np.abs(np.linalg.eigvals(closed))) >= 1.0:
+                raise ConfigError(
+                    "Kalman filter: the Riccati solution does not give a stable filter; check that Q excites "
+                    "every mode of A on the unit circle"
+                )
+        else:
+            self.P0 = np.eye(n) if P0 is None else check_weight("P0", P0, n, definite=False)
+        self._I = np.eye(n)
+        self.reset()
+
+    # --- state -------------------------------------------------------------------------------------------
+    def reset(self, x0: Any = None, P0: Any = None) -> None:
+        """Back to sample 0 with the prior ``(x0, P0)`` (the constructor's unless given here)."""
+        self.k = 0
+        self.x = self.x0.copy() if x0 is None else as_vector("x0", x0, self.n)
+        self.P = self.P0.copy() if P0 is None or self.steady_state else check_weight("P0", P0, self.n, definite=False)
+        self._hist: deque[_Sample] = deque(maxlen=self.history + 1)
+        self._hist.append(_Sample(0, self.x, self.P))
+        self.fused = 0
+        self.duplicates = 0
+        self.stale = 0
+
+    @property
+    def x_hat(self) -> np.ndarray:
+        """Estimate at the current sample (posterior if a measurement was fused there, prior otherwise)."""
+        return self.x
+
+    @property
+    def gain(self) -> np.ndarray:
+        """The gain a correction at the current sample would use."""
+        if self.steady_state:
+            return self.K_ss
+        return kalman_gain(self.P, self.C, self.R)
+
+    # --- the two half-steps ------------------------------------------------------------------------------
+    def _fuse(self, x: np.ndarray, P: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        C = self.C
+        if self.steady_state:
+            return x + self.K_ss @ (y - C @ x), P
+        PCt = P @ C.T
+        S = C @ PCt + self.R
+        K = np.linalg.solve(S, PCt.T).T
+        x = x + K @ (y - C @ x)
+        IKC = self._I - K @ C
+        P = IKC @ P @ IKC.T + K @ self.R @ K.T  # Joseph form: stays symmetric positive semidefinite
+        return x, P
+
+    def _propagate(self, x: np.ndarray, P: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        A = self.A
+        x = A @ x + self.B @ u
+        if not self.steady_state:
+            P = A @ P @ A.T + self.Q
+        return x, P
+
+    def _as_u(self, u: Any) -> np.ndarray:
+        if self.m == 0:
+            return np.zeros(0)
+        u = np.asarray(u, dtype=float).reshape(-1)
+        if u.shape[0] != self.m:
+            raise SimulationError(f"Kalman filter: the input has {u.shape[0]} entries, the model B has {self.m} columns")
+        return u
+
+    def correct(self, y: Any, k: int | None = None) -> bool:
+        """Fuse a measurement taken at sample ``k`` (default: the current sample).
+
+        Parameters
+        ----------
+        y
+            Measurement (``p`` entries; a scalar when ``p`` is 1).
+        k
+            Sample index at which ``y`` was taken. An older ``k`` (a delayed measurement) is fused at that
+            sample and the estimate brought forward again (see the class notes).
+
+        Returns
+        -------
+        bool
+            ``True`` when fused; ``False`` for a duplicate (already one measurement for ``k``) or a stale one
+            (older than ``history`` samples).
+
+        Raises
+        ------
+        SimulationError
+            ``k`` in the future, or ``y`` of the wrong size.
+        """
+        y = np.asarray(y, dtype=float).reshape(-1)
+        if y.shape[0] != self.p:
+            raise SimulationError(f"Kalman filter: the measurement has {y.shape[0]} entries, C has {self.p} rows")
+        if k is None or k == self.k:
+            rec = self._hist[-1]
+            if rec.ys:
+                self.duplicates += 1
+                return False
+            rec.ys.append(y)
+            self.x, self.P = self._fuse(self.x, self.P, y)
+            self.fused += 1
+            return True
+        if k > self.k:
+            raise SimulationError(f"Kalman filter: a measurement of sample {k} arrived at sample {self.k} (from the future)")
+        back = self.k - k
+        if back >= len(self._hist):
+            self.stale += 1
+            return False
+        recs = list(self._hist)[-1 - back :]
+        if recs[0].ys:
+            self.duplicates += 1
+            return False
+        recs[0].ys.append(y)
+        x, P = recs[0].x_prior, recs[0].P_prior
+        for i, rec in enumerate(recs):
+            if i > 0:
+                x, P = self._propagate(x, P, recs[i - 1].u)
+                rec.x_prior, rec.P_prior = x, P
+            for yy in rec.ys:
+                x, P = self._fuse(x, P, yy)
+        self.x, self.P = x, P
+        self.fused += 1
+        return True
+
+    def predict(self, u: Any = None) -> None:
+        """Move to the next sample: ``x <- A x + B u`` and (time-varying filter) ``P <- A P A' + Q``."""
+        u = self._as_u(0.0 if u is None and self.m else u)
+        self._hist[-1].u = u
+        self.x, self.P = self._propagate(self.x, self.P, u)
+        self.k += 1
+        self._hist.append(_Sample(self.k, self.x, self.P))
+
+    def advance(self, y: Any, u: Any) -> np.ndarray:
+        """Correct with ``y`` (``None``: prediction only), return the estimate, then predict with ``u``.
+
+        Convenience for offline use; returns the estimate at the sample before the prediction.
+        """
+        if y is not None:
+            self.correct(y)
+        x = self.x
+        self.predict(u)
+        return x

@@ -16,18 +16,21 @@ Systems*: forward difference for the integral, backward difference for the filte
 With ``Ti = None`` the controller is a PD (no integral). An optional output saturation stops the integrator
 from winding up (the integral is not advanced while the output is saturated in the direction of the error).
 
-The object is plain numerics: no simpy, kernel or network inside.
+The object is plain numerics: no simpy, kernel or network inside. :meth:`PID.step` takes ``(r, y)`` (the
+order the programs use); :meth:`PID.as_law` gives the same controller behind the toolbox's common interface
+``step(y, r) -> u`` (:class:`~netsim.control.interface.ControlLaw`).
 """
 
 from __future__ import annotations
 
+import numpy as np
 from pydantic import model_validator
 
 from netsim.registry import register
 from netsim.timebase import to_seconds
 from netsim.units import Duration, StrictModel
 
-__all__ = ["PID", "PIDParams"]
+__all__ = ["PID", "PIDLaw", "PIDParams"]
 
 
 class PIDParams(StrictModel):
@@ -137,3 +140,29 @@ class PID:
         self.y_old = y
         self.u = u
         return u
+
+    def as_law(self) -> "PIDLaw":
+        """This controller behind the common ``step(y, r) -> u`` interface (same state, same results)."""
+        return PIDLaw(self)
+
+
+class PIDLaw:
+    """A :class:`PID` with the toolbox's argument order: ``step(y, r) -> u`` (measurement first).
+
+    The wrapped controller keeps its state; ``PIDLaw(pid).step(y, r)`` returns exactly ``pid.step(r, y)``.
+    """
+
+    def __init__(self, pid: PID) -> None:
+        self.pid = pid
+
+    def step(self, y: float, r: float) -> float:
+        """Control signal for measurement ``y`` and reference ``r``."""
+        if not isinstance(y, (int, float)):
+            y = np.asarray(y, dtype=float).reshape(-1)[0]
+        if not isinstance(r, (int, float)):
+            r = np.asarray(r, dtype=float).reshape(-1)[0]
+        return self.pid.step(float(r), float(y))
+
+    def reset(self) -> None:
+        """Reset the wrapped PID."""
+        self.pid.reset()

@@ -1,0 +1,174 @@
+"""Luenberger observer for a discrete model, gain by pole placement, in predictor or current form.
+
+Model: ``x[k+1] = A x[k] + B u[k]``, ``y[k] = C x[k]``.
+
+*Predictor form* (the estimate at ``k`` uses measurements up to ``y[k-1]``: it leaves a whole sample for the
+computation)::
+
+    x_hat[k+1] = A x_hat[k] + B u[k] + L (y[k] - C x_hat[k])
+    e[k+1] = (A - L C) e[k],            e = x - x_hat
+
+with ``L`` placing the eigenvalues of ``A - L C`` at the requested poles (``L' = place(A', C', poles)``).
+
+*Current (filter) form* (the estimate at ``k`` already uses ``y[k]``)::
+
+    x_bar[k] = A x_hat[k-1] + B u[k-1]                  (prediction)
+    x_hat[k] = x_bar[k] + L (y[k] - C x_bar[k])         (correction)
+    e[k+1] = (I - L C) A e[k]  =  (A - L C A) e[k]
+
+with ``L`` placing the eigenvalues of ``A - L C A`` at the requested poles (``L' = place(A', (C A)', poles)``;
+this needs ``(A, C A)`` observable, so ``A`` may not have a zero eigenvalue in an unobservable direction).
+The prediction error ``x - x_bar`` has the same eigenvalues (``A (I - L C)`` is similar to ``(I - L C) A``).
+
+The gain is computed once at construction with python-control's ``acker`` (one output: handles repeated
+poles) or ``place`` (several outputs); the steps are plain numpy.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+
+from netsim.control.design_checks import (
+    as_input_matrix,
+    as_matrix,
+    as_vector,
+    check_poles,
+    check_square,
+    uncontrollable_modes,
+)
+from netsim.errors import ConfigError, SimulationError
+
+__all__ = ["LuenbergerObserver", "observer_gain"]
+
+
+def observer_gain(A: Any, C: Any, poles: Any, form: Literal["predictor", "current"] = "predictor") -> np.ndarray:
+    """Gain ``L`` (``n x p``) placing the observer error eigenvalues of ``form`` at ``poles``.
+
+    Raises
+    ------
+    ConfigError
+        Poles not strictly inside the unit circle or not in conjugate pairs, a mode the measurement cannot
+        see (named by its eigenvalue), or a placement python-control cannot achieve.
+    """
+    A = as_matrix("A", A)
+    n = check_square("A", A)
+    C = as_matrix("C", C, (None, n))
+    p = check_poles("poles", poles, n)
+    if form not in ("predictor", "current"):
+        raise ConfigError(f"form must be 'predictor' or 'current', got {form!r}")
+    Cf = C if form == "predictor" else C @ A
+    what = "(A, C)" if form == "predictor" else "(A, C A) (current form)"
+    hidden = uncontrollable_modes(A.T, Cf.T, only_unstable=False)
+    if hidden:
+        modes = ", ".join(f"{complex(m):.6g}" for m in hidden)
+        extra = " (A has a zero eigenvalue there: use the predictor form)" if form == "current" and any(
+            abs(m) < 1e-12 for m in hidden
+        ) else ""
+        raise ConfigError(
+            f"poles: the pair {what} is not observable, so the observer cannot place the mode(s) at eigenvalue "
+            f"{modes}{extra}; measure another output"
+        )
+    import control  # lazy: python-control takes about a second to import
+
+    try:
+        if Cf.shape[0] == 1:
+            Lt = control.acker(A.T, Cf.T, p)
+        else:
+            Lt = control.place(A.T, Cf.T, p)
+    except Exception as exc:  # python-control/scipy raise ValueError, LinAlgError, ControlDimension ...
+        raise ConfigError(f"poles: python-control could not place the observer poles {list(p)} ({exc})") from exc
+    L = np.asarray(Lt, dtype=float).T
+    got = np.sort_complex(np.linalg.eigvals(A - L @ Cf))
+    want = np.sort_complex(p)
+    if np.max(np.abs(got - want)) > 1e-6 * max(1.0, float(np.max(np.abs(want)))):
+        raise ConfigError(
+            f"poles: the placement is ill-conditioned (asked {list(want)}, got {list(got)}); choose poles further "
+            "apart or use fewer repeated poles"
+        )
+    return L
+
+
+class LuenbergerObserver:
+    """Discrete Luenberger observer (see the module docstring for both forms and their error dynamics).
+
+    Parameters
+    ----------
+    A, B, C
+        Discrete model; ``B`` may be ``None`` (no input).
+    poles
+        ``n`` observer poles, strictly inside the unit circle, complex ones in conjugate pairs.
+    form
+        ``"predictor"`` (estimate at ``k`` from ``y`` up to ``k-1``) or ``"current"`` (uses ``y[k]``).
+    x0
+        Initial estimate (default zeros).
+
+    Notes
+    -----
+    In a loop (:class:`~netsim.control.interface.OutputFeedback`): :meth:`correct` with ``y[k]``, the law reads
+    :attr:`x_hat`, then :meth:`predict` with ``u[k]``. In the predictor form ``correct`` only stores ``y[k]``
+    for the next prediction; a sample without measurement predicts open loop (``x_hat <- A x_hat + B u``).
+    """
+
+    def __init__(
+        self,
+        A: Any,
+        B: Any,
+        C: Any,
+        poles: Any,
+        *,
+        form: Literal["predictor", "current"] = "predictor",
+        x0: Any = None,
+    ) -> None:
+        self.A = as_matrix("A", A)
+        n = check_square("A", self.A)
+        self.B = np.zeros((n, 0)) if B is None else as_input_matrix("B", B, n)
+        self.C = as_matrix("C", C, (None, n))
+        self.n, self.m, self.p = n, self.B.shape[1], self.C.shape[0]
+        self.form = form
+        self.L = observer_gain(self.A, self.C, poles, form)
+        self.poles = check_poles("poles", poles, n)
+        self.x0 = np.zeros(n) if x0 is None else as_vector("x0", x0, n)
+        self.reset()
+
+    def reset(self, x0: Any = None) -> None:
+        """Back to the initial estimate, no stored measurement."""
+        self.x = self.x0.copy() if x0 is None else as_vector("x0", x0, self.n)
+        self._y: np.ndarray | None = None
+
+    @property
+    def x_hat(self) -> np.ndarray:
+        """Estimate at the current sample."""
+        return self.x
+
+    @property
+    def error_matrix(self) -> np.ndarray:
+        """Matrix of the error dynamics: ``A - L C`` (predictor) or ``(I - L C) A`` (current)."""
+        if self.form == "predictor":
+            return self.A - self.L @ self.C
+        return (np.eye(self.n) - self.L @ self.C) @ self.A
+
+    def correct(self, y: Any) -> bool:
+        """Use the measurement of the current sample; ``False`` if one was already used at this sample."""
+        if self._y is not None:
+            return False
+        y = np.asarray(y, dtype=float).reshape(-1)
+        if y.shape[0] != self.p:
+            raise SimulationError(f"Luenberger observer: the measurement has {y.shape[0]} entries, C has {self.p} rows")
+        self._y = y
+        if self.form == "current":
+            self.x = self.x + self.L @ (y - self.C @ self.x)
+        return True
+
+    def predict(self, u: Any = None) -> None:
+        """Move to the next sample with input ``u``."""
+        if self.m:
+            u = np.asarray(0.0 if u is None else u, dtype=float).reshape(-1)
+            x = self.A @ self.x + self.B @ u
+        else:
+            x = self.A @ self.x
+        if self.form == "predictor" and self._y is not None:
+            x = x + self.L @ (self._y - self.C @ self.x)
+        self.x = x
+        self._y = None
