@@ -338,6 +338,3 @@ hdd_et.Params = HddControlParams  # type: ignore[attr-defined]
 
 
 hdd_et.Params = HddControlParams  # type: ignore[attr-defined]
-
-# the case-study report registers itself as kind "report" "hdd"
-import models.hdd_report  # noqa: E402,F401

@@ -193,18 +193,9 @@ class EtControlParams(StrictModel):
 
 
 def _et_params(params: Any) -> EtControlParams:
-    if isinstance(params, EtControlParams):
-        return params
-    from pydantic import ValidationError
+    from netsim.metrics.runtime import validate_params
 
-    try:
-        return EtControlParams.model_validate(dict(params or {}))
-    except ValidationError as exc:
-        from netsim.scenario.messages import problems_from_validation_error
-
-        problems = problems_from_validation_error(exc, model=EtControlParams)
-        raise ConfigError("et_control: " + "; ".join(f"{p.path}: {p.message}" if p.path else p.message
-                                                     for p in problems)) from None
+    return validate_params(EtControlParams, params, "et_control")
 
 
 @register("metric", "et_control", "et.Uc, et.Ua, et.Cc, et.CS, et.ISE, et.ISEP, et.NE, et.GPI of Cuenca et al. "

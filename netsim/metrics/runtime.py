@@ -46,6 +46,7 @@ __all__ = [
     "compute_metrics",
     "job_outcome_counts",
     "held_integrals",
+    "validate_params",
     "ControlErrorParams",
     "LatencyParams",
 ]
@@ -176,14 +177,28 @@ def _column(result: Any, name: str) -> np.ndarray:
     return result.signals[name].to_numpy(dtype=float)
 
 
-def _validate(model: type[StrictModel], params: Any, what: str) -> Any:
+def validate_params(model: type[StrictModel], params: Any, what: str) -> Any:
+    """``params`` (a mapping, or already a ``model``) checked by a metric's ``Params`` model; a :class:`ConfigError`
+    naming the metric ``what`` and each bad field otherwise (``netsim validate`` checks a scenario's metric
+    parameters before a run; this is the check for metrics called from Python)."""
     if isinstance(params, model):
         return params
     try:
         return model.model_validate(dict(params or {}))
     except ValidationError as exc:
-        problems = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in exc.errors())
+        problems = "; ".join(_param_problem(e, model) for e in exc.errors())
         raise ConfigError(f"metric '{what}': {problems}") from None
+
+
+def _param_problem(error: Any, model: type[StrictModel]) -> str:
+    """One pydantic error as a short sentence saying what to change."""
+    loc = ".".join(str(p) for p in error["loc"])
+    if error["type"] == "extra_forbidden":
+        known = ", ".join(sorted(model.model_fields))
+        return f"unknown key '{loc}' (known: {known}); remove or rename it"
+    if error["type"] == "missing":
+        return f"missing required key '{loc}'; add it"
+    return f"{loc}: {error['msg']}"
 
 
 def held_integrals(t: np.ndarray, e: np.ndarray, t0: float, t1: float) -> tuple[float, float, float]:
@@ -203,7 +218,7 @@ def held_integrals(t: np.ndarray, e: np.ndarray, t0: float, t1: float) -> tuple[
 @register("metric", "control_error", "IAE and ISE of reference minus output over [t0, t1]")
 def control_error(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
     """IAE/ISE of ``reference - output`` (reference 0 when not given) from the signals table."""
-    p = _validate(ControlErrorParams, params, "control_error")
+    p = validate_params(ControlErrorParams, params, "control_error")
     t = result.signals["time_s"].to_numpy(dtype=float)
     y = _column(result, p.output)
     r = _column(result, p.reference) if p.reference else np.zeros_like(y)
@@ -306,7 +321,7 @@ def chain_latencies(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[str]
 @register("metric", "latency", "sample-to-actuation latency along a task chain, from the jobs/messages tables")
 def latency(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
     """Mean/max/min latency and the number of complete chains."""
-    p = _validate(LatencyParams, params, "latency")
+    p = validate_params(LatencyParams, params, "latency")
     values = chain_latencies_ns(result.jobs, result.messages, p.chain)
     n = p.name
     if values.size == 0:
