@@ -16,7 +16,7 @@ the CPU, at the start of the job's next segment (TrueTime's segment functions).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -30,12 +30,101 @@ if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.exectime import ExecTime
     from netsim.kernel.kernel import Kernel
 
-__all__ = ["Job"]
+__all__ = ["Job", "JobContext", "JobState"]
 
 _EXECUTE = rq.EXECUTE
 
 
-class Job:
+class JobContext:
+    """What the jobs of one kernel need of it: the one object a :class:`Job` holds instead of the kernel.
+
+    A job reads the clock, the node's shared state and random stream through it, and the synchronisation
+    objects (:mod:`netsim.kernel.sync`) hand a blocked job its result through :attr:`unblock`; nothing else of
+    the kernel is reached from a job.
+
+    Attributes
+    ----------
+    kernel : Kernel
+        The kernel (``job.kernel``: its public API, e.g. ``create_job`` or ``trigger``).
+    name : str
+        The node name.
+    sim : EventLoop
+        The event loop (``sim.now`` is the time in ns).
+    shared : dict[str, Any]
+        The node's state shared by its bodies (``kernel.shared``).
+    rng : numpy.random.Generator
+        The node's random stream for body code.
+    unblock : Callable[[Job, Any], None]
+        Wake a blocked job with a value as the result of its request (called by the sync objects).
+    """
+
+    __slots__ = ("kernel", "name", "sim", "shared", "rng", "unblock")
+
+    def __init__(self, kernel: "Kernel", name: str, sim: Any, shared: dict[str, Any], rng: np.random.Generator,
+                 unblock: Callable[["Job", Any], None]) -> None:
+        self.kernel = kernel
+        self.name = name
+        self.sim = sim
+        self.shared = shared
+        self.rng = rng
+        self.unblock = unblock
+
+
+class JobState:
+    """The scheduling state the kernel keeps on each job (read and written by the kernel only).
+
+    Every field is a class-level default, so creating a job (one per handler invocation, possibly 100 000
+    per simulated second) sets only what differs.
+
+    Attributes
+    ----------
+    _state : int
+        Life-cycle state (:mod:`netsim.kernel.states`).
+    _rank, _base_rank : tuple
+        Urgency in the ready queue (smaller is more urgent): ``(0, priority)`` for handlers, ``(1, key)``
+        for task jobs (the policy's key); ``_rank`` is raised while a non-preemptible job runs.
+    _seq : int
+        Order of becoming ready (FIFO among equal ranks).
+    _np : bool
+        Non-preemptible between tasks once started.
+    _gen, _value
+        The body's generator and the value its pending request returns.
+    _remaining : int
+        CPU time left of the current ``execute``.
+    _pre_left : int
+        Kernel time to run before the body continues: a context switch or a handler's ISR latency.
+    _budget : int | None
+        WCET budget left (``None``: no budget).
+    _seg_start, _seg_end : int
+        Start and planned end of the current CPU segment.
+    _ev, _ev_time
+        The pending segment wake-up of the job and its time.
+    _win_end : int
+        For a periodic load's real invocation at a tick: the end of its window.
+    _blocked_on, _wake
+        What a blocked job waits on; its pending sleep wake-up.
+    """
+
+    _gen: Any = None
+    _state = NEW
+    _rank: tuple[Any, Any] = (1, 0)
+    _base_rank: tuple[Any, Any] = (1, 0)
+    _seq = 0
+    _remaining = 0
+    _pre_left = 0
+    _budget: int | None = None
+    _value: Any = None
+    _seg_start = 0
+    _seg_end = 0
+    _ev: Any = None
+    _ev_time = 0
+    _win_end = 0
+    _blocked_on: Any = None
+    _wake: Any = None
+    _np = False
+
+
+class Job(JobState):
     """One job of a task, or one invocation of an interrupt handler.
 
     Attributes
@@ -63,25 +152,6 @@ class Job:
         For handler invocations: who raised it (timer, trigger, network, task name).
     """
 
-    # Per-job state that most jobs never change lives in class-level defaults, so creating a job (one
-    # per handler invocation, possibly 100 000 per simulated second) sets only what differs.
-    _gen: Any = None
-    _state = NEW
-    _rank: tuple[Any, Any] = (1, 0)
-    _base_rank: tuple[Any, Any] = (1, 0)
-    _seq = 0
-    _remaining = 0
-    _pre_left = 0
-    _budget: int | None = None
-    _value: Any = None
-    _seg_start = 0
-    _seg_end = 0
-    _ev: Any = None  # pending segment wake-up of this job
-    _ev_time = 0
-    _win_end = 0  # a periodic load's real invocation at a tick: the end of its window
-    _blocked_on: Any = None
-    _wake: Any = None
-    _np = False
     start: int | None = None
     finish: int | None = None
     cpu_time = 0
@@ -91,9 +161,9 @@ class Job:
     wcet_overrun = False
     deadline_overrun = False
 
-    def __init__(self, kernel: "Kernel", task: Any, job_id: int, data: Any, release: int,
+    def __init__(self, ctx: JobContext, task: Any, job_id: int, data: Any, release: int,
                  deadline: int | None, is_handler: bool = False, invoker: str | None = None) -> None:
-        self._kernel = kernel
+        self._ctx = ctx
         self._task = task
         self.is_handler = is_handler
         self.task_name: str = task.name
@@ -108,7 +178,7 @@ class Job:
     @property
     def now(self) -> int:
         """Current simulation time in ns."""
-        return self._kernel._sim.now  # type: ignore[no-any-return]
+        return self._ctx.sim.now  # type: ignore[no-any-return]
 
     @property
     def spec(self) -> Any:
@@ -118,17 +188,17 @@ class Job:
     @property
     def kernel(self) -> "Kernel":
         """The kernel (node) the job runs on."""
-        return self._kernel
+        return self._ctx.kernel
 
     @property
     def shared(self) -> dict[str, Any]:
         """The node's shared state (``kernel.shared``)."""
-        return self._kernel.shared
+        return self._ctx.shared
 
     @property
     def rng(self) -> np.random.Generator:
         """The node's random stream for body code, ``env.rng(f"kernel.{node}.rng")``."""
-        return self._kernel.rng
+        return self._ctx.rng
 
     @property
     def state(self) -> str:

@@ -13,46 +13,54 @@ yield that object each time; it saves two Python calls per request in the hot lo
 
 from __future__ import annotations
 
+from enum import IntEnum
 from typing import Any
 
-__all__ = ["Request", "OP_NAMES"]
+__all__ = ["Op", "Request", "OP_NAMES"]
 
-# Operation codes, ordered roughly by how often they occur (the kernel tests them in this order).
-EXECUTE = 0
-SLEEP_UNTIL = 1
-ANALOG_IN = 2
-ANALOG_OUT = 3
-SEND = 4
-RECEIVE = 5
-FETCH = 6
-POST = 7
-TRY_FETCH = 8
-TRY_POST = 9
-TAKE = 10
-GIVE = 11
-WAIT = 12
-NOTIFY = 13
-KILL = 14
-SLEEP = 15
 
-OP_NAMES: dict[int, str] = {
-    EXECUTE: "execute",
-    SLEEP_UNTIL: "sleep_until",
-    ANALOG_IN: "analog_in",
-    ANALOG_OUT: "analog_out",
-    SEND: "send",
-    RECEIVE: "receive",
-    FETCH: "fetch",
-    POST: "post",
-    TRY_FETCH: "try_fetch",
-    TRY_POST: "try_post",
-    TAKE: "take",
-    GIVE: "give",
-    WAIT: "wait",
-    NOTIFY: "notify",
-    KILL: "kill",
-    SLEEP: "sleep",
-}
+class Op(IntEnum):
+    """The operation of a request. The kernel answers each one with its method ``Kernel._op_<name>``
+    (:mod:`netsim.kernel.interpreter`), except ``EXECUTE``, the most frequent, which it handles inline."""
+
+    EXECUTE = 0
+    SLEEP_UNTIL = 1
+    ANALOG_IN = 2
+    ANALOG_OUT = 3
+    SEND = 4
+    RECEIVE = 5
+    FETCH = 6
+    POST = 7
+    TRY_FETCH = 8
+    TRY_POST = 9
+    TAKE = 10
+    GIVE = 11
+    WAIT = 12
+    NOTIFY = 13
+    KILL = 14
+    SLEEP = 15
+
+
+# The operations as module constants (``Request(RECEIVE, "net")`` in programs that prebuild their requests).
+EXECUTE = Op.EXECUTE
+SLEEP_UNTIL = Op.SLEEP_UNTIL
+ANALOG_IN = Op.ANALOG_IN
+ANALOG_OUT = Op.ANALOG_OUT
+SEND = Op.SEND
+RECEIVE = Op.RECEIVE
+FETCH = Op.FETCH
+POST = Op.POST
+TRY_FETCH = Op.TRY_FETCH
+TRY_POST = Op.TRY_POST
+TAKE = Op.TAKE
+GIVE = Op.GIVE
+WAIT = Op.WAIT
+NOTIFY = Op.NOTIFY
+KILL = Op.KILL
+SLEEP = Op.SLEEP
+
+#: The name of each operation (the name of its ``Job`` method).
+OP_NAMES: dict[int, str] = {op: op.name.lower() for op in Op}
 
 
 class Request:
@@ -60,15 +68,15 @@ class Request:
 
     Attributes
     ----------
-    op : int
-        The operation (see :data:`OP_NAMES`).
+    op : Op
+        The operation.
     a, b, c
         Operation arguments (a duration, a mailbox and an item, ...).
     """
 
     __slots__ = ("op", "a", "b", "c")
 
-    def __init__(self, op: int, a: Any = None, b: Any = None, c: Any = None) -> None:
+    def __init__(self, op: Op, a: Any = None, b: Any = None, c: Any = None) -> None:
         self.op = op
         self.a = a
         self.b = b

@@ -67,7 +67,7 @@ class Mailbox:
         while getters:
             job = getters.popleft()
             if _live(job, self):
-                job._kernel._unblock(job, item)
+                job._ctx.unblock(job, item)
                 return True
         if self.capacity is not None and len(self.items) >= self.capacity:
             return False
@@ -84,7 +84,7 @@ class Mailbox:
             job, pending = putters.popleft()
             if _live(job, self):
                 self.items.append(pending)
-                job._kernel._unblock(job, None)
+                job._ctx.unblock(job, None)
                 break
         return True, item
 
@@ -128,7 +128,7 @@ class Semaphore:
         while waiters:
             job = waiters.popleft()
             if _live(job, self):
-                job._kernel._unblock(job, None)
+                job._ctx.unblock(job, None)
                 return
         if self.maximum is None or self.count < self.maximum:
             self.count += 1
@@ -162,7 +162,7 @@ class Event:
         while waiters:
             job = waiters.popleft()
             if _live(job, self):
-                job._kernel._unblock(job, None)
+                job._ctx.unblock(job, None)
                 woken += 1
                 if not all:
                     break
