@@ -126,7 +126,9 @@ _PLUGIN_FILES: dict[str, str] = {}
 #: netsim's own plugin modules and packages. :func:`load_plugins` imports each, and every module below a
 #: listed package (a new file in ``netsim/network/`` or ``models/`` registers without being imported anywhere).
 #: The application layer (CLI, scenario loading, runner, sweeps, plots) is not listed: it uses plugins and
-#: defines none, and ``tests/test_registry.py`` fails when a module outside these registers something.
+#: defines none, and ``tests/test_registry.py`` fails when a module outside these registers something. Every
+#: module below a listed package is imported at the first lookup of every run: a module there imports heavy
+#: libraries (python-control, solvers, matplotlib) inside the functions that use them.
 PLUGIN_MODULES: list[str] = [
     "netsim.kernel",
     "netsim.network",

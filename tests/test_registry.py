@@ -106,6 +106,8 @@ _SNAPSHOT = textwrap.dedent(
 
     failures = registry.load_plugins()
     by_load = table()
+    heavy = sorted(m for m in ("matplotlib", "dask", "distributed", "control", "clarabel", "scipy.integrate")
+                   if m in sys.modules)
     def walk(name):
         module = importlib.import_module(name)
         for info in pkgutil.iter_modules(getattr(module, "__path__", [])):
@@ -123,7 +125,8 @@ _SNAPSHOT = textwrap.dedent(
         for base in (Network, Policy, Signal)
         if isinstance(cls, type) and issubclass(cls, base) and cls.__module__ == mod.__name__
         and not inspect.isabstract(cls) and cls is not base and id(cls) not in registered)
-    print(json.dumps({"failures": failures, "by_load": by_load, "all": table(), "unregistered": unregistered}))
+    print(json.dumps({"failures": failures, "by_load": by_load, "all": table(), "unregistered": unregistered,
+                      "heavy": heavy}))
     """
 )
 
@@ -142,6 +145,12 @@ def test_load_plugins_imports_every_built_in_plugin_without_failure(snapshot):
     assert missing == [], f"registered only when some module is imported by hand, not by load_plugins: {missing}"
     kinds = {row[0] for row in snapshot["by_load"]}
     assert {"plant", "controller", "network", "policy", "program", "signal", "metric", "report"} <= kinds
+
+
+def test_loading_the_plugins_imports_no_heavy_library(snapshot):
+    # load_plugins imports every module of the plugin packages at the first lookup of every run and CLI command:
+    # python-control, solvers, plotting and Dask belong inside the functions that use them
+    assert snapshot["heavy"] == []
 
 
 def test_every_concrete_network_policy_and_signal_class_is_registered(snapshot):
