@@ -26,7 +26,9 @@ from netsim.network.loss import LossSpec
 from netsim.network.records import DROP_REASONS, MessageRecord
 from netsim.network.round_robin import RoundRobinBus
 from netsim.network.tdma import TdmaBus
-from netsim.network.wireless import Ieee80211b, Ieee802154, WirelessMedium
+from netsim.network.ieee802154 import Ieee802154
+from netsim.network.ieee80211b import Ieee80211b
+from netsim.network.wireless import WirelessMedium
 
 __all__ = [
     "make_network",

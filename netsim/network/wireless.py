@@ -1,6 +1,7 @@
 """Wireless media: a shared radio channel with path loss, interference, CSMA/CA, acknowledgements and retries.
 
-Two MACs on one radio model (TrueTime's wireless network block offers the same two):
+Two MACs on one radio model (TrueTime's wireless network block offers the same two), each in its own module
+(:mod:`netsim.network.ieee802154`, :mod:`netsim.network.ieee80211b`); this module holds the radio channel they share:
 
 ``ieee802154`` (alias ``802.15.4``)
     Unslotted CSMA/CA of IEEE 802.15.4: wait a random number of unit backoff periods in
@@ -68,11 +69,10 @@ from netsim.network.records import (
 )
 from netsim.network.stats import BusyMeter
 from netsim.network.timing import Call, call_later, tx_time_ns
-from netsim.registry import register
 from netsim.timebase import US
-from netsim.units import Bitrate, Duration
+from netsim.units import Duration
 
-__all__ = ["WirelessMedium", "Ieee802154", "Ieee80211b", "received_dbm"]
+__all__ = ["WirelessMedium", "WirelessParams", "received_dbm"]
 
 
 def received_dbm(tx_dbm: float, distance_m: float, exponent: float, d0: float = 1.0) -> float:
@@ -386,181 +386,3 @@ class WirelessMedium(Network):
     def _extra_metrics(self, t_end_ns: int) -> dict[str, float]:
         return {"attempts": float(self.attempts), "retransmissions": float(self.retransmissions),
                 "acks": float(self.acks_sent), "duplicates": float(self.duplicates)}
-
-
-@register("network", "ieee802154", "IEEE 802.15.4 radio: unslotted CSMA/CA, path loss, interference, ACK and retries")
-@register("network", "802.15.4", "IEEE 802.15.4 radio (same as 'ieee802154')")
-class Ieee802154(WirelessMedium):
-    """IEEE 802.15.4 (2.4 GHz O-QPSK PHY defaults), unslotted CSMA/CA (see the module docstring)."""
-
-    class Params(WirelessParams):
-        """802.15.4 defaults: 250 kbit/s, 16 us symbols, 127-byte PSDU (116 bytes of payload)."""
-
-        bitrate: Bitrate = 250_000.0
-        max_frame_bits: int | None = Field(928, gt=0)
-        phy_overhead: Duration = 192 * US  # preamble, SFD and PHY header: 6 bytes at 250 kbit/s
-        mac_overhead_bits: int = Field(88, ge=0)  # frame control, sequence, short addresses, PAN id, FCS
-        ack_bits: int = Field(40, ge=0)  # 5-byte ACK frame
-        ack_delay: Duration = 192 * US  # aTurnaroundTime, 12 symbols
-        ack_timeout: Duration | None = 864 * US  # macAckWaitDuration, 54 symbols
-        max_retries: int = Field(3, ge=0)  # macMaxFrameRetries
-        unit_backoff: Duration = 320 * US  # aUnitBackoffPeriod, 20 symbols
-        cca_time: Duration = 128 * US  # 8 symbols
-        turnaround: Duration = 192 * US
-        min_be: int = Field(3, ge=0, le=20)
-        max_be: int = Field(5, ge=0, le=20)
-        max_csma_backoffs: int = Field(4, ge=0)
-
-        @model_validator(mode="after")
-        def _check_be(self) -> "Ieee802154.Params":
-            if self.min_be > self.max_be:
-                raise ValueError(f"min_be ({self.min_be}) is larger than max_be ({self.max_be})")
-            return self
-
-    def _mac_setup(self) -> None:
-        self._nb = {n: 0 for n in self.nodes}
-        self._be = {n: 0 for n in self.nodes}
-        self.busy_ccas = 0
-
-    def _contend(self, node: str, first: bool) -> None:
-        p: Any = self.params
-        self._nb[node] = 0
-        self._be[node] = p.min_be
-        self._backoff(node)
-
-    def _backoff(self, node: str) -> None:
-        p: Any = self.params
-        slots = int(self._rng.integers(0, 1 << self._be[node]))
-        call_later(self.sim, slots * int(p.unit_backoff) + int(p.cca_time), self._cca, node)
-
-    def _cca(self, node: str) -> None:
-        p: Any = self.params
-        if not self._sensed_busy(node):
-            call_later(self.sim, int(p.turnaround), self._transmit, node)
-            return
-        self.busy_ccas += 1
-        self._nb[node] += 1
-        self._be[node] = min(self._be[node] + 1, p.max_be)
-        if self._nb[node] > p.max_csma_backoffs:
-            self._give_up_access(node)
-        else:
-            self._backoff(node)
-
-    def _transmit(self, node: str) -> None:
-        self._send_frame(node)
-
-    def _extra_metrics(self, t_end_ns: int) -> dict[str, float]:
-        return {**super()._extra_metrics(t_end_ns), "busy_ccas": float(self.busy_ccas)}
-
-
-@register("network", "ieee80211b", "IEEE 802.11b radio: DCF (CSMA/CA with frozen backoff), path loss, ACK and retries")
-@register("network", "802.11b", "IEEE 802.11b radio (same as 'ieee80211b')")
-class Ieee80211b(WirelessMedium):
-    """IEEE 802.11b (DSSS, long preamble defaults) with the DCF's basic access (see the module docstring)."""
-
-    class Params(WirelessParams):
-        """802.11b defaults: 11 Mbit/s data, 192 us PLCP preamble and header, 2304-byte payload at most."""
-
-        bitrate: Bitrate = 11_000_000.0
-        max_frame_bits: int | None = Field(18432, gt=0)
-        transmit_power_dbm: float = 20.0
-        receiver_threshold_dbm: float = -82.0
-        phy_overhead: Duration = 192 * US
-        mac_overhead_bits: int = Field(272, ge=0)  # 34-byte MAC header and FCS
-        ack_bits: int = Field(112, ge=0)  # 14-byte ACK frame
-        ack_delay: Duration = 10 * US  # SIFS
-        ack_timeout: Duration | None = None
-        max_retries: int = Field(7, ge=0)  # dot11ShortRetryLimit
-        slot: Duration = 20 * US
-        sifs: Duration = 10 * US
-        cw_min: int = Field(31, ge=0)
-        cw_max: int = Field(1023, ge=0)
-
-        @model_validator(mode="after")
-        def _check_cw(self) -> "Ieee80211b.Params":
-            if self.cw_min > self.cw_max:
-                raise ValueError(f"cw_min ({self.cw_min}) is larger than cw_max ({self.cw_max})")
-            return self
-
-    def _mac_setup(self) -> None:
-        p: Any = self.params
-        self._difs = int(p.sifs) + 2 * int(p.slot)
-        self._slot = int(p.slot)
-        self._cw = {n: p.cw_min for n in self.nodes}
-        self._bo: dict[str, int | None] = {n: None for n in self.nodes}  # backoff slots left (None: none drawn)
-        self._timer: dict[str, Call | None] = {n: None for n in self.nodes}
-        self._count_from: dict[str, int] = {n: 0 for n in self.nodes}
-        # when each node's medium went idle (None while sensed busy); before the run it was idle for a DIFS
-        self._idle_since: dict[str, int | None] = {n: -self._difs for n in self.nodes}
-        self._post_backoff: dict[str, bool] = {n: False for n in self.nodes}
-        self._contending: set[str] = set()
-
-    def _contend(self, node: str, first: bool) -> None:
-        p: Any = self.params
-        now = self.sim.now
-        idle = self._idle_since[node]
-        if first and not self._post_backoff[node] and idle is not None and now - idle >= self._difs:
-            self._bo[node] = None
-            self._send_frame(node)  # the medium has been idle for DIFS: immediate access
-            return
-        if not first:
-            self._cw[node] = min(2 * self._cw[node] + 1, p.cw_max)
-        if self._bo[node] is None:
-            self._bo[node] = int(self._rng.integers(0, self._cw[node] + 1))
-        self._contending.add(node)
-        self._arm(node)
-
-    def _arm(self, node: str) -> None:
-        """Count the backoff down from now if the medium is idle (after a DIFS), else stay frozen."""
-        if self._timer[node] is not None or self._sensed_busy(node):
-            return
-        self._count_from[node] = self.sim.now
-        slots = self._bo[node] or 0
-        self._timer[node] = call_later(self.sim, self._difs + slots * self._slot, self._backoff_done, node)
-
-    def _freeze(self, node: str) -> None:
-        timer = self._timer[node]
-        if timer is None:
-            return
-        timer.cancel()
-        self._timer[node] = None
-        counted = (self.sim.now - self._count_from[node] - self._difs) // self._slot
-        if counted > 0:
-            self._bo[node] = max(0, self._bo[node] - counted)  # type: ignore[operator]
-
-    def _backoff_done(self, node: str) -> None:
-        self._timer[node] = None
-        self._contending.discard(node)
-        self._bo[node] = None
-        self._post_backoff[node] = False
-        if self._current[node] is not None:  # else nothing to send: the next frame may access at once
-            self._send_frame(node)
-
-    def _on_medium_change(self) -> None:
-        now = self.sim.now
-        for n in self.nodes:
-            busy = self._sensed_busy(n)
-            if busy:
-                self._idle_since[n] = None
-            elif self._idle_since[n] is None:
-                self._idle_since[n] = now
-        for n in sorted(self._contending):
-            if self._sensed_busy(n):
-                self._freeze(n)
-            else:
-                self._arm(n)
-
-    def _after_attempt(self, node: str, done: bool) -> None:
-        p: Any = self.params
-        if done:  # success or given up: CW resets and a post-transmission backoff starts
-            self._cw[node] = p.cw_min
-            self._post_backoff[node] = True
-            self._bo[node] = int(self._rng.integers(0, self._cw[node] + 1))
-            self._contending.add(node)
-            self._arm(node)
-        else:
-            self._contend(node, first=False)
-
-    def _start_access(self, node: str) -> None:
-        if not self._post_backoff[node]:  # else the post-transmission backoff under way sends it when it ends
-            self._contend(node, first=True)
