@@ -78,14 +78,19 @@ def observer_gain(A: Any, C: Any, poles: Any, form: Literal["predictor", "curren
         else:
             Lt = control.place(A.T, Cf.T, p)
     except Exception as exc:  # python-control/scipy raise ValueError, LinAlgError, ControlDimension ...
-        raise ConfigError(f"poles: python-control could not place the observer poles {list(p)} ({exc})") from exc
-    L = np.asarray(Lt, dtype=float).T
-    got = np.sort_complex(np.linalg.eigvals(A - L @ Cf))
-    want = np.sort_complex(p)
-    if np.max(np.abs(got - want)) > 1e-6 * max(1.0, float(np.max(np.abs(want)))):
+        asked = ", ".join(f"{complex(q):.6g}" for q in p)
+        raise ConfigError(f"poles: python-control could not place the observer poles {asked} ({exc})") from exc
+    L = np.asarray(Lt, dtype=float).reshape(Cf.shape[0], n).T
+    # compare characteristic polynomials: well conditioned even for repeated poles, whose computed
+    # eigenvalues scatter by eps^(1/multiplicity)
+    got = np.poly(A - L @ Cf)
+    want = np.real(np.poly(p))
+    if np.max(np.abs(got - want)) > 1e-8 * max(1.0, float(np.max(np.abs(want)))):
+        asked = ", ".join(f"{complex(q):.6g}" for q in p)
         raise ConfigError(
-            f"poles: the placement is ill-conditioned (asked {list(want)}, got {list(got)}); choose poles further "
-            "apart or use fewer repeated poles"
+            f"poles: the placement is ill-conditioned (asked {asked}, got the eigenvalues "
+            f"{', '.join(f'{complex(q):.6g}' for q in np.linalg.eigvals(A - L @ Cf))}); choose poles further apart "
+            "or use fewer repeated poles"
         )
     return L
 
