@@ -18,6 +18,9 @@ Built-in policies (registered under kind ``"policy"``):
 Custom policies subclass :class:`Policy` and override :meth:`Policy.key` (and optionally
 :meth:`Policy.check` and :attr:`Policy.preemptive`); pass an instance to ``Kernel(policy=...)`` or name
 it as ``"module:Class"``.
+
+Every policy name is resolved by :func:`find_policy` (the kernel, ``netsim validate`` and the scenario
+builder alike); :func:`resolve_policy` turns its result into the instance a kernel uses.
 """
 
 from __future__ import annotations
@@ -44,6 +47,8 @@ __all__ = [
     "NonPreemptiveFixedPriority",
     "NonPreemptiveEDF",
     "BUILTIN_POLICIES",
+    "find_policy",
+    "is_builtin_policy",
     "resolve_policy",
 ]
 
@@ -166,28 +171,58 @@ BUILTIN_POLICIES: dict[str, type[Policy]] = {
 }
 
 
-def resolve_policy(policy: "str | Policy", node: str) -> Policy:
-    """A :class:`Policy` instance from a registered name, a ``"module:Class"`` path or an instance."""
+def is_builtin_policy(name: Any) -> bool:
+    """True when ``name`` is one of the kernel's own policies (``fp``, ``rm``, ``dm``, ``edf``, ``np_fp``,
+    ``np_edf``): resolving it runs no code from outside netsim."""
+    return isinstance(name, str) and name in BUILTIN_POLICIES
+
+
+def find_policy(name: str) -> "type[Policy] | Policy":
+    """The policy class (or registered instance) called ``name``, without instantiating it.
+
+    The one place a policy name is looked up: the kernel (:func:`resolve_policy`), ``netsim validate`` and
+    the scenario builder all resolve names here. Built-in names first, then the registry (kind
+    ``"policy"``: plugins and ``"module:Class"`` paths).
+
+    Raises
+    ------
+    ConfigError
+        When the name is unknown (with a "did you mean" or the list of known policies), its path cannot be
+        loaded, or it names something that is not a :class:`Policy`.
+    """
+    if not isinstance(name, str):
+        raise ConfigError(f"policy must be a name such as 'fp', 'rm', 'dm' or 'edf', got {name!r}")
+    if name in BUILTIN_POLICIES:
+        return BUILTIN_POLICIES[name]
+    try:
+        obj = lookup("policy", name)
+    except ConfigError as exc:
+        if ":" in name:
+            raise
+        known = sorted({*BUILTIN_POLICIES, *(e.name for e in entries("policy"))})
+        close = difflib.get_close_matches(name, known, n=1, cutoff=0.4)
+        hint = f"; did you mean '{close[0]}'?" if close else f" (known: {', '.join(known)})"
+        raise ConfigError(f"unknown policy '{name}'{hint}") from exc
+    if not (isinstance(obj, Policy) or (isinstance(obj, type) and issubclass(obj, Policy))):
+        raise ConfigError(f"'{name}' is not a scheduling Policy (got {obj!r}); `netsim list policies` shows them")
+    return obj
+
+
+def resolve_policy(policy: "str | type[Policy] | Policy", node: str) -> Policy:
+    """A :class:`Policy` instance from a name (see :func:`find_policy`), a Policy class or an instance.
+
+    Raises
+    ------
+    BuildError
+        Naming the node, when the policy cannot be found.
+    """
     if isinstance(policy, Policy):
         return policy
     if isinstance(policy, type) and issubclass(policy, Policy):
         return policy()
-    if not isinstance(policy, str):
-        raise BuildError(f"node '{node}': policy must be a name such as 'fp', 'rm', 'dm', 'edf' or a Policy, "
-                         f"got {policy!r}")
-    if policy in BUILTIN_POLICIES:
-        return BUILTIN_POLICIES[policy]()
     try:
-        obj = lookup("policy", policy)
+        obj = find_policy(policy)  # type: ignore[arg-type]
     except ConfigError as exc:
-        if ":" in policy:
-            raise BuildError(f"node '{node}': scheduling policy: {exc}") from None
-        known = [e.name for e in entries("policy")]
-        close = difflib.get_close_matches(policy, known, n=1, cutoff=0.4)
-        hint = f"; did you mean '{close[0]}'?" if close else f" (known: {', '.join(sorted(known))})"
-        raise BuildError(f"node '{node}': unknown policy '{policy}'{hint}") from None
-    if isinstance(obj, type):
-        obj = obj()
-    if not isinstance(obj, Policy):
-        raise BuildError(f"node '{node}': '{policy}' is not a scheduling Policy (got {obj!r})")
-    return obj
+        where = "scheduling policy: " if isinstance(policy, str) and ":" in policy else ""
+        raise BuildError(f"node '{node}': {where}{exc.message}") from None
+    return obj() if isinstance(obj, type) else obj

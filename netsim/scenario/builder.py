@@ -288,18 +288,6 @@ def _recording_write(recorder: Any, name: str, write: Callable[[int, Any], None]
     return recorded_write
 
 
-def _policy(node_spec: Any) -> Any:
-    from netsim.scenario.schema import BUILTIN_POLICIES
-
-    name = node_spec.policy
-    if name in BUILTIN_POLICIES:
-        return name
-    from netsim.registry import lookup
-
-    obj = lookup("policy", name)
-    return obj() if isinstance(obj, type) else obj
-
-
 def _exec_time(spec: Any, path: str) -> Any:
     raw = spec.execution_spec()
     if raw is None:
@@ -384,7 +372,7 @@ def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
     for node_name, node in scenario.nodes.items():
         npath = f"nodes.{node_name}"
         try:
-            kernel = Kernel(env, node_name, policy=_policy(node), context_switch=node.context_switch)
+            kernel = Kernel(env, node_name, policy=node.policy, context_switch=node.context_switch)
         except NetsimError as exc:
             raise BuildError(str(exc), path=npath) from None
         kernels[node_name] = kernel
