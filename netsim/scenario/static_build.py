@@ -51,9 +51,9 @@ def _lookup(kind: str, name: str) -> Any:
 
 def _netsim_kernels(scenario: Any) -> bool:
     """True when every node policy is built into the kernel (a custom policy is not instantiated here)."""
-    from netsim.kernel.policies import BUILTIN_POLICIES
+    from netsim.kernel.policies import is_builtin_policy
 
-    return all(node.policy in BUILTIN_POLICIES for node in scenario.nodes.values())
+    return all(is_builtin_policy(node.policy) for node in scenario.nodes.values())
 
 
 def _netsim_plant(scenario: Any) -> bool:
