@@ -15,37 +15,24 @@ from typing import Any, Sequence
 from pydantic import BaseModel, ValidationError
 
 from netsim.scenario.paths import PathPart, did_you_mean, format_path
-from netsim.scenario.problems import Problem
+from netsim.scenario.problems import Problem, shorten
 from netsim.scenario.schema import EXEC_DISTS, IO_TYPES, TAG_MARK
 
 __all__ = ["problems_from_validation_error", "show_value", "shorten", "shorten_problem"]
 
-#: A run of non-space characters longer than this in a message is cut (a key or value pasted from a file).
-LONG_TOKEN = 200
-#: The longest message kept whole (lists of known names included).
-LONG_MESSAGE = 2000
-_LONG = re.compile(r"\S{%d,}" % (LONG_TOKEN + 1))
-
-
-def shorten(text: str) -> str:
-    """``text`` with every token over :data:`LONG_TOKEN` characters cut to its start and its length.
-
-    A message names what it refuses; when that is a 10^6-character key or value it must not echo it (issue 14).
-    """
-    if len(text) <= LONG_TOKEN:
-        return text
-    out = _LONG.sub(lambda m: f"{m.group()[:60]}...({len(m.group())} characters)", text)
-    return out if len(out) <= LONG_MESSAGE else out[:LONG_MESSAGE] + "..."
-
 
 def shorten_problem(problem: Problem) -> Problem:
-    """``problem`` with its path and message shortened (:func:`shorten`); the same object when nothing is cut."""
+    """``problem`` with its path and message shortened (:func:`shorten`); the same object when nothing is cut.
+
+    Every :class:`Problem` is shortened when it is made, so this returns ``problem`` itself; kept for callers.
+    """
     path, message = shorten(problem.path), shorten(problem.message)
     if path is problem.path and message is problem.message:
         return problem
     from dataclasses import replace
 
     return replace(problem, path=path, message=message)
+
 
 _UNIONS = (typing.Union, types.UnionType)
 

@@ -7,15 +7,35 @@ at least one problem of severity ``"error"`` raises :class:`ScenarioError`, whic
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 from typing import Iterable
 
 from netsim.errors import ConfigError
 
-__all__ = ["Problem", "ScenarioError", "ERROR", "WARNING", "sort_problems"]
+__all__ = ["Problem", "ScenarioError", "ERROR", "WARNING", "sort_problems", "shorten"]
 
 ERROR = "error"
 WARNING = "warning"
+
+#: A run of non-space characters longer than this in a path or message is cut (a key or value pasted from a file).
+LONG_TOKEN = 200
+#: The longest message kept whole (lists of known names included).
+LONG_MESSAGE = 2000
+_LONG = re.compile(r"\S{%d,}" % (LONG_TOKEN + 1))
+
+
+def shorten(text: str) -> str:
+    """``text`` with every token over :data:`LONG_TOKEN` characters cut to its start and its length.
+
+    A message names what it refuses; when that is a 10^6-character key, value or alias name it must not echo it
+    (issue 14: "an error message never echoes a whole file's content"). Text of at most :data:`LONG_TOKEN`
+    characters is returned as it is (the same object).
+    """
+    if len(text) <= LONG_TOKEN:
+        return text
+    out = _LONG.sub(lambda m: f"{m.group()[:60]}...({len(m.group())} characters)", text)
+    return out if len(out) <= LONG_MESSAGE else out[:LONG_MESSAGE] + "..."
 
 
 @dataclass(frozen=True)
@@ -27,7 +47,8 @@ class Problem:
     path
         Dotted YAML path (``nodes.controller.tasks[1].period``); empty for the whole file.
     message
-        What is wrong and what to change.
+        What is wrong and what to change. Path and message are cut where a word runs over
+        :data:`LONG_TOKEN` characters (:func:`shorten`).
     line
         1-based line in ``file``, when known.
     file
@@ -46,6 +67,11 @@ class Problem:
     file: str | None = None
     severity: str = ERROR
     supersedes: bool = False
+
+    def __post_init__(self) -> None:
+        # every problem, whichever check made it, is short (shorten): no message can echo a file
+        object.__setattr__(self, "path", shorten(self.path))
+        object.__setattr__(self, "message", shorten(self.message))
 
     @property
     def is_error(self) -> bool:

@@ -24,3 +24,21 @@ def test_a_million_character_key_or_value_is_not_echoed(scenario, case):
     problems = [p for p in check_scenario(raw) if p.is_error]
     assert problems
     assert all(len(p.describe()) < 400 for p in problems), [len(p.describe()) for p in problems]
+
+
+def test_a_yaml_error_naming_a_huge_alias_is_not_echoed(tmp_path):
+    """A parser's message may quote the alias name; before, the 300 kB name came back whole."""
+    path = tmp_path / "alias.yaml"
+    path.write_text("name: *" + "q" * 300_000 + "\nduration: 1 s\n")
+    (problem,) = check_scenario(path)
+    assert problem.is_error and problem.line == 1
+    assert len(problem.describe()) < 400
+
+
+def test_every_problem_is_short_whoever_makes_it():
+    from netsim.scenario.problems import LONG_TOKEN, Problem
+
+    p = Problem("a." + "k" * 10**6, "unknown key '" + "k" * 10**6 + "'; did you mean 'kp'?")
+    assert len(p.describe()) < 400 and p.message.endswith(" did you mean 'kp'?")
+    short = "x" * LONG_TOKEN  # a token of the limit is kept whole
+    assert Problem("", short).message == short
