@@ -104,7 +104,7 @@ class _Osqp(_Backend):
         self.solver.update(q=g, l=lo, u=hi)
         if warm is not None:
             self.solver.warm_start(x=warm)
-        res = self.solver.solve()
+        res = self.solver.solve(raise_error=False)
         status = str(res.info.status)
         ok = res.info.status_val in (1, 2) and res.x is not None and np.all(np.isfinite(res.x))
         return (np.asarray(res.x) if ok else None), f"osqp {status}"
