@@ -31,16 +31,8 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from netsim.errors import ConfigError
-from netsim.sweep.executor import (
-    PointFn,
-    SchedulerLost,
-    default_point_fn,
-    open_executor,
-    point_hash,
-    read_record,
-    run_chunk,
-    scheduler_lost,
-)
+from netsim.sweep.executor import SchedulerLost, open_executor, scheduler_lost
+from netsim.sweep.points import PointFn, default_point_fn, point_hash, read_record, run_chunk
 from netsim.sweep.spec import Point, Sweep, load_sweep
 from netsim.sweep.summary import write_summary
 
@@ -360,7 +352,7 @@ def _drive(
 
 def _lost(task: dict[str, Any], exc: BaseException) -> dict[str, Any]:
     """Record of a point whose chunk never came back (worker crashed, could not be pickled ...)."""
-    from netsim.sweep.executor import RECORD_NAME, _write_json
+    from netsim.sweep.points import RECORD_NAME, _write_json
 
     rec = {
         "index": task["index"],

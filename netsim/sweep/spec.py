@@ -296,12 +296,17 @@ def quote_flow_paths(text: str) -> str:
 
 
 def _read_yaml(path: Path, *, sweep_file: bool = False) -> Any:
-    from ruamel.yaml import YAML
-    from ruamel.yaml.error import YAMLError
+    """The data of a sweep file or its base scenario, read as scenario files are (:mod:`netsim.scenario.safe_yaml`).
 
-    from netsim.scenario.safe_yaml import YamlRefused, check_events, check_flow_depth, read_text
+    Raises
+    ------
+    ConfigError
+        For an unreadable or refused file (regular files only, bounded size, depth, tags and alias expansion,
+        issue 14) and for invalid YAML, with the line.
+    """
+    from netsim.scenario.safe_yaml import YamlRefused, load_text, read_text
 
-    try:  # issue 14: regular files only, bounded size, depth, tags and alias expansion
+    try:
         text = read_text(str(path))
     except OSError as exc:
         raise ConfigError(f"cannot read '{path}': {exc.strerror or exc}") from None
@@ -311,20 +316,15 @@ def _read_yaml(path: Path, *, sweep_file: bool = False) -> Any:
     if sweep_file:
         text = quote_flow_paths(text)
     try:
-        check_flow_depth(text)
-        check_events(YAML(typ="safe", pure=True).parse(text))
-        return YAML(typ="safe", pure=True).load(text)
+        return load_text(text)
     except YamlRefused as exc:
         where = f" (line {exc.line})" if exc.line else ""
+        if exc.syntax:
+            raise ConfigError(
+                f"'{path}' is not valid YAML{where}: {exc.message.removeprefix('YAML syntax error: ')}; quote values "
+                "that contain [ ] inside flow lists, e.g. paths: ['nodes.ctrl.tasks[0].params.k']"
+            ) from None
         raise ConfigError(f"'{path}'{where}: {exc.message}") from None
-    except YAMLError as exc:
-        first = str(exc).splitlines()[0]
-        mark = getattr(exc, "problem_mark", None)
-        where = f" (line {mark.line + 1})" if mark is not None else ""
-        raise ConfigError(
-            f"'{path}' is not valid YAML{where}: {first}; quote values that contain [ ] inside flow lists, "
-            "e.g. paths: ['nodes.ctrl.tasks[0].params.k']"
-        ) from None
 
 
 def _format_validation(exc: ValidationError, where: str) -> str:

@@ -22,7 +22,7 @@ SWEEP = ROOT / "scenarios" / "hdd_gpi_sweep.yaml"
 
 def noop_point(raw, out, seed):
     """A point that does nothing: what is left is the executor's own cost."""
-    return {"GPI": float(seed % 7)}
+    return {"et.GPI": float(seed % 7)}  # the surface column of hdd_gpi_sweep.yaml (et_control names it et.GPI)
 
 
 @pytest.mark.benchmark
