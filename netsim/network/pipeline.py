@@ -14,6 +14,10 @@ inbox for the network (``Kernel.deliver`` puts the message there and fires the r
 
 Statistics are kept as the simulation runs: one :class:`~netsim.network.records.MessageRecord` per receiver
 copy in :attr:`Network.records`, queue lengths per node, busy time per channel, drop counts per reason.
+
+Why this module is long: the :class:`Network` base is one state machine (pre-delay, queue, medium,
+post-delay, loss) whose stages share the per-node queues, records and statistics, and :class:`Transmitter` is
+the half of it every medium drives; split, one message's life would be spread over several files.
 """
 
 from __future__ import annotations

@@ -17,6 +17,10 @@ comes (while a local Dask cluster starts, runs or closes): runs in progress are 
 are kept, ``summary.csv`` is written with ``status = pending`` for the rest, and the returned result has
 ``interrupted = True``. A Dask worker that dies costs only time (the scheduler reruns its runs elsewhere);
 a Dask scheduler that goes away stops the sweep the same way, then :class:`SchedulerLost` is raised.
+
+Why this module is long: resume (which points are finished), chunking, the drive loop over in-flight
+futures, progress, Ctrl-C and a lost Dask scheduler all act on the same in-flight state of one sweep;
+the worker side is :mod:`netsim.sweep.points`, the backends :mod:`netsim.sweep.executor`.
 """
 
 from __future__ import annotations
