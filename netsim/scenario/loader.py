@@ -1,10 +1,17 @@
 """Load a scenario from YAML (or a dict), validate it completely, and report every problem at once.
 
-The file is read with ruamel.yaml's round-trip loader, which keeps the line of every key and list item, so
-each problem is reported as ``file:line: path: message``. Validation runs in three layers that all run even
-when an earlier one finds problems: the base schema (:mod:`netsim.scenario.schema`), every plugin's own
-``Params`` model, and the cross references (:mod:`netsim.scenario.validate`); a scenario that passes them
-then goes through build's own kernel and network checks (:mod:`netsim.scenario.static_build`).
+Loading goes one way: **text -> raw tree -> overrides and seed applied to the raw tree -> one validation -> a
+frozen** :class:`~netsim.scenario.schema.Scenario`, which ``build`` turns into runtime objects. Nothing goes back
+from a Scenario to raw data except on purpose (:func:`raw_copy`, when a caller overrides a loaded scenario).
+
+The file is read by :func:`netsim.scenario.safe_yaml.load_text` (PyYAML with libyaml's C parser: fast, keeps no
+positions). Every problem is reported as ``file:line: path: message``; the lines are looked up only when there
+is a problem to place (:class:`LineIndex` parses the text a second time, keeping positions, on first use).
+Validation runs in three layers that all run even when an earlier one finds problems: the base schema
+(:mod:`netsim.scenario.schema`, once), every plugin's own ``Params`` model, and the cross references
+(:mod:`netsim.scenario.validate`); a scenario that passes them then goes through build's own kernel and network
+checks (:mod:`netsim.scenario.static_build`). A scenario with ``baseline: {overrides: ...}`` has its baseline
+validated the same way, once, while it loads; :meth:`Scenario.baseline_scenario` returns it.
 
 Top-level keys starting with ``x-`` are ignored, so a file can hold YAML anchors for repeated entries::
 
@@ -25,20 +32,19 @@ from __future__ import annotations
 
 import copy
 import hashlib
-import io
 import json
 import logging
 import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from pydantic import BaseModel, ValidationError
+from pydantic import ValidationError
 
 from netsim.errors import ConfigError
 from netsim.scenario.messages import problems_from_validation_error, shorten_problem
-from netsim.scenario.paths import PathPart, parse_path, set_path
+from netsim.scenario.paths import PathPart, parse_path, plain_copy, set_path
 from netsim.scenario.problems import ERROR, Problem, ScenarioError, sort_problems
-from netsim.scenario.schema import PluginSpec, Scenario
+from netsim.scenario.schema import Scenario
 
 __all__ = [
     "LineIndex",
@@ -60,14 +66,30 @@ Source = str | os.PathLike[str] | Mapping[str, Any] | Scenario
 
 
 class LineIndex:
-    """Lines (1-based) of the keys and list items of a YAML document, addressable by path parts."""
+    """Lines (1-based) of the keys and list items of a YAML document, addressable by path parts.
 
-    def __init__(self) -> None:
-        self._lines: dict[tuple[PathPart, ...], int] = {}
+    Made from the document's text, it parses the text (again, keeping positions) the first time a line is asked
+    for: loading a valid scenario never pays for positions.
+    """
+
+    def __init__(self, text: str | None = None) -> None:
+        self._text = text
+        self._lines: dict[tuple[PathPart, ...], int] | None = None if text is not None else {}
+
+    def _table(self) -> dict[tuple[PathPart, ...], int]:
+        if self._lines is None:
+            from netsim.scenario.safe_yaml import YamlRefused, line_table
+
+            try:
+                self._lines = line_table(self._text or "")
+            except YamlRefused:  # cannot happen for a text that loaded; no lines rather than a crash
+                self._lines = {}
+            self._lines.setdefault((), 1)
+        return self._lines
 
     def add(self, parts: tuple[PathPart, ...], line: int) -> None:
         """Record that the value at ``parts`` starts on ``line``."""
-        self._lines.setdefault(parts, line)
+        self._table().setdefault(parts, line)
 
     def line_of(self, path: str | Sequence[PathPart]) -> int | None:
         """The line of ``path``, or of its nearest existing ancestor (None for an empty index)."""
@@ -75,106 +97,33 @@ class LineIndex:
             parts = tuple(parse_path(path)) if path else ()
         except ConfigError:
             return None
+        lines = self._table()
         while parts:
-            if parts in self._lines:
-                return self._lines[parts]
+            if parts in lines:
+                return lines[parts]
             parts = parts[:-1]
-        return self._lines.get((), None)
-
-
-def _to_plain(node: Any, parts: tuple[PathPart, ...], index: LineIndex) -> Any:
-    """Plain Python (dict/list/str/int/float/bool/None) from ruamel nodes, recording lines on the way."""
-    from ruamel.yaml.comments import CommentedMap, CommentedSeq
-
-    if isinstance(node, dict):
-        out: dict[Any, Any] = {}
-        for key, value in node.items():
-            plain_key = _scalar(key)
-            if isinstance(node, CommentedMap):
-                try:
-                    index.add((*parts, plain_key), node.lc.key(key)[0] + 1)
-                except (KeyError, TypeError, AttributeError):
-                    pass
-            out[plain_key] = _to_plain(value, (*parts, plain_key), index)
-        return out
-    if isinstance(node, (list, tuple)):
-        items = []
-        for i, value in enumerate(node):
-            if isinstance(node, CommentedSeq):
-                try:
-                    index.add((*parts, i), node.lc.item(i)[0] + 1)
-                except (KeyError, TypeError, AttributeError, IndexError):
-                    pass
-            items.append(_to_plain(value, (*parts, i), index))
-        return items
-    return _scalar(node)
-
-
-def _scalar(value: Any) -> Any:
-    if value is None or type(value) in (str, int, float, bool):
-        return value
-    if isinstance(value, bool):
-        return bool(value)
-    if isinstance(value, int):
-        return int(value)
-    if isinstance(value, float):
-        return float(value)
-    if isinstance(value, str):
-        return str(value)
-    return value
+        return lines.get((), None)
 
 
 def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
-    """Read a YAML file into plain Python data and the line index of its keys.
+    """Read a YAML file into plain Python data and the (lazy) line index of its keys.
 
     Raises
     ------
     ScenarioError
-        For a missing or unreadable file, or a YAML syntax error (with its line).
+        For a missing or unreadable file, a file refused by :mod:`netsim.scenario.safe_yaml` (size, nesting,
+        aliases, tags, duplicate keys) or a YAML syntax error, with its line.
     """
-    from ruamel.yaml import YAML
-    from ruamel.yaml.error import MarkedYAMLError, YAMLError
-
-    from netsim.scenario.safe_yaml import YamlRefused, check_events, check_flow_depth, needs_event_check, read_text
-    from netsim.scenario.limits import round_trip_constructor
+    from netsim.scenario.safe_yaml import YamlRefused, load_file
 
     name = os.fspath(path)
     try:
-        text = read_text(name)
+        data, text = load_file(name)
     except FileNotFoundError:
         raise ScenarioError([Problem("", f"file not found: {name}", None, name)]) from None
     except YamlRefused as exc:
         raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None
-    yaml = YAML(typ="rt", pure=True)
-    yaml.Constructor = round_trip_constructor()  # a 5000-digit integer is refused at its path (limits.py)
-    try:
-        check_flow_depth(text)
-        if needs_event_check(text):
-            check_events(yaml.parse(io.StringIO(text)))  # depth, tags, alias expansion: before anything is built
-        data = yaml.load(io.StringIO(text))
-    except YamlRefused as exc:
-        raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None
-    except MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line = mark.line + 1 if mark is not None else None
-        what = exc.problem or "syntax error"
-        context = f" ({exc.context})" if exc.context else ""
-        if "'\\t'" in what or "\t" in what:
-            what, context = "a tab character where YAML expects indentation", "; indent with spaces, not tabs"
-        raise ScenarioError([Problem("", f"YAML syntax error: {what}{context}", line, name)]) from None
-    except YAMLError as exc:
-        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ScenarioError([Problem("", f"YAML error: {first[:200]}", None, name)]) from None
-    except (ValueError, TypeError, AttributeError, RecursionError) as exc:  # a value ruamel cannot construct
-        raise ScenarioError([Problem("", f"YAML value cannot be read ({type(exc).__name__}: {str(exc)[:120]}); "
-                                     "remove any '!!' tag and write plain values", None, name)]) from None
-    index = LineIndex()
-    index.add((), 1)
-    return _to_plain(data, (), index), index
-
-
-def _plain_copy(data: Any) -> Any:
-    return _to_plain(copy.deepcopy(data), (), LineIndex())
+    return data, LineIndex(text)
 
 
 _NOT_ALLOWED = "this scenario loads code from"
@@ -229,73 +178,141 @@ def _plugin_files(raw: dict[str, Any], file: str | None, allow: bool | None) -> 
     return problems
 
 
-def _gather(source: Source, overrides: Mapping[str, Any] | None,
-            allow_plugins: bool | None = None) -> tuple[list[Problem], Scenario | None]:
-    """Every problem of ``source`` (located) and the scenario when there is no error."""
-    file: str | None = None
-    index = LineIndex()
+def _raw_tree(source: Source, overrides: Mapping[str, Any] | None
+              ) -> tuple[Any, str | None, LineIndex, list[Problem]]:
+    """The raw tree of ``source`` (a private copy), its file, its line index and the problems reading it."""
     if isinstance(source, Scenario):
-        if not overrides:
-            return [], source
-        raw: Any = raw_copy(source)
-        file = source.source
-    elif isinstance(source, Mapping):
-        raw = _plain_copy(dict(source))
-    elif isinstance(source, (str, os.PathLike)):
+        return raw_copy(source), source.source, LineIndex(), []
+    if isinstance(source, Mapping):
+        return plain_copy(dict(source)), None, LineIndex(), []
+    if isinstance(source, (str, os.PathLike)):
         file = os.fspath(source)
         try:
             raw, index = read_yaml(file)
         except ScenarioError as exc:
-            return exc.problems, None
-    else:
-        return [Problem("", f"expected a scenario file path or mapping, got {type(source).__name__}")], None
+            return None, file, LineIndex(), exc.problems
+        return raw, file, index, []
+    return None, None, LineIndex(), [Problem("", f"expected a scenario file path or mapping, got "
+                                                 f"{type(source).__name__}")]
+
+
+def _validate(raw: dict[str, Any], line_of: Any) -> tuple[list[Problem], Scenario | None]:
+    """The one validation of a raw tree: schema, plugin parameters and cross references, then build's checks.
+
+    Returns the problems (with paths, no lines) and the scenario when there is no error.
+    """
+    from netsim.scenario.validate import check_raw
+
+    problems: list[Problem] = []
+    scenario: Scenario | None = None
+    try:
+        scenario = Scenario.model_validate(raw)
+    except ValidationError as exc:
+        problems += problems_from_validation_error(exc, model=Scenario)
+    more, validated = check_raw(raw, line_of)  # duplicate names quote the line of the first definition
+    problems += more
+    if scenario is None or any(p.severity == ERROR for p in problems):
+        return problems, None
+    for path, spec in scenario.plugin_specs():
+        if path in validated:
+            spec.attach_validated(validated[path])
+    scenario._raw = raw
+    from netsim.scenario.static_build import build_problems
+
+    problems += build_problems(scenario)  # what build checks with its runtime objects, nothing simulated
+    if any(p.severity == ERROR for p in problems):
+        return problems, None
+    return problems, scenario
+
+
+def _baseline(raw: dict[str, Any], main_valid: bool) -> tuple[list[Problem], list[Problem], Scenario | None]:
+    """The baseline of ``raw`` (``baseline.overrides`` applied, no baseline), validated once.
+
+    Returns the errors to report at ``baseline.overrides``, the baseline's warnings, and the baseline scenario.
+    When the scenario itself has errors, only the schema errors at the overridden paths are reported (the
+    others are the scenario's own, already reported).
+    """
+    baseline = raw.get("baseline")
+    if not isinstance(baseline, dict) or not isinstance(baseline.get("overrides"), dict):
+        return [], [], None
+    where = "baseline.overrides"
+    base_raw = copy.deepcopy(raw)
+    base_raw["baseline"] = None
+    errors: list[Problem] = []
+    keys: list[list[PathPart]] = []
+    for key, value in baseline["overrides"].items():
+        try:
+            set_path(base_raw, str(key), copy.deepcopy(value))
+            keys.append(parse_path(str(key)))
+        except ConfigError as exc:
+            errors.append(Problem(where, f"override '{key}': {exc.message}"))
+    if not keys:
+        return errors, [], None
+    if not main_valid:
+        try:
+            Scenario.model_validate(base_raw)
+        except ValidationError as exc:
+            for p in problems_from_validation_error(exc, model=Scenario):
+                try:
+                    parts = parse_path(p.path)
+                except ConfigError:
+                    continue
+                if any(parts[: len(k)] == k for k in keys):
+                    errors.append(Problem(where, f"override gives {p.path}: {p.message}"))
+        return errors, [], None
+    problems, scenario = _validate(base_raw, None)
+    errors += [Problem(where, f"override gives {p.path}: {p.message}" if p.path else f"override gives: {p.message}")
+               for p in problems if p.severity == ERROR]
+    warnings = [p for p in problems if p.severity != ERROR]
+    return errors, warnings, None if errors else scenario
+
+
+def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None
+            ) -> tuple[list[Problem], Scenario | None, list[Problem]]:
+    """Every problem of ``source`` (located), the scenario when there is no error, and its baseline's warnings."""
+    if isinstance(source, Scenario) and not overrides:
+        return [], source, []
+    raw, file, index, read_problems = _raw_tree(source, overrides)
 
     def done(problems: list[Problem]) -> list[Problem]:
         located = [shorten_problem(p.located(index.line_of(p.path), file)) for p in problems]
         return sort_problems(located)
 
+    if read_problems:
+        return read_problems, None, []
     if raw is None:
-        return done([Problem("", "the file is empty; a scenario needs at least 'name' and 'duration'", 1)]), None
+        return done([Problem("", "the file is empty; a scenario needs at least 'name' and 'duration'", 1)]), None, []
     if not isinstance(raw, dict):
-        kind = "a list" if isinstance(raw, list) else repr(raw)
-        return done([Problem("", f"the top level must be a mapping (name: ..., duration: ...), got {kind}", 1)]), None
+        kind = "a list" if isinstance(raw, list) else repr(raw)[:80]
+        return done([Problem("", f"the top level must be a mapping (name: ..., duration: ...), got {kind}", 1)]), None, []
 
     for key in [k for k in raw if isinstance(k, str) and k.startswith(EXTENSION_PREFIX)]:
         del raw[key]  # a place for YAML anchors (``x-defaults: &task {...}``), ignored
     problems: list[Problem] = []
     for key, value in (overrides or {}).items():
         try:
-            set_path(raw, key, _plain_copy(value))
+            set_path(raw, key, plain_copy(value))
         except ConfigError as exc:
             problems.append(Problem(key, f"cannot apply override: {exc.message}"))
     refused = _plugin_files(raw, file, allow_plugins)  # before any plugin name is looked up
     problems += refused
     if any(_NOT_ALLOWED in p.message for p in refused):
         # the names the file registers are unknown until it runs: listing them as unknown would only be noise
-        return done(problems), None
+        return done(problems), None, []
 
-    scenario: Scenario | None = None
-    try:
-        scenario = Scenario.model_validate(raw)
-    except ValidationError as exc:
-        problems += problems_from_validation_error(exc, model=Scenario)
-
-    from netsim.scenario.validate import check_raw
-
-    more, validated = check_raw(raw, index.line_of)  # duplicate names quote the line of the first definition
-    problems += more
-    if scenario is not None and not any(p.severity == ERROR for p in problems):
-        _attach(scenario, validated)
-        scenario._source = file
-        scenario._raw = raw
-        from netsim.scenario.static_build import build_problems
-
-        problems += build_problems(scenario)  # what build checks with its runtime objects, nothing simulated
-        if any(p.severity == ERROR for p in problems):
-            scenario = None
-    elif any(p.severity == ERROR for p in problems):
-        scenario = None
-    return done(problems), scenario
+    found, scenario = _validate(raw, index.line_of)
+    problems += found
+    valid = scenario is not None and not any(p.severity == ERROR for p in problems)
+    base_errors, base_warnings, base_scenario = _baseline(raw, valid)
+    problems += base_errors
+    said = {(p.path, p.message) for p in problems}
+    base_warnings = [p for p in base_warnings if (p.path, p.message) not in said]  # not twice in the log
+    if not valid or base_errors:
+        return done(problems), None, []
+    assert scenario is not None
+    scenario._source = file
+    scenario._baseline = base_scenario
+    return done(problems), scenario, base_warnings
 
 
 def raw_copy(scenario: Scenario) -> dict[str, Any]:
@@ -307,12 +324,6 @@ def raw_copy(scenario: Scenario) -> dict[str, Any]:
     if isinstance(scenario._raw, dict):
         return copy.deepcopy(scenario._raw)
     return resolved_dict(scenario)
-
-
-def _attach(scenario: Scenario, validated: Mapping[str, Any]) -> None:
-    for path, spec in scenario.plugin_specs():
-        if path in validated:
-            spec.attach_validated(validated[path])
 
 
 def check_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
@@ -334,13 +345,13 @@ def check_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *
     list[Problem]
         Sorted by line; empty when the scenario is valid and clean.
     """
-    problems, _ = _gather(source, overrides, allow_plugins)
+    problems, _, _ = _gather(source, overrides, allow_plugins)
     return problems
 
 
 def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
                   allow_plugins: bool | None = None) -> Scenario:
-    """Load and validate a scenario; warnings are logged.
+    """Load and validate a scenario (and its baseline, if it has one); warnings are logged.
 
     Parameters
     ----------
@@ -348,7 +359,8 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
         Path of a YAML file, a raw mapping (copied, never modified), or a :class:`Scenario` (returned as is
         unless ``overrides`` are given).
     overrides
-        ``{"dotted.path": value}`` applied before validation (``{"networks.can.bitrate": "1 Mbit/s"}``).
+        ``{"dotted.path": value}`` applied to the raw data before the one validation
+        (``{"networks.can.bitrate": "1 Mbit/s", "seed": 3}``).
     allow_plugins
         Whether the plugin files the scenario's ``plugins:`` names may run (None: the user's settings,
         :func:`netsim.trust.plugins_allowed`; a scenario naming a file that is not allowed does not load).
@@ -358,65 +370,31 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
     ScenarioError
         Listing every problem (with path, line and file) when there is at least one error.
     """
-    problems, scenario = _gather(source, overrides, allow_plugins)
+    problems, scenario, base_warnings = _gather(source, overrides, allow_plugins)
     if scenario is None:
         raise ScenarioError(problems or [Problem("", "invalid scenario")])
-    for p in problems:
+    for p in [*problems, *base_warnings]:
         log.warning("%s", p.describe(tag=False))
     return scenario
 
 
 # --------------------------------------------------------------------------------------------- resolved form
-def _params_json(spec: PluginSpec) -> dict[str, Any]:
-    validated = spec._validated
-    if isinstance(validated, BaseModel):
-        try:
-            return validated.model_dump(mode="json")
-        except Exception:  # a Params model with values JSON cannot hold: keep what the user wrote
-            log.debug("cannot serialize validated params of %s", spec.plugin_name(), exc_info=True)
-    elif isinstance(validated, dict):
-        return _plain_copy(validated)
-    return _plain_copy(spec.raw_params())
-
-
 def resolved_dict(scenario: Scenario) -> dict[str, Any]:
     """Plain data of ``scenario`` with every default filled in and times as text (``"10 ms"``).
 
-    Network and signal parameters are written inline (``{type: can, nodes: [...], bitrate: ...}``), as in
-    scenario files, so the result loads back into an equal scenario.
+    The same as :meth:`Scenario.resolved_dict`: network and signal parameters are written inline
+    (``{type: can, nodes: [...], bitrate: ...}``), as in scenario files, so the result loads back into an equal
+    scenario.
     """
-    data = scenario.model_dump(mode="json")
-    if not data.get("plugins"):
-        data.pop("plugins", None)  # most scenarios have none: their resolved form (and hash) stays as it was
-    for path, spec in scenario.plugin_specs():
-        params = _params_json(spec)
-        parts = parse_path(path)
-        if parts[0] == "networks":
-            params.pop("nodes", None)
-            data["networks"][parts[1]] = {"type": spec.plugin_name(), "nodes": list(spec.nodes), **params}  # type: ignore[attr-defined]
-        elif parts[0] == "signals":
-            data["signals"][parts[1]] = {"type": spec.plugin_name(), **params}
-        else:
-            node: Any = data
-            for part in parts:
-                node = node[part]
-            node["params"] = params
-    return data
+    return scenario.resolved_dict()
 
 
 def dump_resolved(scenario: Scenario) -> str:
-    """The resolved scenario (:func:`resolved_dict`) as YAML text, keys in schema order."""
-    from ruamel.yaml import YAML
+    """The resolved scenario (:func:`resolved_dict`) as YAML text, keys in schema order, that loads back into an
+    equal scenario (:func:`netsim.scenario.safe_yaml.dump_text`)."""
+    from netsim.scenario.safe_yaml import dump_text
 
-    yaml = YAML(typ="rt", pure=True)
-    yaml.default_flow_style = False
-    yaml.width = 100
-    yaml.representer.add_representer(
-        type(None), lambda rep, _: rep.represent_scalar("tag:yaml.org,2002:null", "null")
-    )
-    buf = io.StringIO()
-    yaml.dump(resolved_dict(scenario), buf)
-    return buf.getvalue()
+    return dump_text(resolved_dict(scenario), width=100)
 
 
 def scenario_hash(raw_or_scenario: Source) -> str:

@@ -19,6 +19,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import difflib
 import re
 from typing import Any, Iterable, Sequence
@@ -33,6 +34,7 @@ __all__ = [
     "set_path",
     "parse_override",
     "parse_value",
+    "plain_copy",
     "did_you_mean",
 ]
 
@@ -222,26 +224,47 @@ def set_path(d: Any, path: str | Sequence[PathPart], value: Any) -> None:
 
 
 def parse_value(text: str) -> Any:
-    """Read an override value as a YAML scalar or flow collection.
+    """Read an override value as a YAML scalar or flow collection (as a scenario file reads it).
 
-    ``"1 Mbit/s"`` stays a string, ``"0.5"`` becomes a float, ``"[1, 0]"`` a list, ``"{a: 1}"`` a mapping,
-    ``"null"`` None, ``"true"`` True.
+    ``"1 Mbit/s"`` stays a string, ``"0.5"`` and ``"1e-5"`` become floats, ``"[1, 0]"`` a list, ``"{a: 1}"`` a
+    mapping, ``"null"`` None, ``"true"`` True.
 
     Raises
     ------
     ConfigError
-        When the text is not valid YAML flow syntax.
+        When the text is not valid YAML flow syntax (or is refused as a scenario file would be: a tag, ...).
     """
-    from ruamel.yaml import YAML
-    from ruamel.yaml.error import YAMLError
+    from netsim.scenario.safe_yaml import YamlRefused, load_text
 
-    yaml = YAML(typ="safe", pure=True)
     try:
-        value = yaml.load(text)
-    except YAMLError as exc:
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"cannot read {text!r} as a YAML value: {problem}") from None
-    return value
+        return load_text(text)
+    except YamlRefused as exc:
+        problem = exc.message.removeprefix("YAML syntax error: ")
+        raise ConfigError(f"cannot read {text[:80]!r} as a YAML value: {problem}") from None
+
+
+def plain_copy(data: Any) -> Any:
+    """A deep copy of ``data`` made of plain dicts, lists and scalars (tuples become lists).
+
+    Scenario data given from Python (a mapping, override values) is copied so, never shared: validation and
+    overrides then work on data that nobody else holds.
+    """
+    if isinstance(data, dict):
+        return {_scalar(k): plain_copy(v) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [plain_copy(v) for v in data]
+    return _scalar(data)
+
+
+def _scalar(value: Any) -> Any:
+    """``value`` as the plain type it is a subclass of (a ``numpy.float64`` becomes a ``float``)."""
+    kind = type(value)
+    if value is None or kind in (str, int, float, bool):
+        return value
+    for plain in (bool, int, float, str):
+        if isinstance(value, plain):
+            return plain(value)
+    return copy.deepcopy(value)  # a date, or something the schema will refuse: still not shared
 
 
 def parse_override(item: str) -> tuple[str, Any]:

@@ -63,6 +63,7 @@ import re
 from typing import Annotated, Any, ClassVar, Literal, Union
 
 from pydantic import (
+    BaseModel,
     BeforeValidator,
     ConfigDict,
     Discriminator,
@@ -70,10 +71,13 @@ from pydantic import (
     PrivateAttr,
     StringConstraints,
     Tag,
+    ValidationError,
     model_serializer,
     model_validator,
 )
 
+from netsim.scenario.paths import format_path, parse_path, plain_copy
+from netsim.scenario.problems import Problem, ScenarioError
 from netsim.units import Duration, StrictModel, Time
 
 __all__ = [
@@ -227,22 +231,34 @@ class PluginSpec(SpecModel):
         """The plugin's ``Params`` instance for these parameters (raw dict if the plugin has no ``Params``).
 
         Cached; filled by :func:`netsim.scenario.load_scenario`. Validates now when the scenario was built
-        without the loader.
+        without the loader (``Scenario.model_validate(raw)``).
 
         Raises
         ------
         ScenarioError
-            When the parameters do not fit the plugin's ``Params``.
+            When the parameters do not fit the plugin's ``Params`` (one problem per error, paths relative to
+            the parameters; the loader gives the full messages with YAML paths and lines).
         """
         if self._validated is None:
-            from netsim.scenario.validate import validate_params
-
-            self._validated = validate_params(self.plugin(), self.raw_params())
+            self._validated = _validate_params(self.plugin(), self.raw_params())
         return self._validated
 
     def attach_validated(self, params: Any) -> None:
         """Store the validated parameters (used by the loader)."""
         self._validated = params
+
+
+def _validate_params(plugin: Any, raw: dict[str, Any]) -> Any:
+    """``raw`` validated by ``plugin.Params`` (a pydantic model); ``dict(raw)`` when the plugin declares none."""
+    cls = getattr(plugin, "Params", None)
+    if not (isinstance(cls, type) and issubclass(cls, BaseModel)):
+        return dict(raw)
+    try:
+        return cls.model_validate(raw)
+    except ValidationError as exc:
+        problems = [Problem(format_path([p for p in err["loc"] if not str(p).startswith(TAG_MARK)]),
+                            str(err["msg"]).removeprefix("Value error, ")) for err in exc.errors()]
+        raise ScenarioError(problems) from None
 
 
 # --------------------------------------------------------------------------------------------- execution
@@ -676,6 +692,7 @@ class Scenario(SpecModel):
 
     _source: str | None = PrivateAttr(default=None)
     _raw: Any = PrivateAttr(default=None)
+    _baseline: Any = PrivateAttr(default=None)
 
     @property
     def source(self) -> str | None:
@@ -703,20 +720,54 @@ class Scenario(SpecModel):
         """Plain YAML/JSON-ready data with every default filled in and times as text (``"10 ms"``).
 
         Plugin parameters appear with their plugin's defaults when they have been validated (always the case
-        for a scenario from :func:`~netsim.scenario.load_scenario`). Loading the result gives an equal scenario.
+        for a scenario from :func:`~netsim.scenario.load_scenario`). Network and signal parameters are written
+        inline (``{type: can, nodes: [...], bitrate: ...}``), as in scenario files, so the result loads back
+        into an equal scenario.
         """
-        from netsim.scenario.loader import resolved_dict
-
-        return resolved_dict(self)
+        data = self.model_dump(mode="json")
+        if not data.get("plugins"):
+            data.pop("plugins", None)  # most scenarios have none: their resolved form (and hash) stays as it was
+        for path, spec in self.plugin_specs():
+            params = _params_json(spec)
+            parts = parse_path(path)
+            if parts[0] == "networks":
+                params.pop("nodes", None)
+                data["networks"][parts[1]] = {"type": spec.plugin_name(), "nodes": list(spec.nodes), **params}  # type: ignore[attr-defined]
+            elif parts[0] == "signals":
+                data["signals"][parts[1]] = {"type": spec.plugin_name(), **params}
+            else:
+                node: Any = data
+                for part in parts:
+                    node = node[part]
+                node["params"] = params
+        return data
 
     def baseline_scenario(self) -> Scenario | None:
-        """The baseline scenario (this one with ``baseline.overrides`` applied and no baseline), or None."""
+        """The baseline scenario (this one with ``baseline.overrides`` applied and no baseline), or None.
+
+        The loader validates it with the scenario (:func:`~netsim.scenario.load_scenario`), once.
+
+        Raises
+        ------
+        ScenarioError
+            For a scenario with a baseline that was not made by the loader (``Scenario.model_validate``).
+        """
         if self.baseline is None:
             return None
-        from netsim.scenario.loader import load_scenario
+        if self._baseline is None:
+            raise ScenarioError([Problem("baseline", "the baseline is validated by the loader: load this scenario "
+                                                     "with netsim.scenario.load_scenario to run its baseline")])
+        return self._baseline
 
-        from netsim.scenario.loader import raw_copy
 
-        raw = raw_copy(self)
-        raw["baseline"] = None
-        return load_scenario(raw, overrides=dict(self.baseline.overrides))
+def _params_json(spec: PluginSpec) -> dict[str, Any]:
+    """The parameters of ``spec`` as plain data: its validated ``Params`` (with defaults), else as written."""
+    validated = spec._validated
+    if isinstance(validated, BaseModel):
+        try:
+            return validated.model_dump(mode="json")
+        except Exception:  # noqa: BLE001 - a Params model with values JSON cannot hold: keep what the user wrote
+            pass
+    elif isinstance(validated, dict):
+        return plain_copy(validated)
+    return plain_copy(spec.raw_params())

@@ -30,7 +30,7 @@ What is checked
   plurals ``signals``, ``outputs``, ``*_signals``) must be in the ``record:`` list when one is given (the
   metric reads them from the signals table after the run). A metric's ``chain`` (or ``*_chain``) lists
   ``node.task`` names of existing tasks or handlers.
-- ``baseline.overrides`` paths can be applied and give a valid scenario.
+- (The baseline, ``baseline.overrides`` applied, is validated by the loader like the scenario itself.)
 - The kernel's own task checks (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
   ``check``): e.g. ``rm``/``dm`` refuse a deadline longer than the period, a ``wcet_handler`` needs a ``wcet``.
 - A ``module:attr`` plugin must accept the arguments build calls it with (:mod:`netsim.scenario.calls`); a
@@ -42,7 +42,6 @@ A scenario that passes all of these then goes through build's kernel and network
 
 from __future__ import annotations
 
-import copy
 import logging
 from typing import Any, Iterable
 
@@ -51,7 +50,7 @@ from pydantic import BaseModel, ValidationError
 from netsim.errors import ConfigError
 from netsim.scenario.limits import NAME_MAX, LineOf, limit_problems
 from netsim.scenario.messages import problems_from_validation_error
-from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path, set_path
+from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path
 from netsim.scenario.problems import WARNING, Problem, ScenarioError
 from netsim.scenario.schema import BUILTIN_POLICIES
 from netsim.timebase import TimeParseError, format_time, parse_time
@@ -226,7 +225,6 @@ class _Checker:
                 self.node(name, node)
         self.metrics()
         self.record(outputs)
-        self.baseline()
 
     def plant(self) -> tuple[list[Any] | None, list[Any] | None]:
         plant = self.raw.get("plant")
@@ -601,34 +599,6 @@ class _Checker:
         for i, name in enumerate(_l(self.raw.get("record"))):
             if not isinstance(name, str) or not name.strip():
                 self.error(["record", i], f"expected a signal name, got {name!r}")
-
-    def baseline(self) -> None:
-        baseline = self.raw.get("baseline")
-        if not isinstance(baseline, dict) or not isinstance(baseline.get("overrides"), dict):
-            return
-        copy_raw = copy.deepcopy(self.raw)
-        copy_raw["baseline"] = None
-        keys: list[list[PathPart]] = []
-        for key, value in baseline["overrides"].items():
-            try:
-                set_path(copy_raw, str(key), copy.deepcopy(value))
-                keys.append(parse_path(str(key)))
-            except ConfigError as exc:
-                self.error(["baseline", "overrides"], f"override '{key}': {exc.message}")
-        if not keys:
-            return
-        from netsim.scenario.schema import Scenario
-
-        try:
-            Scenario.model_validate(copy_raw)
-        except ValidationError as exc:
-            for p in problems_from_validation_error(exc, model=Scenario):
-                try:
-                    parts = parse_path(p.path)
-                except ConfigError:
-                    continue
-                if any(parts[: len(k)] == k for k in keys):
-                    self.error(["baseline", "overrides"], f"override gives {p.path}: {p.message}")
 
 
 def _values(model: Any) -> dict[str, Any]:

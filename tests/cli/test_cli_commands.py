@@ -56,7 +56,8 @@ def test_run_validates_applies_overrides_and_calls_the_runner(tmp_path, monkeypa
     assert isinstance(scenario, Scenario) and scenario.source == str(path)
     assert scenario.networks["net"].validated_params().bitrate == 1e6
     assert scenario.plant.x0 == [2.0]
-    assert kwargs == {"out": str(tmp_path / "o"), "seed": 5, "plot": True, "progress": None}  # no TTY: no bar
+    assert scenario.seed == 5  # --seed is applied with the --set values, before the one validation
+    assert kwargs == {"out": str(tmp_path / "o"), "plot": True, "progress": None}  # no TTY: no bar
     out = capsys.readouterr().out
     assert out.splitlines()[0] == "zzc_good: ok; wrote /tmp/run-x"
     assert "cpu.a" in out and "0.125" in out

@@ -24,7 +24,7 @@ import warnings
 from pathlib import Path
 from typing import Any, Iterator
 
-from ruamel.yaml import YAML
+from netsim.scenario.safe_yaml import dump_text, load_file
 
 ROOT = Path(__file__).resolve().parents[2]
 def _is_sweep(path: Path) -> bool:
@@ -81,24 +81,15 @@ class Outcome:
 
 
 # ------------------------------------------------------------------------------------------ reading/writing
-def _yaml() -> YAML:
-    y = YAML(typ="safe", pure=True)
-    y.default_flow_style = False
-    y.width = 4096
-    return y
-
-
 def load(path: Path) -> dict[str, Any]:
-    """A shipped scenario as plain data."""
-    with open(path, encoding="utf-8") as fh:
-        return _yaml().load(fh)
+    """A shipped scenario as plain data (read as netsim reads it)."""
+    return load_file(path)[0]
 
 
 def dump(raw: Any) -> str:
     """YAML text of ``raw`` (``HUGE_INT_TOKEN`` strings become a 5000-digit integer)."""
-    buf = io.StringIO()
-    _yaml().dump(raw, buf)
-    return buf.getvalue().replace(f"'{HUGE_INT_TOKEN}'", HUGE_INT_TEXT).replace(HUGE_INT_TOKEN, HUGE_INT_TEXT)
+    text = dump_text(raw, width=4096)
+    return text.replace(f"'{HUGE_INT_TOKEN}'", HUGE_INT_TEXT).replace(HUGE_INT_TOKEN, HUGE_INT_TEXT)
 
 
 def _leaves(node: Any, prefix: Path_ = ()) -> Iterator[tuple[Path_, Any]]:
