@@ -4,8 +4,8 @@ What the ratios measure (printed with the figures):
 
 * ``simulation``: building the runtime objects from the validated scenario and running the event loop
   (kernels, switched Ethernet, plant, programs) -- the work a co-simulator adds to the control loop itself;
-* ``run()``: everything ``netsim.run(path, write=False)`` does: YAML parsing (ruamel round-trip, kept for
-  line numbers in error messages), validation, the simulation, the result tables and the metrics.
+* ``run()``: everything ``netsim.run(path, write=False)`` does: YAML parsing (libyaml; positions are parsed
+  only for a problem to report), validation, the simulation, the result tables and the metrics.
 
 Both are compared with two plain loops of the same closed loop measured in the same process: the minimal
 plant + MRCI loop below, and :func:`netsim.control.reference_loop.simulate_loop` (plant, trigger, control

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from ruamel.yaml import YAML
+import yaml
 
 from netsim.scenario import check_scenario
 from netsim.scenario.limits import EVENTS_WARN, NAME_MAX, expected_events
@@ -120,7 +120,7 @@ def test_duplicate_task_names_name_the_first_definition_with_its_line(tmp_path, 
     raw["nodes"]["sensor"]["tasks"].append(dict(raw["nodes"]["sensor"]["tasks"][0]))
     path = tmp_path / "dup.yaml"
     with open(path, "w") as fh:
-        YAML(typ="safe", pure=True).dump(raw, fh)
+        yaml.safe_dump(raw, fh)  # keys sorted: each task starts with its execution
     lines = path.read_text().splitlines()
     first = next(i for i, ln in enumerate(lines, 1) if ln.strip() == "- execution: 0.5 ms")  # tasks[0] starts here
     (dup,) = [p for p in check_scenario(path) if p.is_error]
@@ -180,7 +180,7 @@ def _write_with_long_integer(tmp_path, base, where):
     node[where[-1]] = "LONG_INTEGER"
     path = tmp_path / "long.yaml"
     with open(path, "w") as fh:
-        YAML(typ="safe", pure=True).dump(raw, fh)
+        yaml.safe_dump(raw, fh)
     text = path.read_text()
     path.write_text(text.replace("LONG_INTEGER", "9" * 5000))
     line = next(i for i, ln in enumerate(text.splitlines(), 1) if "LONG_INTEGER" in ln)
