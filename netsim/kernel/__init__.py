@@ -11,20 +11,55 @@
 >>> [r.response for r in k.job_records if r.finish is not None]
 [2000000, 2000000]
 
-Importing this package registers the scheduling policies under registry kind ``"policy"``.
+The names below are imported on first use (PEP 562), so a module that needs only the static descriptions
+(``from netsim.kernel.task import TaskSpec``, as the scenario schema does) does not load the run time
+(simpy, numpy). The scheduling policies register themselves under registry kind ``"policy"`` when
+:mod:`netsim.kernel.policies` is imported (by the kernel, or by :func:`netsim.registry.load_plugins`).
 """
 
-from netsim.kernel.exectime import ExecTime
-from netsim.kernel.job import Job
-from netsim.kernel.kernel import Kernel
-from netsim.kernel.load import PeriodicLoad
-from netsim.kernel.policies import (DeadlineMonotonic, EarliestDeadlineFirst, FixedPriority,
-                                    NonPreemptiveEDF, NonPreemptiveFixedPriority, Policy, RateMonotonic)
-from netsim.kernel.records import JobRecord
-from netsim.kernel.requests import Request
-from netsim.kernel.sync import Event, Mailbox, Semaphore
-from netsim.kernel.task import Handler, HandlerSpec, Task, TaskSpec
-from netsim.kernel.timers import Timer, Trigger
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # pragma: no cover
+    from netsim.kernel.exectime import ExecTime
+    from netsim.kernel.job import Job
+    from netsim.kernel.kernel import Kernel
+    from netsim.kernel.load import PeriodicLoad
+    from netsim.kernel.policies import (DeadlineMonotonic, EarliestDeadlineFirst, FixedPriority,
+                                        NonPreemptiveEDF, NonPreemptiveFixedPriority, Policy, RateMonotonic)
+    from netsim.kernel.records import JobRecord
+    from netsim.kernel.requests import Request
+    from netsim.kernel.sync import Event, Mailbox, Semaphore
+    from netsim.kernel.task import Handler, HandlerSpec, Task, TaskSpec
+    from netsim.kernel.timers import Timer, Trigger
+
+#: Where each public name lives.
+_HOMES = {
+    "Kernel": "kernel",
+    "Job": "job",
+    "ExecTime": "exectime",
+    "Mailbox": "sync",
+    "Semaphore": "sync",
+    "Event": "sync",
+    "JobRecord": "records",
+    "Policy": "policies",
+    "FixedPriority": "policies",
+    "RateMonotonic": "policies",
+    "DeadlineMonotonic": "policies",
+    "EarliestDeadlineFirst": "policies",
+    "NonPreemptiveFixedPriority": "policies",
+    "NonPreemptiveEDF": "policies",
+    "Task": "task",
+    "TaskSpec": "task",
+    "Handler": "task",
+    "HandlerSpec": "task",
+    "Timer": "timers",
+    "Trigger": "timers",
+    "PeriodicLoad": "load",
+    "Request": "requests",
+}
 
 __all__ = [
     "Kernel",
@@ -50,3 +85,16 @@ __all__ = [
     "PeriodicLoad",
     "Request",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module 'netsim.kernel' has no attribute '{name}'")
+    value = getattr(importlib.import_module(f"netsim.kernel.{home}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_HOMES])

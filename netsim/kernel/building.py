@@ -24,39 +24,16 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["KernelBuilder", "task_spec"]
 
 
-def task_spec(node: str, name: str, *, period: int | None = None, offset: int = 0, deadline: int | None = None,
-              priority: int | float | None = None, wcet: int | None = None, preemptible: bool = True,
-              wcet_handler: Any = None, deadline_handler: Any = None) -> TaskSpec:
-    """The checked :class:`TaskSpec` of a task, as :meth:`KernelBuilder.create_task` makes it (times in ns).
-
-    Every check here depends on the task's description only, so ``netsim validate`` runs this same function
-    on a scenario's tasks before anything is built (then the scheduling policy's ``check``).
+def task_spec(node: str, name: str, **fields: Any) -> TaskSpec:
+    """``TaskSpec(name, **fields).checked(node)``: the checked description of a task, as
+    :meth:`KernelBuilder.create_task` makes it (``netsim validate`` calls this on a scenario's tasks).
 
     Raises
     ------
     BuildError
         From :func:`~netsim.kernel.task.task_error` (with ``node``, ``task`` and ``field`` attributes).
     """
-    period_ns = check_time(node, name, "period", period, positive=True, allow_none=True)
-    offset_ns = check_time(node, name, "offset", offset)
-    assert offset_ns is not None
-    if period_ns is None and offset_ns:
-        raise task_error(node, name, "offset", "applies to periodic tasks only; give a period or drop it")
-    deadline_ns = check_time(node, name, "deadline", deadline, positive=True, allow_none=True)
-    if deadline_ns is None:
-        deadline_ns = period_ns
-    if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
-        raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
-    wcet_ns = check_time(node, name, "wcet", wcet, positive=True, allow_none=True)
-    for field, ref in (("wcet_handler", wcet_handler), ("deadline_handler", deadline_handler)):
-        if ref is not None and not isinstance(ref, str) and not callable(ref):
-            raise task_error(node, name, field, f"must be a handler name or a callable fn(job), got {ref!r}")
-    if wcet_handler is not None and wcet_ns is None:
-        raise task_error(node, name, "wcet_handler", "needs a 'wcet' budget to detect overruns; add e.g. "
-                         "'wcet: 2 ms' (the execution budget per job)")
-    if deadline_handler is not None and deadline_ns is None:
-        raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
-    return TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(preemptible))
+    return TaskSpec(name, **fields).checked(node)
 
 
 class KernelBuilder:
@@ -117,20 +94,32 @@ class KernelBuilder:
         BuildError
             Naming the task and field for an invalid value.
         """
+        return self.add_task(TaskSpec(name, period=period, offset=offset, deadline=deadline, priority=priority,
+                                      wcet=wcet, preemptible=preemptible, wcet_handler=wcet_handler,
+                                      deadline_handler=deadline_handler), body, data)
+
+    def add_task(self, spec: TaskSpec, body: Callable[[Job], Any], data: Any = None) -> Task:
+        """Create the task ``spec`` describes (:meth:`create_task` with the description in one object).
+
+        Raises
+        ------
+        BuildError
+            Naming the task and field for an invalid value (:meth:`TaskSpec.checked`, then the policy's
+            ``check``).
+        """
         node = self.name
+        name = spec.name
         if not isinstance(name, str) or not name:
             raise BuildError(f"node '{node}': task name must be a non-empty string, got {name!r}")
         if name in self.tasks or name in self.handlers:
             raise task_error(node, name, "name", "is already used by another task or handler on this node")
         check_body(node, name, body)
-        spec = task_spec(node, name, period=period, offset=offset, deadline=deadline, priority=priority, wcet=wcet,
-                         preemptible=preemptible, wcet_handler=wcet_handler, deadline_handler=deadline_handler)
+        spec = spec.checked(node)
         self.policy.check(node, spec)
-        period_ns, offset_ns = spec.period, spec.offset
-        task = Task(spec, body, data, wcet_handler, deadline_handler)
+        task = Task(spec, body, data)
         self.tasks[name] = task
-        if period_ns is not None:
-            schedule_call(self._sim, offset_ns, NORMAL, self._on_periodic_release, task)
+        if spec.period is not None:
+            schedule_call(self._sim, spec.offset, NORMAL, self._on_periodic_release, task)
         return task
 
     def create_handler(self, name: str, body: Callable[[Job], Any], *, priority: int | float = 0, latency: int = 0,
@@ -149,17 +138,19 @@ class KernelBuilder:
         latency
             ISR entry latency: CPU time (ns) spent at each invocation before the code runs.
         """
+        return self.add_handler(HandlerSpec(name, priority, latency), body, data)
+
+    def add_handler(self, spec: HandlerSpec, body: Callable[[Job], Any], data: Any = None) -> Handler:
+        """Create the interrupt handler ``spec`` describes (:meth:`create_handler` with the description in one
+        object)."""
         node = self.name
+        name = spec.name
         if not isinstance(name, str) or not name:
             raise BuildError(f"node '{node}': handler name must be a non-empty string, got {name!r}")
         if name in self.tasks or name in self.handlers:
             raise task_error(node, name, "name", "is already used by another task or handler on this node")
         check_body(node, name, body)
-        if isinstance(priority, bool) or not isinstance(priority, (int, float)):
-            raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
-        latency_ns = check_time(node, name, "latency", latency)
-        assert latency_ns is not None
-        handler = Handler(HandlerSpec(name, priority, latency_ns), body, data)
+        handler = Handler(spec.checked(node), body, data)
         self.handlers[name] = handler
         return handler
 

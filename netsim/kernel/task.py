@@ -1,7 +1,11 @@
 """Static descriptions of tasks and interrupt handlers, and their run-time counterparts.
 
 Following SimSo, the frozen :class:`TaskSpec`/:class:`HandlerSpec` (what the user asked for, validated at
-build time) is kept apart from the mutable :class:`Task`/:class:`Handler` (job queue, counters).
+build time) is kept apart from the mutable :class:`Task`/:class:`Handler` (job queue, counters). They are
+the only definition of a task's and a handler's scheduling fields: the scenario schema parses its YAML
+entries into them (:meth:`netsim.scenario.schema.TaskSpec.kernel_spec`).
+
+This module imports nothing of the kernel's run time, so the scenario schema can use it cheaply.
 """
 
 from __future__ import annotations
@@ -93,7 +97,12 @@ def check_time(node: str, task: str, field: str, value: Any, *, positive: bool =
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """The validated description of a task (times in ns).
+    """The static description of a task (times in ns): what the user asked for, apart from the run-time
+    :class:`Task`. The one definition of a task's scheduling fields and their defaults; a scenario's task
+    entry (:class:`netsim.scenario.schema.TaskSpec`) only parses its YAML form into this.
+
+    Build one with keywords and let :meth:`checked` (run by ``Kernel.add_task``) validate it and fill the
+    defaults that depend on other fields.
 
     Attributes
     ----------
@@ -104,27 +113,67 @@ class TaskSpec:
     offset
         First release of a periodic task.
     deadline
-        Relative deadline (default: the period; ``None`` for an aperiodic task without one).
+        Relative deadline (``None``: the period; no deadline for an aperiodic task without one).
     priority
         Explicit priority (lower = more urgent); needed by ``fp``.
     wcet
         Execution budget per job; exceeding it fires the task's ``wcet_handler``.
     preemptible
         ``False``: once started, only interrupt handlers can take the CPU from the job.
+    wcet_handler, deadline_handler
+        A handler name (invoked with the overrunning job as data) or a callable ``fn(job)`` run at the
+        overrun instant (``None``: the overrun is only logged).
     """
 
     name: str
-    period: int | None
-    offset: int
-    deadline: int | None
-    priority: int | float | None
-    wcet: int | None
-    preemptible: bool
+    period: int | None = None
+    offset: int = 0
+    deadline: int | None = None
+    priority: int | float | None = None
+    wcet: int | None = None
+    preemptible: bool = True
+    wcet_handler: str | Callable[[Any], Any] | None = None
+    deadline_handler: str | Callable[[Any], Any] | None = None
+
+    def checked(self, node: str) -> TaskSpec:
+        """This description validated for node ``node``, with ``deadline`` defaulting to the period.
+
+        Every check depends on the description only, so ``netsim validate`` runs this same method on a
+        scenario's tasks before anything is built (then the scheduling policy's ``check``).
+
+        Raises
+        ------
+        BuildError
+            From :func:`task_error` (with ``node``, ``task`` and ``field`` attributes).
+        """
+        name = self.name
+        period_ns = check_time(node, name, "period", self.period, positive=True, allow_none=True)
+        offset_ns = check_time(node, name, "offset", self.offset)
+        assert offset_ns is not None
+        if period_ns is None and offset_ns:
+            raise task_error(node, name, "offset", "applies to periodic tasks only; give a period or drop it")
+        deadline_ns = check_time(node, name, "deadline", self.deadline, positive=True, allow_none=True)
+        if deadline_ns is None:
+            deadline_ns = period_ns
+        priority = self.priority
+        if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
+            raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
+        wcet_ns = check_time(node, name, "wcet", self.wcet, positive=True, allow_none=True)
+        for field, ref in (("wcet_handler", self.wcet_handler), ("deadline_handler", self.deadline_handler)):
+            if ref is not None and not isinstance(ref, str) and not callable(ref):
+                raise task_error(node, name, field, f"must be a handler name or a callable fn(job), got {ref!r}")
+        if self.wcet_handler is not None and wcet_ns is None:
+            raise task_error(node, name, "wcet_handler", "needs a 'wcet' budget to detect overruns; add e.g. "
+                             "'wcet: 2 ms' (the execution budget per job)")
+        if self.deadline_handler is not None and deadline_ns is None:
+            raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
+        return TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(self.preemptible),
+                        self.wcet_handler, self.deadline_handler)
 
 
 @dataclass(frozen=True)
 class HandlerSpec:
-    """The validated description of an interrupt handler.
+    """The static description of an interrupt handler (the one definition; see :class:`TaskSpec`).
 
     Attributes
     ----------
@@ -137,8 +186,23 @@ class HandlerSpec:
     """
 
     name: str
-    priority: int | float
-    latency: int
+    priority: int | float = 0
+    latency: int = 0
+
+    def checked(self, node: str) -> HandlerSpec:
+        """This description validated for node ``node``.
+
+        Raises
+        ------
+        BuildError
+            From :func:`task_error` (with ``node``, ``task`` and ``field`` attributes).
+        """
+        priority = self.priority
+        if isinstance(priority, bool) or not isinstance(priority, (int, float)):
+            raise task_error(node, self.name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
+        latency_ns = check_time(node, self.name, "latency", self.latency)
+        assert latency_ns is not None
+        return HandlerSpec(self.name, priority, latency_ns)
 
 
 class Task:
@@ -147,14 +211,13 @@ class Task:
     __slots__ = ("spec", "name", "body", "data", "wcet_handler", "deadline_handler", "queue", "active",
                  "released", "key", "cpu", "trace_state", "trace_since")
 
-    def __init__(self, spec: TaskSpec, body: Callable[[Any], Any], data: Any,
-                 wcet_handler: Any, deadline_handler: Any) -> None:
+    def __init__(self, spec: TaskSpec, body: Callable[[Any], Any], data: Any) -> None:
         self.spec = spec
         self.name = spec.name
         self.body = body
         self.data = data
-        self.wcet_handler = wcet_handler
-        self.deadline_handler = deadline_handler
+        self.wcet_handler = spec.wcet_handler  # copies of the spec's, read at every release and overrun
+        self.deadline_handler = spec.deadline_handler
         self.queue: deque[Any] = deque()  # released jobs waiting for the active one to finish
         self.active: Any = None  # the job currently ready/running/blocked
         self.released = 0

@@ -23,6 +23,7 @@ What :func:`build` does, in order:
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -31,6 +32,7 @@ import numpy as np
 
 from netsim.env import SimEnv, run_events
 from netsim.errors import BuildError, ConfigError, NetsimError
+from netsim.kernel.task import HandlerSpec, TaskSpec
 from netsim.timebase import MS
 
 __all__ = ["Simulation", "build", "make_plant", "wire_kernels", "build_networks", "bind_receivers", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
@@ -381,15 +383,10 @@ def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
             attach(kernel)
         for i, h in enumerate(node.handlers):
             hpath = f"{npath}.handlers[{i}]"
-            _call(kernel.create_handler, hpath, h.name, body(h, kernel, node_name, hpath, None),
-                  priority=h.priority, latency=h.latency)
+            _call(kernel.add_handler, hpath, h.kernel_spec(), body(h, kernel, node_name, hpath, None))
         for i, t in enumerate(node.tasks):
             tpath = f"{npath}.tasks[{i}]"
-            periodic = t.release_kind == "periodic"
-            _call(kernel.create_task, tpath, t.name, body(t, kernel, node_name, tpath, t.period),
-                  period=t.period if periodic else None, offset=t.offset, deadline=t.deadline,
-                  priority=t.priority, wcet=t.wcet, preemptible=t.preemptible,
-                  wcet_handler=t.wcet_handler, deadline_handler=t.deadline_handler)
+            _call(kernel.add_task, tpath, t.kernel_spec(), body(t, kernel, node_name, tpath, t.period))
             if t.release_network is not None:
                 bindings.append((node_name, t.release_network, t.name))
         # triggers after every handler exists
@@ -424,9 +421,9 @@ def bind_receivers(kernels: dict[str, Any], networks: dict[str, Any], bindings: 
         _call(kernels[node].bind_receive, f"nodes.{node}", net, target)
 
 
-#: Task/handler fields a kernel error may name that are keys of the scenario's task or handler.
-_SPEC_FIELDS = ("period", "offset", "deadline", "priority", "wcet", "wcet_handler", "deadline_handler", "latency",
-                "preemptible", "name")
+#: Task/handler fields a kernel error may name: the fields of the kernel's descriptions, keys of the scenario's
+#: task or handler.
+_SPEC_FIELDS = frozenset(f.name for cls in (TaskSpec, HandlerSpec) for f in dataclasses.fields(cls))
 
 
 def _call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:

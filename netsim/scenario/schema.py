@@ -58,6 +58,7 @@ instance, or the raw dict when the plugin declares no ``Params``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from typing import Annotated, Any, ClassVar, Literal, Union
@@ -78,6 +79,8 @@ from pydantic import (
 
 from netsim.scenario.paths import format_path, parse_path, plain_copy
 from netsim.scenario.problems import Problem, ScenarioError
+from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
+from netsim.kernel.task import TaskSpec as KernelTaskSpec
 from netsim.units import Duration, StrictModel, Time
 
 __all__ = [
@@ -439,6 +442,14 @@ class SignalSpec(PluginSpec):
 
 
 # --------------------------------------------------------------------------------------------- nodes
+#: The kernel's task description with every field at its default: the defaults of TaskSpec's scheduling fields.
+_KTASK = KernelTaskSpec("")
+_KTASK_FIELDS = tuple(f.name for f in dataclasses.fields(KernelTaskSpec))
+#: The kernel's handler description with every field at its default.
+_KHANDLER = KernelHandlerSpec("")
+_KHANDLER_FIELDS = tuple(f.name for f in dataclasses.fields(KernelHandlerSpec))
+
+
 class TaskSpec(PluginSpec):
     """A task on a node: the program it runs, when it is released and how long it executes.
 
@@ -451,30 +462,42 @@ class TaskSpec(PluginSpec):
     - ``release: on_message:<network>``: no ``period``; the node must be attached to ``<network>`` and has one
       receiver per network.
     - Under policy ``fp`` every task needs a ``priority``; a ``wcet_handler`` needs a ``wcet``.
+
+    The scheduling fields (``period`` ... ``deadline_handler``) are the kernel's static description of a task,
+    :class:`netsim.kernel.task.TaskSpec`, which defines them and their defaults; this model only reads them
+    from YAML (times with units) and :meth:`kernel_spec` hands them to the kernel.
     """
 
     plugin_kind: ClassVar[str] = "program"
     name: Name
     program: str = Field(min_length=1)
     params: dict[str, Any] = Field(default_factory=dict)
-    period: Duration | None = None
-    offset: Time = 0
-    deadline: Duration | None = None
-    priority: int | None = None
+    period: Duration | None = _KTASK.period
+    offset: Time = _KTASK.offset
+    deadline: Duration | None = _KTASK.deadline
+    priority: int | None = _KTASK.priority
     execution: Execution | None = None
-    wcet: Duration | None = None
+    wcet: Duration | None = _KTASK.wcet
     release: Release | None = None
-    preemptible: bool = True
-    wcet_handler: Name | None = None
-    deadline_handler: Name | None = None
+    preemptible: bool = _KTASK.preemptible
+    wcet_handler: Name | None = _KTASK.wcet_handler  # type: ignore[assignment]
+    deadline_handler: Name | None = _KTASK.deadline_handler  # type: ignore[assignment]
 
     @model_validator(mode="after")
     def _defaults(self) -> TaskSpec:
         if self.release is None:
             object.__setattr__(self, "release", "periodic" if self.period is not None else "aperiodic")
-        if self.deadline is None and self.period is not None:
+        if self.deadline is None and self.period is not None:  # the kernel's default (TaskSpec.checked)
             object.__setattr__(self, "deadline", self.period)
         return self
+
+    def kernel_spec(self) -> KernelTaskSpec:
+        """The kernel's description of this task (unchecked: ``Kernel.add_task`` checks it); a task released
+        by messages or by program code has no period."""
+        fields = {name: getattr(self, name) for name in _KTASK_FIELDS}
+        if self.release_kind != "periodic":
+            fields["period"] = None
+        return KernelTaskSpec(**fields)
 
     def plugin_name(self) -> str:
         return self.program
@@ -558,19 +581,28 @@ class HandlerTrigger(SpecModel):
 
 
 class HandlerSpec(PluginSpec):
-    """An interrupt handler on a node: beats every task; lower ``priority`` value is more urgent."""
+    """An interrupt handler on a node: beats every task; lower ``priority`` value is more urgent.
+
+    ``priority`` and ``latency`` are the kernel's static description of a handler,
+    :class:`netsim.kernel.task.HandlerSpec` (which defines them and their defaults); :meth:`kernel_spec`
+    hands them to the kernel.
+    """
 
     plugin_kind: ClassVar[str] = "program"
     name: Name
     program: str = Field(min_length=1)
     params: dict[str, Any] = Field(default_factory=dict)
-    priority: int = 0
-    latency: Time = 0
+    priority: int = _KHANDLER.priority  # type: ignore[assignment]
+    latency: Time = _KHANDLER.latency
     execution: Execution | None = None
     trigger: HandlerTrigger | None = None
 
     def plugin_name(self) -> str:
         return self.program
+
+    def kernel_spec(self) -> KernelHandlerSpec:
+        """The kernel's description of this handler (unchecked: ``Kernel.add_handler`` checks it)."""
+        return KernelHandlerSpec(**{name: getattr(self, name) for name in _KHANDLER_FIELDS})
 
     def execution_spec(self) -> Any:
         """``execution`` in the form ``ExecTime.from_spec`` reads, or None."""

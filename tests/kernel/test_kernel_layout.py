@@ -79,3 +79,12 @@ def test_kernel_modules_are_short_or_say_why(path: Path):
     assert "lines" in doc and "because" in doc, (
         f"{path.name} has {n} lines (> {MAX_LINES}); split it, or say in its docstring why it is long "
         "('... lines because ...')")
+
+
+def test_the_package_exports_every_public_name_from_its_home_module():
+    for name in netsim.kernel.__all__:
+        obj = getattr(netsim.kernel, name)
+        assert obj.__module__.startswith("netsim.kernel."), name
+    assert set(netsim.kernel.__all__) == set(netsim.kernel._HOMES)
+    with pytest.raises(AttributeError, match="no attribute 'Nope'"):
+        netsim.kernel.Nope  # noqa: B018

@@ -1,0 +1,70 @@
+"""TaskSpec/HandlerSpec: the kernel's frozen descriptions are the one definition of a task and a handler."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from netsim.env import SimEnv
+from netsim.errors import BuildError
+from netsim.kernel import HandlerSpec, Kernel, TaskSpec
+from netsim.scenario import schema
+from netsim.timebase import MS, US
+
+
+def body(job):
+    yield job.execute(1 * MS)
+
+
+def test_checked_fills_the_deadline_with_the_period_and_keeps_the_rest():
+    spec = TaskSpec("ctl", period=10 * MS, priority=2).checked("cpu")
+    assert spec == TaskSpec("ctl", period=10 * MS, offset=0, deadline=10 * MS, priority=2, wcet=None,
+                            preemptible=True)
+    assert TaskSpec("bg").checked("cpu").deadline is None  # aperiodic without a deadline: none
+
+
+@pytest.mark.parametrize("fields, field, text", [
+    ({"period": 0}, "period", "must be positive"),
+    ({"offset": 3}, "offset", "applies to periodic tasks only"),
+    ({"period": 5, "priority": "high"}, "priority", "must be a number"),
+    ({"period": 5, "wcet_handler": "h"}, "wcet_handler", "needs a 'wcet' budget"),
+    ({"deadline_handler": "h"}, "deadline_handler", "needs a deadline"),
+])
+def test_checked_names_node_task_and_field(fields, field, text):
+    with pytest.raises(BuildError, match=text) as info:
+        TaskSpec("t", **fields).checked("cpu")
+    assert (info.value.node, info.value.task, info.value.field) == ("cpu", "t", field)
+
+
+def test_add_task_and_add_handler_take_the_descriptions():
+    env = SimEnv()
+    k = Kernel(env, "cpu")
+    task = k.add_task(TaskSpec("ctl", period=5 * MS, priority=1), body)
+    handler = k.add_handler(HandlerSpec("isr", priority=0, latency=10 * US), body)
+    assert task.spec.deadline == 5 * MS and handler.spec.latency == 10 * US
+    with pytest.raises(BuildError, match=r"task 'isr2', field 'latency'"):
+        k.add_handler(HandlerSpec("isr2", latency=-1), body)
+    env.run(5 * MS + 1)
+    # the job released at 0 runs its 1 ms alone: response 1 ms; the one released at 5 ms is still running
+    assert [(r.release, r.response) for r in k.job_records] == [(0, 1 * MS), (5 * MS, None)]
+
+
+@pytest.mark.parametrize("model, kernel_cls", [(schema.TaskSpec, TaskSpec), (schema.HandlerSpec, HandlerSpec)])
+def test_the_yaml_models_read_exactly_the_kernel_fields_with_the_kernel_defaults(model, kernel_cls):
+    fields = model.model_fields
+    for f in dataclasses.fields(kernel_cls):
+        assert f.name in fields, f"{model.__name__} does not read the kernel field '{f.name}'"
+        if f.default is not dataclasses.MISSING:
+            assert fields[f.name].default == f.default, f"default of '{f.name}' differs from the kernel's"
+
+
+def test_a_yaml_task_becomes_the_kernel_description():
+    task = schema.TaskSpec.model_validate({"name": "ctl", "program": "p", "period": "10 ms", "priority": 1,
+                                           "wcet": "2 ms", "wcet_handler": "ovr"})
+    assert task.kernel_spec() == TaskSpec("ctl", period=10 * MS, deadline=10 * MS, priority=1, wcet=2 * MS,
+                                          wcet_handler="ovr")
+    on_msg = schema.TaskSpec.model_validate({"name": "act", "program": "p", "release": "on_message:can"})
+    assert on_msg.kernel_spec() == TaskSpec("act")
+    isr = schema.HandlerSpec.model_validate({"name": "isr", "program": "p", "latency": "5 us", "priority": 2})
+    assert isr.kernel_spec() == HandlerSpec("isr", priority=2, latency=5 * US)
