@@ -23,6 +23,8 @@ order the programs use); :meth:`PID.as_law` gives the same controller behind the
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from pydantic import model_validator
 
@@ -155,14 +157,21 @@ class PIDLaw:
     def __init__(self, pid: PID) -> None:
         self.pid = pid
 
-    def step(self, y: float, r: float) -> float:
-        """Control signal for measurement ``y`` and reference ``r``."""
-        if not isinstance(y, (int, float)):
-            y = np.asarray(y, dtype=float).reshape(-1)[0]
-        if not isinstance(r, (int, float)):
-            r = np.asarray(r, dtype=float).reshape(-1)[0]
-        return self.pid.step(float(r), float(y))
+    def step(self, y: Any, r: Any) -> float:
+        """Control signal for measurement ``y`` and reference ``r`` (numbers or one-element arrays)."""
+        return self.pid.step(_scalar(r), _scalar(y))
 
     def reset(self) -> None:
         """Reset the wrapped PID."""
         self.pid.reset()
+
+
+def _scalar(v: Any) -> float:
+    """A float from a number, a one-element array or a one-element list."""
+    if isinstance(v, float):
+        return v
+    if isinstance(v, np.ndarray):
+        return float(v.item())
+    if isinstance(v, (list, tuple)):
+        return float(v[0])
+    return float(v)
