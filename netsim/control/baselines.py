@@ -38,7 +38,9 @@ class FiniteDifferenceVelocity:
         if not (isinstance(h, (int, float)) and h > 0 and math.isfinite(h)):
             raise ConfigError(f"h must be a positive sampling period in seconds, got {h!r}")
         if cutoff_hz is not None and not (cutoff_hz > 0 and math.isfinite(cutoff_hz)):
-            raise ConfigError(f"cutoff_hz must be a positive frequency (or null for the raw difference), got {cutoff_hz!r}")
+            raise ConfigError(
+                f"cutoff_hz must be a positive frequency (or null for the raw difference), got {cutoff_hz!r}"
+            )
         self.h = float(h)
         self.tau = None if cutoff_hz is None else 1.0 / (2.0 * math.pi * float(cutoff_hz))
         self.reset()
@@ -65,7 +67,9 @@ class FiniteDifferenceVelocity:
         if self._last is not None:
             dt = t - self._last[0]
             if not dt > 0:
-                raise SimulationError(f"finite-difference velocity: sample times must increase ({self._last[0]} then {t})")
+                raise SimulationError(
+                    f"finite-difference velocity: sample times must increase ({self._last[0]} then {t})"
+                )
             raw = (p - self._last[1]) / dt
             v = raw if self.tau is None else math.exp(-dt / self.tau) * v + (1.0 - math.exp(-dt / self.tau)) * raw
         self._last = (t, p)

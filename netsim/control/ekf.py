@@ -236,7 +236,9 @@ class ExtendedKalmanFilter:
         """Move to the next sample: ``x <- f(x, u)``, ``P <- F P F' + Q``."""
         u = np.zeros(self.m) if u is None else np.asarray(u, dtype=float).reshape(-1)
         if u.shape[0] != self.m:
-            raise SimulationError(f"EKF: the input has {u.shape[0]} entries, the filter was built with n_inputs={self.m}")
+            raise SimulationError(
+                f"EKF: the input has {u.shape[0]} entries, the filter was built with n_inputs={self.m}"
+            )
         where = f"at sample {self.k}"
         x = self.x
         n = self.n

@@ -20,7 +20,27 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["ControlLaw", "StateEstimator", "OutputFeedback"]
+__all__ = ["ControlLaw", "StateEstimator", "OutputFeedback", "sample_index"]
+
+
+def sample_index(t_ns: int, period_ns: int, start_ns: int = 0) -> int:
+    """Index ``k`` of the sample ``start_ns + k * period_ns`` nearest to a measurement's sample time ``t_ns``.
+
+    Estimators count samples; a measurement message carries its sample time in integer nanoseconds. A
+    time-triggered sensor on the controller's grid maps exactly; a measurement taken between two samples is
+    attributed to the nearest one (half-way rounds up), an error of at most half a period.
+
+    Raises
+    ------
+    ValueError
+        When ``period_ns`` is not positive or ``t_ns`` lies more than half a period before ``start_ns``.
+    """
+    if period_ns <= 0:
+        raise ValueError(f"period_ns must be positive, got {period_ns}")
+    k = (int(t_ns) - int(start_ns) + period_ns // 2) // period_ns
+    if k < 0:
+        raise ValueError(f"sample time {t_ns} ns is before the first sample at {start_ns} ns")
+    return k
 
 
 @runtime_checkable

@@ -18,7 +18,14 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from netsim.control.design_checks import as_input_matrix, as_matrix, as_vector, check_detectable, check_square, check_weight
+from netsim.control.design_checks import (
+    as_input_matrix,
+    as_matrix,
+    as_vector,
+    check_detectable,
+    check_square,
+    check_weight,
+)
 from netsim.errors import ConfigError, SimulationError
 
 __all__ = ["KalmanFilter", "steady_state_prior", "kalman_gain", "riccati_step"]
@@ -209,7 +216,9 @@ class KalmanFilter:
             return np.zeros(0)
         u = np.asarray(u, dtype=float).reshape(-1)
         if u.shape[0] != self.m:
-            raise SimulationError(f"Kalman filter: the input has {u.shape[0]} entries, the model B has {self.m} columns")
+            raise SimulationError(
+                f"Kalman filter: the input has {u.shape[0]} entries, the model B has {self.m} columns"
+            )
         return u
 
     def correct(self, y: Any, k: int | None = None) -> bool:
@@ -247,7 +256,9 @@ class KalmanFilter:
             self.fused += 1
             return True
         if k > self.k:
-            raise SimulationError(f"Kalman filter: a measurement of sample {k} arrived at sample {self.k} (from the future)")
+            raise SimulationError(
+                f"Kalman filter: a measurement of sample {k} arrived at sample {self.k} (from the future)"
+            )
         back = self.k - k
         if back >= len(self._hist):
             self.stale += 1
@@ -270,7 +281,7 @@ class KalmanFilter:
 
     def predict(self, u: Any = None) -> None:
         """Move to the next sample: ``x <- A x + B u`` and (time-varying filter) ``P <- A P A' + Q``."""
-        u = self._as_u(0.0 if u is None and self.m else u)
+        u = np.zeros(self.m) if u is None else self._as_u(u)
         self._hist[-1].u = u
         self.x, self.P = self._propagate(self.x, self.P, u)
         self.k += 1

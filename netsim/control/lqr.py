@@ -29,7 +29,6 @@ import numpy as np
 from netsim.control.design_checks import (
     as_input_matrix,
     as_matrix,
-    as_vector,
     check_square,
     check_stabilizable,
     check_weight,

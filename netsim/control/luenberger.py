@@ -63,9 +63,11 @@ def observer_gain(A: Any, C: Any, poles: Any, form: Literal["predictor", "curren
     hidden = uncontrollable_modes(A.T, Cf.T, only_unstable=False)
     if hidden:
         modes = ", ".join(f"{complex(m):.6g}" for m in hidden)
-        extra = " (A has a zero eigenvalue there: use the predictor form)" if form == "current" and any(
-            abs(m) < 1e-12 for m in hidden
-        ) else ""
+        extra = (
+            " (A has a zero eigenvalue there: use the predictor form)"
+            if form == "current" and any(abs(m) < 1e-12 for m in hidden)
+            else ""
+        )
         raise ConfigError(
             f"poles: the pair {what} is not observable, so the observer cannot place the mode(s) at eigenvalue "
             f"{modes}{extra}; measure another output"
@@ -169,7 +171,7 @@ class LuenbergerObserver:
     def predict(self, u: Any = None) -> None:
         """Move to the next sample with input ``u``."""
         if self.m:
-            u = np.asarray(0.0 if u is None else u, dtype=float).reshape(-1)
+            u = np.zeros(self.m) if u is None else np.asarray(u, dtype=float).reshape(-1)
             x = self.A @ self.x + self.B @ u
         else:
             x = self.A @ self.x

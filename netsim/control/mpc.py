@@ -38,9 +38,8 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from netsim.control.design_checks import as_vector, check_weight
+from netsim.control.design_checks import as_matrix, as_vector, check_weight
 from netsim.control.lqr import _limits, _model, dlqr_gain, reference_gains
-from netsim.control.design_checks import as_matrix
 from netsim.errors import ConfigError, SimulationError
 
 __all__ = ["LinearMPC", "SOLVERS"]
@@ -50,11 +49,11 @@ _SHORTCUT_TOL = 1e-9
 
 
 class _Backend:
-    """One QP solver: ``solve(g, lo, hi, warm) -> (U or None, status)`` for ``min 1/2 U'HU + g'U, lo <= G U <= hi``."""
+    """One QP solver: ``solve(g, lo, hi, warm) -> (U or None, status, iterations)`` for ``min 1/2 U'HU + g'U, lo <= G U <= hi``."""
 
     warm_start = False
 
-    def solve(self, g: np.ndarray, lo: np.ndarray, hi: np.ndarray, warm: np.ndarray | None) -> tuple[Any, str]:
+    def solve(self, g: np.ndarray, lo: np.ndarray, hi: np.ndarray, warm: np.ndarray | None) -> tuple[Any, str, int]:
         raise NotImplementedError
 
 
@@ -82,8 +81,8 @@ class _Daqp(_Backend):
             self.ready = True
         else:
             self.model.update(f=g, bupper=hi, blower=lo)
-        x, _, flag, _ = self.model.solve()
-        return (np.array(x) if flag == 1 else None), f"daqp exitflag {flag}"
+        x, _, flag, info = self.model.solve()
+        return (np.array(x) if flag == 1 else None), f"daqp exitflag {flag}", int(info.get("iterations", 0))
 
 
 class _Osqp(_Backend):
@@ -107,7 +106,7 @@ class _Osqp(_Backend):
         res = self.solver.solve(raise_error=False)
         status = str(res.info.status)
         ok = res.info.status_val in (1, 2) and res.x is not None and np.all(np.isfinite(res.x))
-        return (np.asarray(res.x) if ok else None), f"osqp {status}"
+        return (np.asarray(res.x) if ok else None), f"osqp {status}", int(res.info.iter)
 
 
 class _Piqp(_Backend):
@@ -132,7 +131,7 @@ class _Piqp(_Backend):
             self.solver.update(c=g, h_l=lo, h_u=hi)
         status = self.solver.solve()
         ok = status == self._piqp.PIQP_SOLVED
-        return (np.array(self.solver.result.x) if ok else None), f"piqp {status}"
+        return (np.array(self.solver.result.x) if ok else None), f"piqp {status}", int(self.solver.result.info.iter)
 
 
 class _Clarabel(_Backend):
@@ -161,7 +160,7 @@ class _Clarabel(_Backend):
             self.solver.update(q=g, b=b)
         sol = self.solver.solve()
         ok = str(sol.status) in ("Solved", "AlmostSolved")
-        return (np.asarray(sol.x) if ok else None), f"clarabel {sol.status}"
+        return (np.asarray(sol.x) if ok else None), f"clarabel {sol.status}", int(sol.iterations)
 
 
 class LinearMPC:
@@ -200,6 +199,9 @@ class LinearMPC:
         Counters: saturated-LQR fallbacks (infeasible QP or solver failure), QPs sent to the solver, steps.
     last_status, last_solve_time_s, total_solve_time_s, max_solve_time_s
         Status and wall time of the optimisation of the last step, and their totals.
+    last_iterations, total_iterations
+        Solver iterations of the last step (0 when no solver ran) and their total: the input of a
+        per-iteration execution-time model.
     """
 
     def __init__(
@@ -333,7 +335,9 @@ class LinearMPC:
         if v.size == 1 and self.n > 1:
             v = np.full(self.n, float(v[0]))
         if v.size != self.n:
-            raise ConfigError(f"{name} must have {self.n} entries (one per state; use null or inf for none), got {v.size}")
+            raise ConfigError(
+                f"{name} must have {self.n} entries (one per state; use null or inf for none), got {v.size}"
+            )
         if np.any(np.isnan(v)):
             raise ConfigError(f"{name} contains NaN")
         return v
@@ -342,7 +346,9 @@ class LinearMPC:
         import importlib.util
 
         if importlib.util.find_spec(self.solver) is None:
-            raise ConfigError(f"solver {self.solver!r} is not installed: pip install {self.solver}, or use solver='daqp'")
+            raise ConfigError(
+                f"solver {self.solver!r} is not installed: pip install {self.solver}, or use solver='daqp'"
+            )
 
     def _check_initial_state(self, x0: np.ndarray) -> None:
         for i in range(self.n):
@@ -353,11 +359,11 @@ class LinearMPC:
         if self._G.shape[0]:
             lo, hi = self._bounds(x0, self.u0)
             backend = self._make_backend()
-            U, status = backend.solve(self._Gx @ x0, lo, hi, None)
+            U, status, _ = backend.solve(self._Gx @ x0, lo, hi, None)
             if U is None:
                 raise ConfigError(
-                    f"x0: the MPC problem is infeasible from the initial state {x0.tolist()} ({status}); relax x_min/x_max "
-                    "or the input limits, or lengthen the horizon"
+                    f"x0: the MPC problem is infeasible from the initial state {x0.tolist()} ({status}); relax "
+                    "x_min/x_max or the input limits, or lengthen the horizon"
                 )
 
     def _make_backend(self) -> _Backend:
@@ -381,6 +387,8 @@ class LinearMPC:
         self.solver_calls = 0
         self.steps = 0
         self.last_status = "not run"
+        self.last_iterations = 0
+        self.total_iterations = 0
         self.last_solve_time_s = 0.0
         self.total_solve_time_s = 0.0
         self.max_solve_time_s = 0.0
@@ -406,7 +414,9 @@ class LinearMPC:
             return r, -self._Bpinv @ (self._AmI @ r)
         if r.shape[0] == n + m:
             return r[:n], r[n:]
-        raise SimulationError(f"MPC: a state reference has {n} entries (x_ref) or {n + m} ([x_ref, u_ref]), got {r.shape[0]}")
+        raise SimulationError(
+            f"MPC: a state reference has {n} entries (x_ref) or {n + m} ([x_ref, u_ref]), got {r.shape[0]}"
+        )
 
     def _clip(self, u: np.ndarray) -> np.ndarray:
         if self.du_min is not None:
@@ -427,6 +437,7 @@ class LinearMPC:
             raise SimulationError(f"MPC: x_hat has {x0.shape[0]} entries, the model has {self.n} states")
         xs, us = self._target(r)
         m = self.m
+        self.last_iterations = 0
         z = np.concatenate((x0, xs, us))
         U = self._Mall @ z
         self.steps += 1
@@ -444,9 +455,10 @@ class LinearMPC:
                     warm = np.concatenate([self._U_prev[m:], self._U_prev[-m:]])
                 self.solver_calls += 1
                 try:
-                    Usol, status = self._backend.solve(g, lo, hi, warm)
+                    Usol, status, self.last_iterations = self._backend.solve(g, lo, hi, warm)
                 except Exception as exc:  # a solver crash must not stop the run: fall back, count, report
                     Usol, status = None, f"{self.solver} raised {type(exc).__name__}: {exc}"
+                    self.last_iterations = 0
                 self.last_status = status
                 if Usol is None or not np.all(np.isfinite(Usol)):
                     self.fallbacks += 1
@@ -464,6 +476,7 @@ class LinearMPC:
         self.u_prev = u
         dt = time.perf_counter() - t0
         self.last_solve_time_s = dt
+        self.total_iterations += self.last_iterations
         self.total_solve_time_s += dt
         if dt > self.max_solve_time_s:
             self.max_solve_time_s = dt
@@ -477,4 +490,5 @@ class LinearMPC:
             "fallbacks": float(self.fallbacks),
             "solve_time_mean_s": self.total_solve_time_s / self.steps if self.steps else 0.0,
             "solve_time_max_s": self.max_solve_time_s,
+            "solver_iterations": float(self.total_iterations),
         }

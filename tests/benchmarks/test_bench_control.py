@@ -42,7 +42,11 @@ A, B = _zoh(np.array([[0.0, 1.0], [0.0, -1.0]]), np.array([[0.0], [1000.0]]), 0.
 C = np.array([[1.0, 0.0]])
 Qw, Rv = np.diag([1e-8, 1e-4]), np.array([[1e-6]])
 k, c = 2.0, 0.2
-A4, B4 = _zoh(np.array([[0, 1, 0, 0], [-k, -c, k, c], [0, 0, 0, 1], [k, c, -k, -c]], float), np.array([[0.0], [1.0], [0.0], [0.0]]), 0.05)
+A4, B4 = _zoh(
+    np.array([[0, 1, 0, 0], [-k, -c, k, c], [0, 0, 0, 1], [k, c, -k, -c]], float),
+    np.array([[0.0], [1.0], [0.0], [0.0]]),
+    0.05,
+)
 Cr4 = np.array([[0.0, 0.0, 1.0, 0.0]])
 
 rng = np.random.default_rng(0)
@@ -140,7 +144,7 @@ def bare_pid(K, Ti, Td, N, b, h, u_min, u_max):
     """PID.step's arithmetic written inline (same operations, no object)."""
     ad = Td / (Td + N * h)
     bd, bi = K * N * ad, K * h / Ti
-    I = D = 0.0
+    integ = D = 0.0
     yold = None
     r = 0.5
     for yy in YS:
@@ -148,11 +152,11 @@ def bare_pid(K, Ti, Td, N, b, h, u_min, u_max):
         yo = y if yold is None else yold
         P = K * (b * r - y)
         D = ad * D - bd * (y - yo)
-        v = P + I + D
+        v = P + integ + D
         u = min(max(v, u_min), u_max)
         e = r - y
         if not ((u < v and e > 0) or (u > v and e < 0)):
-            I += bi * e
+            integ += bi * e
         yold = y
 
 
@@ -196,7 +200,11 @@ def test_bench_estimators_and_laws_vs_bare_numpy():
         ("Kalman, time-varying", run_estimator(lambda: KalmanFilter(A, B, C, Qw, Rv)), bare_kf_tv),
         ("Kalman, steady-state", run_estimator(lambda: KalmanFilter(A, B, C, Qw, Rv, steady_state=True)),
          lambda: bare_kf_ss(kf_ss.K_ss)),
-        ("Kalman, time-varying, history 5", run_estimator(lambda: KalmanFilter(A, B, C, Qw, Rv, history=5)), bare_kf_tv),
+        (
+            "Kalman, time-varying, history 5",
+            run_estimator(lambda: KalmanFilter(A, B, C, Qw, Rv, history=5)),
+            bare_kf_tv,
+        ),
         ("Luenberger, predictor", run_estimator(lambda: LuenbergerObserver(A, B, C, [0.5, 0.6])),
          lambda: bare_luenberger_pred(lp.L)),
         ("Luenberger, current", run_estimator(lambda: LuenbergerObserver(A, B, C, [0.5, 0.6], form="current")),
@@ -211,7 +219,9 @@ def test_bench_estimators_and_laws_vs_bare_numpy():
          lambda: bare_fd(0.01, a_fd)),
         # the laws: one object per loop, as in a run
         ("LQR with feed-forward", run_law(lambda: lqr, 0.5), lambda: bare_lqr(lqr.K, lqr._Fr)),
-        ("PID through PIDLaw, y a 1-element array", run_law_y(lambda: PID(*pid[:5], pid[5], u_min=-1, u_max=1).as_law()),
+        (
+            "PID through PIDLaw, y a 1-element array",
+            run_law_y(lambda: PID(*pid[:5], pid[5], u_min=-1, u_max=1).as_law()),
          lambda: bare_pid(*pid, -1.0, 1.0)),
     ]  # fmt: skip
     print(f"\n{'step (2000 steps, best of 7)':42s} {'object':>10s} {'bare numpy':>11s} {'ratio':>6s}")
@@ -311,4 +321,3 @@ def test_bench_mpc_object_vs_bare_numpy_and_daqp():
         f"{t_bare / n * 1e6:.1f} us, ratio {t_obj / t_bare:.2f}"
     )
     assert t_obj / t_bare <= TARGET
-

@@ -55,7 +55,9 @@ def test_low_pass_attenuates_quantisation_noise():
     assert np.std(raw - 0.43) > 5 * np.std(filt - 0.43)
 
 
-@pytest.mark.parametrize(("kw", "match"), [(dict(h=0.0), "h must be a positive"), (dict(h=0.01, cutoff_hz=-1.0), "cutoff_hz")])
+@pytest.mark.parametrize(
+    ("kw", "match"), [(dict(h=0.0), "h must be a positive"), (dict(h=0.01, cutoff_hz=-1.0), "cutoff_hz")]
+)
 def test_bad_parameters(kw, match):
     with pytest.raises(ConfigError, match=match):
         FiniteDifferenceVelocity(**kw)

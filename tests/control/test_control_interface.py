@@ -6,7 +6,7 @@ import scipy.linalg as sla
 
 from netsim.control.baselines import FiniteDifferenceVelocity
 from netsim.control.ekf import ExtendedKalmanFilter
-from netsim.control.interface import ControlLaw, OutputFeedback, StateEstimator
+from netsim.control.interface import ControlLaw, OutputFeedback, StateEstimator, sample_index
 from netsim.control.kalman import KalmanFilter
 from netsim.control.lqr import LQR, StateFeedback
 from netsim.control.luenberger import LuenbergerObserver
@@ -28,7 +28,9 @@ def estimators():
         "kalman_ss": KalmanFilter(A, B, C, Qw, Rv, steady_state=True),
         "luenberger_pred": LuenbergerObserver(A, B, C, [0.5, 0.6], form="predictor"),
         "luenberger_curr": LuenbergerObserver(A, B, C, [0.5, 0.6], form="current"),
-        "ekf": ExtendedKalmanFilter(lambda x, u: A @ x + B @ u, {"y": {"h": lambda x: C @ x, "R": Rv}}, Qw, np.zeros(2)),
+        "ekf": ExtendedKalmanFilter(
+            lambda x, u: A @ x + B @ u, {"y": {"h": lambda x: C @ x, "R": Rv}}, Qw, np.zeros(2)
+        ),
         "finite_difference": FiniteDifferenceVelocity(H, cutoff_hz=30.0),
     }
 
@@ -87,3 +89,12 @@ def test_pid_law_gives_the_same_results_as_pid_step():
         assert law.step(np.array([y]), r) == a.step(r, y)
     law.reset()
     assert b.I == 0.0 and b.y_old is None
+
+
+def test_sample_index_maps_sample_times_to_the_nearest_sample():
+    assert sample_index(30_000_000, 10_000_000) == 3
+    assert sample_index(34_999_999, 10_000_000) == 3
+    assert sample_index(35_000_000, 10_000_000) == 4  # half-way rounds up
+    assert sample_index(1_005_000_000, 10_000_000, start_ns=1_000_000_000) == 1
+    with pytest.raises(ValueError, match="before the first sample"):
+        sample_index(0, 10_000_000, start_ns=1_000_000_000)

@@ -30,8 +30,14 @@ def test_scalars_vectors_and_diagonals():
         (lambda: as_matrix("A", np.zeros((2, 2, 2))), "A must be a matrix"),
         (lambda: as_matrix("C", np.zeros((1, 3)), (None, 2)), "C must be anyx2, got 1x3"),
         (lambda: check_weight("Q", [1.0, 2.0, 3.0], 2, definite=False), "Q given as a diagonal must have 2 entries"),
-        (lambda: check_weight("R", np.diag([1.0, 0.0]), 2, definite=True), r"R must be positive definite \(smallest eigenvalue 0"),
-        (lambda: check_weight("Q", [[1.0, 2.0], [2.0, 1.0]], 2, definite=False), r"Q must be positive semidefinite \(smallest eigenvalue -1"),
+        (
+            lambda: check_weight("R", np.diag([1.0, 0.0]), 2, definite=True),
+            r"R must be positive definite \(smallest eigenvalue 0",
+        ),
+        (
+            lambda: check_weight("Q", [[1.0, 2.0], [2.0, 1.0]], 2, definite=False),
+            r"Q must be positive semidefinite \(smallest eigenvalue -1",
+        ),
         (lambda: check_poles("poles", [0.5, 1.5], 2), r"1\.5"),
     ],
 )

@@ -105,6 +105,7 @@ def test_nonlinear_pendulum_estimate_converges():
 
 def test_user_function_errors_at_construction_name_the_function():
     src = {"pos": {"h": lambda x: C @ x, "R": R}}
+
     def boom(x, u):
         raise ZeroDivisionError("boom")
 
@@ -113,7 +114,9 @@ def test_user_function_errors_at_construction_name_the_function():
     with pytest.raises(ConfigError, match=r"f must return 3 values, returned shape \(2,\)"):
         ExtendedKalmanFilter(lambda x, u: x[:2], src, Q, x0=np.zeros(3))
     with pytest.raises(ConfigError, match=r"sources\.pos\.H must return 1x3 values"):
-        ExtendedKalmanFilter(f_lin, {"pos": {"h": lambda x: C @ x, "R": R, "H": lambda x: np.eye(3)}}, Q, x0=np.zeros(3))
+        ExtendedKalmanFilter(
+            f_lin, {"pos": {"h": lambda x: C @ x, "R": R, "H": lambda x: np.eye(3)}}, Q, x0=np.zeros(3)
+        )
     with pytest.raises(ConfigError, match=r"sources\.pos\.R must be positive definite"):
         ExtendedKalmanFilter(f_lin, {"pos": {"h": lambda x: C @ x, "R": 0.0}}, Q, x0=np.zeros(3))
     with pytest.raises(ConfigError, match=r"sources\.pos: unknown key\(s\) \['r'\]"):
@@ -132,7 +135,9 @@ def test_user_function_errors_during_a_run_name_the_function_and_sample():
     ekf.correct([0.0])
     ekf.predict([0.0])
     ekf.x = np.array([2.0, 0.0, 0.0])
-    with pytest.raises(SimulationError, match=r"sources\.pos\.h raised ValueError: out of the sensor's range \(at sample 1\)"):
+    with pytest.raises(
+        SimulationError, match=r"sources\.pos\.h raised ValueError: out of the sensor's range \(at sample 1\)"
+    ):
         ekf.correct([0.0])
     with pytest.raises(SimulationError, match="unknown measurement source 'gps'"):
         ekf.correct([0.0], "gps")

@@ -27,7 +27,9 @@ A, B = two_masses()
 Q = np.diag([1.0, 0.1, 10.0, 0.1])
 R = np.array([[0.1]])
 Cr = np.array([[0.0, 0.0, 1.0, 0.0]])
-LIMITS = dict(u_min=-1.0, u_max=1.0, du_min=-0.2, du_max=0.2, x_min=[None, -0.6, None, -0.6], x_max=[None, 0.6, None, 0.6])
+LIMITS = dict(
+    u_min=-1.0, u_max=1.0, du_min=-0.2, du_max=0.2, x_min=[None, -0.6, None, -0.6], x_max=[None, 0.6, None, 0.6]
+)
 SOLVERS = [s for s in ("daqp", "clarabel", "piqp", "osqp") if importlib.util.find_spec(s) is not None]
 
 
@@ -216,6 +218,8 @@ def test_solve_time_is_reported():
     mpc = LinearMPC(A, B, Q, R, 20, Cr=Cr, **LIMITS)
     for _ in range(5):
         mpc.step(np.zeros(4), 1.0)
+    assert mpc.solver_calls >= 1 and mpc.last_iterations > 0  # the input limit is active from rest
     m = mpc.metrics()
     assert m["steps"] == 5.0
+    assert m["solver_iterations"] >= mpc.last_iterations
     assert 0 < m["solve_time_mean_s"] <= m["solve_time_max_s"] < 1.0
