@@ -12,7 +12,8 @@ augments the model, the LQR is designed on ``([[A, 0], [-Cr, I]], [[B], [0]])`` 
 saturated (``u_min``/``u_max``) in the direction that would wind it up.
 
 *State reference and trajectory tracking* (``Cr`` is ``None``): ``r`` is a state reference ``x_ref`` (``n``
-entries) or ``[x_ref, u_ref]`` (``n + m`` entries) and ``u = u_ref - K (x_hat - x_ref)``. Without ``u_ref`` the
+entries; one number is the same for every state, so ``0`` regulates) or ``[x_ref, u_ref]`` (``n + m`` entries)
+and ``u = u_ref - K (x_hat - x_ref)``. Without ``u_ref`` the
 least-squares equilibrium input of ``x_ref`` is used; :func:`trajectory_feedforward` gives ``u_ref`` along a
 state trajectory (``B u_ref[k] = x_ref[k+1] - A x_ref[k]`` in least squares), with which a feasible trajectory
 is tracked with error dynamics ``e[k+1] = (A - B K) e[k]``.
@@ -207,6 +208,8 @@ class StateFeedback:
             v = self._Fr @ r - self.K @ x
         else:
             n = self.n
+            if r.shape[0] == 1 and n > 1:
+                r = np.full(n, r[0])  # one number: the same reference for every state (0: regulation)
             if r.shape[0] == n:
                 u_ref = -self._Bpinv @ (self._AmI @ r)  # least-squares equilibrium input of x_ref
             elif r.shape[0] == n + self.m:

@@ -410,6 +410,8 @@ class LinearMPC:
             elif r.shape[0] != q:
                 raise SimulationError(f"MPC: the reference has {r.shape[0]} entries, Cr has {q} rows")
             return self._Nx @ r, self._Nu @ r
+        if r.shape[0] == 1 and n > 1:
+            r = np.full(n, r[0])  # one number: the same reference for every state (0: regulation)
         if r.shape[0] == n:
             return r, -self._Bpinv @ (self._AmI @ r)
         if r.shape[0] == n + m:

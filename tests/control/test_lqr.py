@@ -97,6 +97,7 @@ def test_state_feedback_with_a_given_gain():
     sf = StateFeedback(A, B, K, u_min=-1, u_max=1)
     np.testing.assert_allclose(sf.step([0.01, 0.0], np.zeros(2)), [-0.1])
     np.testing.assert_allclose(sf.step([1.0, 0.0], np.zeros(2)), [-1.0])  # saturated
+    np.testing.assert_allclose(sf.step([0.01, 0.0], 0.0), [-0.1])  # one number: regulation to 0
 
 
 def test_unstabilisable_pair_names_the_mode():
