@@ -14,7 +14,6 @@ import ast
 import re
 from pathlib import Path
 
-import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 BROAD = {"Exception", "BaseException", "<bare>"}
@@ -45,10 +44,6 @@ REVIEWED = {
 
 #: Silent handlers that hide real errors, left to the owner of the file (issue 15 C); the strict xfail below
 #: fails as soon as one is fixed, so the entry is removed with the fix.
-TO_FIX = {
-    # metrics/runtime.py: a Network.metrics() that raises drops that network's metrics without a word
-    ("generic_metrics", "Exception"),
-}
 
 
 def _types(node: ast.expr | None) -> list[str]:
@@ -116,13 +111,6 @@ def _tree_handlers() -> list[tuple[str, str, str]]:
 
 def test_no_new_silent_exception_handler_in_netsim_or_models():
     new = [f"{where}: in {function}(): except {types}" for function, types, where in _tree_handlers()
-           if (function, types) not in REVIEWED | TO_FIX]
+           if (function, types) not in REVIEWED]
     assert new == [], ("exceptions swallowed without a reason; re-raise, report them, or say why on the except "
                        "line:\n" + "\n".join(new))
-
-
-@pytest.mark.xfail(strict=True, reason="TO_FIX: generic_metrics hides a failing Network.metrics(); remove the "
-                   "entry when it is fixed")
-def test_the_handlers_to_fix_are_fixed():
-    left = {(function, types) for function, types, _ in _tree_handlers()} & TO_FIX
-    assert left == set()

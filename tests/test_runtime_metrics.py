@@ -83,3 +83,24 @@ def test_chain_latency_is_exact_in_nanoseconds_away_from_time_zero():
     assert chain_latencies(jobs, msgs, chain) == [0.0035]
     m = latency(RunResult(jobs=jobs, messages=msgs), {"chain": chain})
     assert m["latency.min_s"] == 0.0035 and m["latency.max_s"] == 0.0035 and m["latency.mean_s"] == 0.0035
+
+
+def test_a_network_whose_own_metrics_fail_is_reported_not_hidden(caplog):
+    import types
+
+    import pandas as pd
+
+    class Broken:
+        def metrics(self, t_end_ns):
+            raise ZeroDivisionError("division by zero")
+
+    result = types.SimpleNamespace(
+        signals=pd.DataFrame({"time_s": [0.0, 1.0]}),
+        jobs=pd.DataFrame(columns=["node", "task", "cpu_time_s"]),
+        messages=pd.DataFrame(columns=["network", "sender", "receiver", "sent_s", "delivered_s", "dropped"]),
+    )
+    sim = types.SimpleNamespace(kernels={}, networks={"bus": Broken()})
+    with caplog.at_level("WARNING", logger="netsim"):
+        out = generic_metrics(result, sim, 1_000_000_000)
+    assert not any(k.startswith("net.bus.") and k.endswith("attempts") for k in out)
+    assert "network 'bus'" in caplog.text and "ZeroDivisionError" in caplog.text

@@ -25,6 +25,7 @@ Registered metrics (scenario ``metrics:`` list, ``fn(result, params, baseline) -
 
 from __future__ import annotations
 
+import logging
 import math
 from typing import Any
 
@@ -36,6 +37,8 @@ from netsim.errors import ConfigError
 from netsim.registry import lookup, register
 from netsim.timebase import S
 from netsim.units import StrictModel, Time
+
+_log = logging.getLogger(__name__)
 
 __all__ = [
     "generic_metrics",
@@ -128,11 +131,7 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
     out: dict[str, float] = {}
     if sim is not None:
         for name in sorted(getattr(sim, "kernels", {})):
-            kernel = sim.kernels[name]
-            try:
-                out[f"cpu.{name}.utilization"] = float(kernel.utilization(0, t_end_ns))
-            except Exception:  # noqa: BLE001 - a kernel without accounting must not lose the run
-                pass
+            out[f"cpu.{name}.utilization"] = float(sim.kernels[name].utilization(0, t_end_ns))
     elif not result.jobs.empty and t_end_s > 0:
         for node, grp in result.jobs.groupby("node", sort=True):
             out[f"cpu.{node}.utilization"] = float(grp["cpu_time_s"].astype(float).sum() / t_end_s)
@@ -143,7 +142,9 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
             net = sim.networks[name]
             try:
                 extra = net.metrics(t_end_ns)
-            except Exception:  # noqa: BLE001
+            except Exception as exc:  # noqa: BLE001 - reported: the run's other metrics are still written
+                _log.warning("network '%s': its own metrics could not be computed (%s: %s); the net.%s.* metrics "
+                             "from the messages table are kept", name, type(exc).__name__, exc, name)
                 continue
             for k in sorted(extra):
                 v = extra[k]
