@@ -275,14 +275,16 @@ def run(
     Parameters
     ----------
     source
-        Scenario file path, raw mapping, or validated :class:`~netsim.scenario.schema.Scenario`.
+        Scenario file path, raw mapping, or validated :class:`~netsim.scenario.schema.Scenario` (the CLI loads
+        the file with ``--seed`` and ``--set`` applied and passes the Scenario: one validation per run).
     out
         Run folder, anywhere (default: ``reports/<output.dir>`` when the scenario gives ``output.dir``, else
         ``reports/<name>/<run-id>``).
     seed
-        Overrides the scenario seed.
+        Overrides the scenario seed (applied to the raw data with ``overrides``).
     overrides
-        ``{"dotted.path": value}`` applied before validation.
+        ``{"dotted.path": value}`` applied to the raw data before the one validation; given with a loaded
+        ``Scenario``, its raw data is validated again with them.
     plot
         Also write PNG figures (as does ``output.plot: true`` in the scenario).
     write

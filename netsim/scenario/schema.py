@@ -1,7 +1,9 @@
 """The scenario schema: pydantic models of a netsim YAML scenario.
 
 A scenario is a frozen, validated description (the SimSo split: static description here, runtime objects
-in :mod:`netsim.scenario.builder`). Every model forbids unknown keys; every time field accepts ``"1.5 ms"``
+in :mod:`netsim.scenario.builder`). This module is pure data: it imports no loader and no checker (they import
+it); :func:`netsim.scenario.load_scenario` fills what only it knows (validated plugin parameters, the raw data,
+the baseline scenario) into private attributes. Every model forbids unknown keys; every time field accepts ``"1.5 ms"``
 style text (a bare number other than 0 is refused: "add a unit, e.g. '5 ms'") and holds **integer nanoseconds**. Plugin parameters (plant model,
 programs, networks, signals, metrics) are kept raw here and validated against the plugin's own ``Params``
 model by :mod:`netsim.scenario.validate`; after :func:`netsim.scenario.load_scenario` the validated
@@ -15,7 +17,8 @@ Public classes and their fields (times in ns)
     ``seed, duration, plant: PlantSpec | None, io: dict[str, IOChannel],
     signals: dict[str, SignalSpec], nodes: dict[str, NodeSpec], networks: dict[str, NetworkSpec],
     record: list[str] | None, metrics: list[MetricSpec], baseline: BaselineSpec | None,
-    output: OutputSpec``; methods ``resolved_dict()``, ``node_networks(node)``, ``baseline_scenario()``;
+    output: OutputSpec``; methods ``resolved_dict()``, ``node_networks(node)``, ``baseline_scenario()`` (the
+    baseline the loader validated with the scenario);
     property ``source`` (the file it came from, or None).
 ``PlantSpec``
     ``model, params, x0, disturbances (plant input -> signal name), record_grid, process_noise``.
