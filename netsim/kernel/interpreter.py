@@ -148,17 +148,17 @@ class Interpreter:
             t = self._time_arg(job, t, "sleep")
         if t < 0:
             raise SimulationError(f"node '{self.name}', task '{job.task_name}': sleep({t}) is negative")
-        return self._sleep_to(job, now + t, now)
+        if t:
+            job._wake = schedule_call(self._sim, t, NORMAL, self._on_sleep_done, job)
+            self._block(job, job._wake, now)
+            return GAVE_UP
+        return None
 
     def _op_sleep_until(self, job: Job, req: Request, now: int) -> Any:
         t = req.a
         if type(t) is not int:
             t = self._time_arg(job, t, "sleep_until")
-        return self._sleep_to(job, t, now)
-
-    def _sleep_to(self, job: Job, t: int, now: int) -> Any:
-        """Block ``job`` until ``t`` if it is in the future (else the body continues at once)."""
-        if t > now:
+        if t > now:  # a time already passed: the body continues at once
             job._wake = schedule_call(self._sim, t - now, NORMAL, self._on_sleep_done, job)
             self._block(job, job._wake, now)
             return GAVE_UP
