@@ -3,7 +3,10 @@
 A scenario is a frozen, validated description (the SimSo split: static description here, runtime objects
 in :mod:`netsim.scenario.builder`). This module is pure data: it imports no loader and no checker (they import
 it); :func:`netsim.scenario.load_scenario` fills what only it knows (validated plugin parameters, the raw data,
-the baseline scenario) into private attributes. Every model forbids unknown keys; every time field accepts ``"1.5 ms"``
+the baseline scenario) into private attributes.
+
+Why this module is long: it is the whole scenario format in one place, one model per YAML section in the order
+a scenario file is written, so that it reads top to bottom like the file it describes. Every model forbids unknown keys; every time field accepts ``"1.5 ms"``
 style text (a bare number other than 0 is refused: "add a unit, e.g. '5 ms'") and holds **integer nanoseconds**. Plugin parameters (plant model,
 programs, networks, signals, metrics) are kept raw here and validated against the plugin's own ``Params``
 model by :mod:`netsim.scenario.validate`; after :func:`netsim.scenario.load_scenario` the validated

@@ -38,6 +38,10 @@ What is checked
 
 A scenario that passes all of these then goes through build's kernel and network construction
 (:mod:`netsim.scenario.static_build`), so ``validate`` refuses what ``run`` would refuse while building.
+
+Why this module is long: one checker walks the raw scenario once, section by section, and the cross references
+it checks tie the sections together (a task's network and receiver, a metric's recorded signals and tasks, a
+program's channels); split by section, each part would need the others' indexes.
 """
 
 from __future__ import annotations

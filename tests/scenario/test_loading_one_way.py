@@ -172,7 +172,8 @@ def test_a_merged_mapping_keeps_its_own_keys_when_it_is_merged_before_it_is_buil
 def test_an_integer_python_cannot_read_is_a_placeholder_the_limits_refuse():
     from netsim.scenario.limits import long_integer_placeholder
 
-    assert load_text("v: -" + "9" * 5000 + "\n")["v"] == long_integer_placeholder(True)
+    assert load_text("v: -" + "9" * 5000 + "\n")["v"] == long_integer_placeholder(True)  # the limits' placeholder
+    assert load_text("v: " + "9" * 5000 + "\n")["v"] == long_integer_placeholder(False)
 
 
 def test_dump_text_quotes_what_either_yaml_version_reads_as_a_number():
