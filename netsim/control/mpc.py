@@ -18,9 +18,9 @@ here; a step forms ``g``, ``l``, ``u`` by a few matrix-vector products.
 
 *Solving.* A step first forms the unconstrained minimiser ``U* = -H^-1 g`` (a pre-factored matrix product);
 when it satisfies every constraint (to 1e-9, absolute) it is the QP's solution and no solver is called. Otherwise the
-QP goes to the solver (``daqp`` by default, chosen by measurement, see the project notes; ``clarabel``,
-``osqp`` and ``piqp`` are accepted when installed), warm-started from the previous solution shifted by one
-sample where the solver supports it.
+QP goes to the solver (``daqp`` by default, chosen by measurement: see :mod:`netsim.control.qp_backends`;
+``clarabel``, ``osqp`` and ``piqp`` are accepted when installed), warm-started where the solver supports it
+(daqp's workspace starts from the previous working set; osqp from the previous solution shifted by one sample).
 
 *Failure.* When the QP is infeasible (e.g. the estimate already violates a state constraint that cannot be
 recovered in one sample) or the solver fails, the law applies the saturated LQR law
@@ -40,127 +40,13 @@ import scipy.linalg as sla
 
 from netsim.control.design_checks import as_matrix, as_vector, check_weight
 from netsim.control.lqr import _limits, _model, dlqr_gain, reference_gains
+from netsim.control.qp_backends import Backend, make_backend
 from netsim.errors import ConfigError, SimulationError
 
 __all__ = ["LinearMPC", "SOLVERS"]
 
 SOLVERS = ("daqp", "clarabel", "osqp", "piqp")
 _SHORTCUT_TOL = 1e-9
-
-
-class _Backend:
-    """One QP solver: ``solve(g, lo, hi, warm) -> (U or None, status, iterations)`` for ``min 1/2 U'HU + g'U, lo <= G U <= hi``."""
-
-    warm_start = False
-
-    def solve(self, g: np.ndarray, lo: np.ndarray, hi: np.ndarray, warm: np.ndarray | None) -> tuple[Any, str, int]:
-        raise NotImplementedError
-
-
-class _Daqp(_Backend):
-    """DAQP's reusable workspace: set up once; each solve updates ``g`` and the bounds and starts from the
-    previous solve's working set (its warm start)."""
-
-    warm_start = False  # the workspace keeps the working set itself; a shifted primal guess is not passed
-
-    def __init__(self, H: np.ndarray, G: np.ndarray, tol: float) -> None:
-        import daqp
-
-        self.model = daqp.Model()
-        self.H = np.ascontiguousarray(H)
-        self.G = np.ascontiguousarray(G)
-        self.tol = tol
-        self.ready = False
-
-    def solve(self, g, lo, hi, warm):  # noqa: D102
-        lo = np.where(np.isfinite(lo), lo, -1e30)
-        hi = np.where(np.isfinite(hi), hi, 1e30)
-        if not self.ready:
-            self.model.setup(self.H, g, self.G, hi, lo)
-            self.model.settings = {"primal_tol": self.tol}
-            self.ready = True
-        else:
-            self.model.update(f=g, bupper=hi, blower=lo)
-        x, _, flag, info = self.model.solve()
-        return (np.array(x) if flag == 1 else None), f"daqp exitflag {flag}", int(info.get("iterations", 0))
-
-
-class _Osqp(_Backend):
-    warm_start = True
-
-    def __init__(self, H: np.ndarray, G: np.ndarray, tol: float) -> None:
-        import osqp
-        import scipy.sparse as sp
-
-        self.solver = osqp.OSQP()
-        lo = np.full(G.shape[0], -np.inf)
-        self.solver.setup(
-            sp.csc_matrix(np.triu(H)), np.zeros(H.shape[0]), sp.csc_matrix(G), lo, -lo,
-            verbose=False, polishing=False, eps_abs=tol, eps_rel=tol, warm_starting=True, max_iter=20000,
-        )  # fmt: skip
-
-    def solve(self, g, lo, hi, warm):  # noqa: D102
-        self.solver.update(q=g, l=lo, u=hi)
-        if warm is not None:
-            self.solver.warm_start(x=warm)
-        res = self.solver.solve(raise_error=False)
-        status = str(res.info.status)
-        ok = res.info.status_val in (1, 2) and res.x is not None and np.all(np.isfinite(res.x))
-        return (np.asarray(res.x) if ok else None), f"osqp {status}", int(res.info.iter)
-
-
-class _Piqp(_Backend):
-    def __init__(self, H: np.ndarray, G: np.ndarray, tol: float) -> None:
-        import piqp
-
-        self._piqp = piqp
-        self.solver = piqp.DenseSolver()
-        self.solver.settings.eps_abs = tol
-        self.solver.settings.eps_rel = tol
-        self.H = np.asfortranarray(H)
-        self.G = np.asfortranarray(G)
-        self.ready = False
-
-    def solve(self, g, lo, hi, warm):  # noqa: D102
-        lo = np.where(np.isfinite(lo), lo, -1e30)
-        hi = np.where(np.isfinite(hi), hi, 1e30)
-        if not self.ready:
-            self.solver.setup(self.H, g, None, None, self.G, lo, hi)
-            self.ready = True
-        else:
-            self.solver.update(c=g, h_l=lo, h_u=hi)
-        status = self.solver.solve()
-        ok = status == self._piqp.PIQP_SOLVED
-        return (np.array(self.solver.result.x) if ok else None), f"piqp {status}", int(self.solver.result.info.iter)
-
-
-class _Clarabel(_Backend):
-    def __init__(self, H: np.ndarray, G: np.ndarray, tol: float, hi_rows: np.ndarray, lo_rows: np.ndarray) -> None:
-        import clarabel
-        import scipy.sparse as sp
-
-        self._clarabel = clarabel
-        self.hi_rows, self.lo_rows = hi_rows, lo_rows
-        Aineq = np.vstack([G[hi_rows], -G[lo_rows]])
-        self.P = sp.csc_matrix(np.triu(H))
-        self.A = sp.csc_matrix(Aineq)
-        self.cones = [clarabel.NonnegativeConeT(Aineq.shape[0])]
-        s = clarabel.DefaultSettings()
-        s.verbose = False
-        s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = tol
-        s.presolve_enable = False  # keeps the constraint rows fixed so data updates are allowed
-        self.settings = s
-        self.solver = None
-
-    def solve(self, g, lo, hi, warm):  # noqa: D102
-        b = np.concatenate([hi[self.hi_rows], -lo[self.lo_rows]])
-        if self.solver is None:
-            self.solver = self._clarabel.DefaultSolver(self.P, g, self.A, b, self.cones, self.settings)
-        else:
-            self.solver.update(q=g, b=b)
-        sol = self.solver.solve()
-        ok = str(sol.status) in ("Solved", "AlmostSolved")
-        return (np.asarray(sol.x) if ok else None), f"clarabel {sol.status}", int(sol.iterations)
 
 
 class LinearMPC:
@@ -322,7 +208,7 @@ class LinearMPC:
         self._shifted = bool(np.any(self._L))
         self.solver = solver
         self.tol = float(tol)
-        self._backend: _Backend | None = None  # created at the first constrained step (imports the solver then)
+        self._backend: Backend | None = None  # created at the first constrained step (imports the solver then)
         self.u0 = np.zeros(m) if u0 is None else as_vector("u0", u0, m)
         self._check_solver_available()
         if x0 is not None:
@@ -366,17 +252,8 @@ class LinearMPC:
                     "x_min/x_max or the input limits, or lengthen the horizon"
                 )
 
-    def _make_backend(self) -> _Backend:
-        H, G, tol = self.H, self._G, self.tol
-        if self.solver == "daqp":
-            return _Daqp(H, G, tol)
-        if self.solver == "osqp":
-            return _Osqp(H, G, tol)
-        if self.solver == "piqp":
-            return _Piqp(H, G, tol)
-        hi_rows = np.flatnonzero(np.isfinite(self._c_hi))
-        lo_rows = np.flatnonzero(np.isfinite(self._c_lo))
-        return _Clarabel(H, G, tol, hi_rows, lo_rows)
+    def _make_backend(self) -> Backend:
+        return make_backend(self.solver, self.H, self._G, self.tol, self._c_lo, self._c_hi)
 
     # --- runtime ----------------------------------------------------------------------------------------
     def reset(self) -> None:

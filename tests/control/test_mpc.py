@@ -159,7 +159,7 @@ def test_reference_is_reached_and_input_limit_active():
 
 
 def test_infeasible_problem_falls_back_to_saturated_lqr_and_counts_it():
-    mpc = LinearMPC(A, B, Q, R, 10, Cr=Cr, **LIMITS)
+    mpc = LinearMPC(A, B, Q, R, 20, Cr=Cr, **LIMITS)
     # second mass already at 2 m/s: with |u| <= 1 no input brings |v2| under 0.6 in one sample
     x = np.array([0.0, 0.0, 0.0, 2.0])
     u = mpc.step(x, 0.0)
@@ -168,6 +168,13 @@ def test_infeasible_problem_falls_back_to_saturated_lqr_and_counts_it():
     lqr_u = np.clip(-mpc.K @ x, -0.2, 0.2)  # saturated LQR, rate limit from u_prev = 0 is the tighter one
     np.testing.assert_allclose(u, lqr_u, rtol=1e-12)
     assert mpc.metrics()["fallbacks"] == 1.0
+    # the solver's workspace recovers: later steps from feasible states are optimal again
+    x, u_prev = np.array([0.1, 0.2, 0.0, 0.1]), float(u[0])
+    for _ in range(20):
+        u = mpc.step(x, 1.0)
+        np.testing.assert_allclose(u, reference_qp_u0(x, u_prev, 1.0), atol=1e-7)
+        x, u_prev = A @ x + B @ u, float(u[0])
+    assert mpc.fallbacks == 1
 
 
 def test_solver_exception_falls_back(force_solver):
