@@ -1,0 +1,142 @@
+"""The ``netsim`` command: run, batch, sweep, report, validate and list.
+
+Every command catches the errors a user can cause (:class:`~netsim.errors.NetsimError`, including
+:class:`~netsim.scenario.ScenarioError`) and prints them without a traceback. Exit codes:
+
+- ``0`` success;
+- ``1`` a run, or any run of a batch or sweep, is not ``ok`` (diverged or error; one rule, :mod:`netsim.status`);
+- ``2`` the scenario or the command line is invalid (nothing ran);
+- ``validate``: the number of problems found (0 when every file is valid), capped at 255;
+- ``130`` interrupted (Ctrl-C).
+
+Heavy modules (numpy, pandas, control, the simulation engine) are imported inside the commands, so
+``netsim --help`` is fast. BLAS is pinned to one thread (tiny matrices; parallelism comes from processes).
+
+The command is split in three: :mod:`netsim.cli.parser` (arguments and examples), :mod:`netsim.cli.commands`
+(what each sub-command does) and this module (:func:`main`: logging, exit codes, signals, errors).
+"""
+
+from __future__ import annotations
+
+import os
+
+import netsim  # noqa: F401  (first: one BLAS thread and the same OpenBLAS kernels everywhere, netsim.blas)
+
+import argparse  # noqa: E402
+import logging  # noqa: E402
+import sys  # noqa: E402
+from typing import Any, Callable, Sequence  # noqa: E402
+
+from netsim.cli.commands import LIST_KINDS, _err, _print_problems  # noqa: E402
+from netsim.cli.parser import build_parser  # noqa: E402
+from netsim.status import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_INVALID, EXIT_OK  # noqa: E402
+
+__all__ = ["main", "build_parser", "LIST_KINDS"]
+
+log = logging.getLogger("netsim.cli")
+
+
+# --------------------------------------------------------------------------------------------- main
+def _setup_logging(verbose: int, quiet: bool) -> None:
+    level = logging.ERROR if quiet else (logging.WARNING, logging.INFO, logging.DEBUG)[min(verbose, 2)]
+    root = logging.getLogger()
+    if not any(getattr(h, "_netsim_cli", False) for h in root.handlers):
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
+        handler._netsim_cli = True  # type: ignore[attr-defined]
+        root.addHandler(handler)
+    root.setLevel(level)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``netsim`` command line; returns the exit code (see the module docstring).
+
+    Parameters
+    ----------
+    argv
+        Arguments without the program name (default: ``sys.argv[1:]``).
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(list(argv) if argv is not None else None)
+    except SystemExit as exc:  # --help, --version, usage errors
+        return int(exc.code) if isinstance(exc.code, int) else (EXIT_OK if exc.code is None else EXIT_INVALID)
+    if getattr(args, "func", None) is None:
+        parser.print_help()
+        return EXIT_INVALID
+    _setup_logging(args.verbose, args.quiet)
+    func: Callable[[argparse.Namespace], int] = args.func
+    from netsim.errors import ConfigError, NetsimError
+
+    previous = _terminate_as_interrupt()
+    from netsim.trust import ENV_VAR
+
+    trust_before = os.environ.get(ENV_VAR)
+    if getattr(args, "allow_plugins", False):
+        os.environ[ENV_VAR] = "1"  # this command and the batch/sweep worker processes it starts
+    try:
+        return func(args)
+    except KeyboardInterrupt as exc:
+        _err("interrupted")
+        _partial_folder(exc)
+        return EXIT_INTERRUPTED
+    except ConfigError as exc:
+        problems = getattr(exc, "problems", None)
+        if problems:
+            _print_problems(problems, sys.stderr)
+            _err(str(exc).splitlines()[0].rstrip(":"))  # the summary line, e.g. "...: 2 problems; nothing was run"
+        else:
+            _err(str(exc))
+        return EXIT_INVALID
+    except NetsimError as exc:
+        _err(str(exc))
+        _partial_folder(exc)
+        return EXIT_FAILED
+    except OSError as exc:  # a file or folder that cannot be written (disk full, permissions, a file in the way)
+        where = exc.filename or getattr(exc, "run_folder", None) or "output"
+        _err(f"cannot write {where}: {exc.strerror or exc}")
+        _partial_folder(exc)
+        return EXIT_FAILED
+    except Exception as exc:  # a bug: the traceback is wanted, and where the partial results are
+        _partial_folder(exc)
+        raise
+    finally:
+        if trust_before is None:
+            os.environ.pop(ENV_VAR, None)
+        else:
+            os.environ[ENV_VAR] = trust_before
+        if previous is not None:
+            import signal
+
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _terminate_as_interrupt() -> Any:
+    """Make SIGTERM stop a command like Ctrl-C (what was simulated is kept); returns the previous handler.
+
+    Only in the main thread (signal handlers cannot be set elsewhere); returns None where it was not set.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def _raise(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    try:
+        return signal.signal(signal.SIGTERM, _raise)
+    except (ValueError, OSError):
+        return None
+
+
+def _partial_folder(exc: BaseException) -> None:
+    """Tell where a failed run left its partial run folder (``exc.run_folder``, set by the runner)."""
+    folder = getattr(exc, "run_folder", None)
+    if folder is not None:
+        print(f"netsim: the partial results are in {folder}", file=sys.stderr)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

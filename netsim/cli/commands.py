@@ -1,0 +1,343 @@
+"""What each ``netsim`` sub-command does: validate, run, batch, sweep, report, list.
+
+Each ``_cmd_<name>(args) -> exit code`` imports the heavy modules it needs inside, so ``netsim --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from pathlib import Path
+from typing import Any, Callable, Sequence, TextIO
+
+from netsim.status import EXIT_INVALID, EXIT_OK
+
+__all__ = ["LIST_KINDS"]
+
+log = logging.getLogger("netsim.cli")
+
+LIST_KINDS: dict[str, str] = {
+    "plants": "plant",
+    "controllers": "controller",
+    "estimators": "estimator",
+    "networks": "network",
+    "policies": "policy",
+    "programs": "program",
+    "signals": "signal",
+    "metrics": "metric",
+    "reports": "report",
+}
+
+
+
+def _err(message: str) -> None:
+    print(f"netsim: error: {message}", file=sys.stderr)
+
+
+def _print_problems(problems: Sequence[Any], stream: TextIO) -> None:
+    for p in problems:
+        print(str(p), file=stream)
+
+
+def _overrides(items: Sequence[str]) -> dict[str, Any]:
+    from netsim.scenario import parse_override
+
+    out: dict[str, Any] = {}
+    for item in items:
+        key, value = parse_override(item)
+        out[key] = value
+    return out
+
+
+# --------------------------------------------------------------------------------------------- commands
+def _is_sweep(file: str) -> bool:
+    from netsim.sweep.check import is_sweep_file
+
+    return is_sweep_file(file)
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    from netsim.scenario import check_scenario
+
+    overrides = _overrides(args.overrides)
+    n_errors = 0
+    for file in args.files:
+        if _is_sweep(file):
+            from netsim.sweep.check import check_sweep
+
+            problems = check_sweep(file)
+        else:
+            problems = check_scenario(file, overrides or None)
+        errors = [p for p in problems if p.is_error]
+        n_errors += len(errors)
+        _print_problems(problems, sys.stdout)
+        if not errors:
+            warn = len(problems)
+            note = f" ({warn} warning{'s' if warn != 1 else ''})" if warn else ""
+            print(f"{file}: valid{note}")
+    if len(args.files) > 1 and n_errors:
+        print(f"{n_errors} problem{'s' if n_errors != 1 else ''} in total", file=sys.stderr)
+    return min(n_errors, 255)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from netsim.scenario import ScenarioError, load_scenario
+
+    if _is_sweep(args.file):
+        from netsim.errors import ConfigError
+
+        raise ConfigError(f"{args.file}: this is a sweep file; use `netsim sweep {args.file}`")
+    overrides = _overrides(args.overrides)
+    if args.out is not None:
+        from netsim.results import check_out_dir
+
+        check_out_dir(args.out)  # a bad --out is refused before anything runs
+    if args.seed is not None:
+        overrides["seed"] = args.seed  # applied to the raw tree with the --set values: one validation
+    try:
+        scenario = load_scenario(args.file, overrides or None)
+    except ScenarioError as exc:
+        _print_problems(exc.problems, sys.stderr)
+        n = len(exc.errors)
+        _err(f"{args.file}: {n} problem{'s' if n != 1 else ''}; nothing was run")
+        return EXIT_INVALID
+    from netsim.runner import run
+
+    show = not (args.no_progress or args.quiet) and sys.stderr.isatty()
+    with _RunProgress(scenario.name, enabled=show) as progress:
+        result = run(scenario, out=args.out, plot=args.plot, progress=progress.callback)
+    meta = getattr(result, "meta", {}) or {}
+    status = str(meta.get("status", "ok"))
+    out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
+    where = f"; wrote {out_dir}" if out_dir else ""
+    n_warn = len(meta.get("warnings") or [])
+    told = f"{status} ({n_warn} warning{'s' if n_warn != 1 else ''} above)" if n_warn else status
+    if not args.quiet or status != "ok":  # quiet: nothing on stdout unless the run failed
+        print(f"{scenario.name}: {told}{where}")
+    if not args.quiet:
+        _print_metrics(getattr(result, "metrics", None))
+    from netsim.status import count_statuses
+
+    if status != "ok":
+        error = meta.get("error")
+        if error:
+            _err(str(error))
+    return count_statuses([status]).exit_code()
+
+
+class _RunProgress:
+    """A rich progress bar on stderr for one run: simulated time, wall time and ETA (or nothing).
+
+    ``callback`` is the ``progress(t_ns, t_end_ns)`` function for :func:`netsim.runner.run` (None when
+    disabled, so the run takes its unsliced path).
+    """
+
+    def __init__(self, label: str, *, enabled: bool) -> None:
+        self.bar: Any = None
+        self.callback: Callable[[int, int], None] | None = None
+        if not enabled:
+            return
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+        self.bar = Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            TextColumn("{task.fields[sim]} simulated"),
+            TextColumn("wall"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            transient=True,
+        )
+        self.task = self.bar.add_task(label, total=None, sim="building")
+        self.callback = self._update
+
+    def _update(self, t_ns: int, t_end_ns: int) -> None:
+        from netsim.timebase import format_time
+
+        self.bar.update(self.task, completed=t_ns, total=max(t_end_ns, 1),
+                        sim=f"{format_time(t_ns)} / {format_time(t_end_ns)}")
+
+    def __enter__(self) -> "_RunProgress":
+        if self.bar is not None:
+            self.bar.start()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+
+def _print_metrics(metrics: Any, limit: int = 30) -> None:
+    if metrics is None:
+        return
+    try:
+        items = list(metrics.items())
+    except AttributeError:
+        return
+    if not items:
+        return
+    width = max(len(str(k)) for k, _ in items[:limit])
+    for key, value in items[:limit]:
+        text = f"{value:.6g}" if isinstance(value, float) else str(value)
+        print(f"  {str(key):<{width}}  {text}")
+    if len(items) > limit:
+        print(f"  ... {len(items) - limit} more in metrics.csv")
+
+
+def _expand_batch(paths: Sequence[str]) -> list[Path]:
+    """Files as given; folders become their *.yaml/*.yml scenarios (sweep files skipped), sorted."""
+    from netsim.errors import ConfigError
+
+    out: list[Path] = []
+    for item in paths:
+        p = Path(item)
+        if p.is_dir():
+            found = sorted([*p.glob("*.yaml"), *p.glob("*.yml")])
+            found = [f for f in found if not _is_sweep(str(f))]
+            if not found:
+                raise ConfigError(f"no scenario files (*.yaml, *.yml) in folder {item}")
+            out += found
+        elif p.exists():
+            out.append(p)
+        else:
+            raise ConfigError(f"file not found: {item}")
+    return out
+
+
+def _cmd_batch(args: argparse.Namespace) -> int:
+    files = _expand_batch(args.paths)
+    from netsim.sweep.batch import run_batch
+
+    from netsim.status import count_statuses
+
+    summary, _ = run_batch(files, out=args.out, workers=args.workers,
+                           progress=not (args.no_progress or args.quiet))
+    counts = count_statuses(summary["status"] if summary is not None and not summary.empty else [])
+    print(counts.describe("scenario"))  # the same status rule as `netsim run` (netsim.status)
+    out = getattr(summary, "attrs", {}).get("path") if summary is not None else None
+    if out:
+        print(f"summary: {out}")
+    return counts.exit_code()
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    from netsim.errors import ConfigError
+
+    if args.scheduler and args.dask_local:
+        raise ConfigError("give either --scheduler ADDR or --dask-local, not both")
+    if args.dask_dashboard and not args.dask_local:
+        raise ConfigError("--dask-dashboard needs --dask-local (a scheduler you start has its own: "
+                          "`dask scheduler --dashboard-address ADDR`)")
+    if not Path(args.file).exists():
+        raise ConfigError(f"file not found: {args.file}")
+    from netsim.sweep import run_sweep
+
+    result = run_sweep(
+        args.file,
+        out=args.out,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        local_dask=args.dask_local,
+        dashboard=args.dask_dashboard,
+        overwrite=args.overwrite,
+        progress=not (args.no_progress or args.quiet),
+    )
+    print(result.describe())
+    from netsim.status import count_statuses
+
+    counts = count_statuses(result.summary["status"] if result.summary is not None else [])
+    if result.interrupted:
+        _err("interrupted: finished runs are kept; run the same command again to resume")
+    elif counts.not_ok:
+        _err(f"{counts.describe('sweep run')} (see summary.csv)")
+    return counts.exit_code(result.interrupted)
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from netsim.report import report
+
+    if not args.quiet:  # case-study reports log their progress under netsim.progress.<name>
+        logging.getLogger("netsim.progress").setLevel(logging.INFO)
+    tables = report(args.target, out=args.out, plots=not args.no_plots)
+    for name, frame in (tables or {}).items():
+        rows = getattr(frame, "shape", (0,))[0]
+        print(f"{name}: {rows} row{'s' if rows != 1 else ''}")
+    return EXIT_OK
+
+
+def _kind_of(text: str) -> str | None:
+    key = text.strip().lower()
+    if key in LIST_KINDS:
+        return LIST_KINDS[key]
+    if key in LIST_KINDS.values():
+        return key
+    return None
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    from netsim import registry
+    from netsim.errors import ConfigError
+    from netsim.scenario.paths import did_you_mean
+    from netsim.scenario.validate import plugin_load_problems
+
+    if args.kind is not None:
+        kind = _kind_of(args.kind)
+        if kind is None:
+            raise ConfigError(f"unknown kind '{args.kind}'{did_you_mean(args.kind.lower(), LIST_KINDS, what='kinds')}")
+        kinds = [kind]
+    else:
+        kinds = list(LIST_KINDS.values())
+    for problem in plugin_load_problems():
+        print(f"warning: {problem.message}", file=sys.stderr)
+    if args.name is not None:
+        _print_plugin(kinds[0], args.name)
+        return EXIT_OK
+    for kind in kinds:
+        items = registry.entries(kind)
+        if args.kind is None:
+            plural = next(k for k, v in LIST_KINDS.items() if v == kind)
+            print(f"{plural}:")
+            if not items:
+                print("  (none)")
+        indent = "  " if args.kind is None else ""
+        width = max((len(e.name) for e in items), default=0)
+        for e in items:
+            print(f"{indent}{e.name:<{width}}  {e.summary}".rstrip())
+    return EXIT_OK
+
+
+def _print_plugin(kind: str, name: str) -> None:
+    """``netsim list KIND NAME``: the plugin's summary, where it is defined, and its parameters as a table."""
+    from netsim import registry
+
+    obj = registry.lookup(kind, name)  # ConfigError (exit 2) with the closest name when unknown
+    same = [e for e in registry.entries(kind) if e.obj is obj]
+    entry = next((e for e in same if e.name == name), same[0] if same else None)
+    shown = entry.name if entry is not None else name
+    summary = entry.summary if entry is not None else ""
+    print(f"{shown} ({kind}){': ' + summary if summary else ''}")
+    aliases = [e.name for e in same if e.name != shown]
+    if aliases:
+        print(f"also named: {', '.join(aliases)}")
+    print(f"defined in: {getattr(obj, '__module__', '?')}:{getattr(obj, '__qualname__', type(obj).__name__)}")
+    model = registry.params_model(obj)
+    if model is None:
+        print("parameters: none declared (it has no Params model)")
+        return
+    rows = registry.param_rows(model)
+    if not rows:
+        print("parameters: none")
+        return
+    print("parameters:")
+    header = ("name", "type", "default", "unit", "description")
+    table = [header, *((r.name, r.type, r.default, r.unit, r.description) for r in rows)]
+    widths = [min(max(len(row[i]) for row in table), cap) for i, cap in enumerate((28, 36, 24, 8))]
+    for row in table:
+        cells = [f"{cell:<{w}}" if len(cell) <= w else cell for cell, w in zip(row[:4], widths)]
+        print(("  " + "  ".join(cells) + "  " + row[4]).rstrip())
+    if any(r.unit == registry.TIME_UNIT for r in rows):
+        print("times are written with their unit: 20 us, 1.5 ms, 2 s")

@@ -1,0 +1,191 @@
+"""The argument parser of the ``netsim`` command: sub-commands, options, and the examples in each ``--help``."""
+
+from __future__ import annotations
+
+import argparse
+
+from netsim.cli.commands import (
+    LIST_KINDS,
+    _cmd_batch,
+    _cmd_list,
+    _cmd_report,
+    _cmd_run,
+    _cmd_sweep,
+    _cmd_validate,
+)
+
+__all__ = ["build_parser"]
+
+_MAIN_EPILOG = """\
+examples:
+  netsim run scenarios/dc_servo_can.yaml                 run one scenario, write reports/<name>/<run-id>/
+  netsim run scenarios/dc_servo_can.yaml --plot --seed 3 --set networks.can.bitrate="1 Mbit/s"
+  netsim validate scenarios/*.yaml                       check files; exit code = number of problems
+  netsim batch scenarios/ --workers 4                    run every scenario in a folder, write summary.csv
+  netsim sweep scenarios/hdd_gpi_sweep.yaml              threshold sweep (parallel), summary.csv + surface
+  netsim report reports/hdd_gpi                          tables and figures from a finished sweep
+  netsim list programs                                   registered task programs, one per line
+
+exit codes: 0 ok, 1 a run failed, 2 invalid scenario or usage; validate: number of problems.
+"""
+
+_RUN_EPILOG = """\
+examples:
+  netsim run scenarios/dc_servo_ideal.yaml
+  netsim run scenarios/dc_servo_can.yaml --out /tmp/can --seed 7 --plot
+  netsim run scenarios/dc_servo_can.yaml --set networks.can.bitrate="1 Mbit/s" --set 'plant.x0=[1, 0]'
+  netsim run scenarios/three_servos_dm.yaml --set nodes.cpu.tasks[2].period="5 ms"
+
+--set values are YAML: "1 Mbit/s" stays text, 0.5 is a number, [1, 0] a list, null removes a value.
+The scenario is validated first; nothing runs when it has problems (exit code 2).
+"""
+
+_VALIDATE_EPILOG = """\
+examples:
+  netsim validate scenarios/dc_servo_can.yaml
+  netsim validate scenarios/*.yaml --set duration="10 s"
+
+Prints every problem as file:line: path: message (warnings marked "warning:") and exits with the
+number of errors found (0 when every file is valid, at most 255).
+"""
+
+_BATCH_EPILOG = """\
+examples:
+  netsim batch scenarios/dc_servo_ideal.yaml scenarios/dc_servo_can.yaml
+  netsim batch scenarios/ --out reports/batch --workers 2
+
+A folder means every *.yaml/*.yml scenario in it (sweep files are skipped). A failing scenario does not
+stop the batch: its row in summary.csv carries the error and the exit code is 1.
+"""
+
+_SWEEP_EPILOG = """\
+examples:
+  netsim sweep scenarios/hdd_gpi_sweep.yaml
+  netsim sweep scenarios/hdd_gpi_sweep.yaml --workers 8 --out reports/gpi
+  netsim sweep scenarios/hdd_gpi_sweep.yaml --scheduler tcp://10.0.0.5:8786
+  netsim sweep scenarios/hdd_gpi_sweep.yaml --dask-local
+
+Finished points are kept and skipped when the sweep is run again (use --overwrite to redo them).
+"""
+
+_REPORT_EPILOG = """\
+examples:
+  netsim report reports/hdd_gpi              tables/figures of a sweep or run folder
+  netsim report hdd --out reports/hdd        a registered case-study report (see: netsim list reports)
+  netsim report reports/hdd_gpi --no-plots
+"""
+
+_LIST_EPILOG = """\
+examples:
+  netsim list                 everything, grouped by kind
+  netsim list plants          registered plant models
+  netsim list programs        task/handler programs a scenario can run
+  netsim list network can     one plugin: what it is, where it is defined, its parameters with
+                              types, defaults and units (from its Params model)
+
+kinds: """ + ", ".join(LIST_KINDS)
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    def __init__(self, prog: str) -> None:
+        super().__init__(prog, max_help_position=32, width=100)
+
+
+def _version() -> str:
+    from netsim import __version__
+
+    return f"netsim {__version__}"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``netsim`` command (no heavy imports)."""
+    parser = argparse.ArgumentParser(
+        prog="netsim",
+        description="Co-simulate networked control systems: real-time kernels, networks and plants.",
+        epilog=_MAIN_EPILOG,
+        formatter_class=_Formatter,
+    )
+    parser.add_argument("--version", action="version", version=_version())
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output (-vv: debug)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="only errors")
+    # the same options after the command (`netsim run x.yaml -q`); SUPPRESS keeps the values given before it
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-v", "--verbose", action="count", default=argparse.SUPPRESS,
+                        help="more log output (-vv: debug)")
+    common.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help="only errors")
+    # issue 14: code from a scenario's plugins: files runs only when the user says so
+    trust = argparse.ArgumentParser(add_help=False)
+    trust.add_argument("--allow-plugins", action="store_true",
+                       help="run the Python files the scenario's plugins: list names (only if you trust them)")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    p = sub.add_parser("run", parents=[common, trust], help="run one scenario and write its run folder",
+                       epilog=_RUN_EPILOG,
+                       formatter_class=_Formatter, description="Validate and run one scenario.")
+    p.add_argument("file", metavar="FILE", help="scenario YAML file")
+    p.add_argument("--out", metavar="DIR", help="run folder (default: reports/<scenario>/<run-id>/)")
+    p.add_argument("--seed", type=int, metavar="N", help="override the scenario seed")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
+                   help="override a value, e.g. networks.can.bitrate='1 Mbit/s' (repeatable)")
+    p.add_argument("--plot", action="store_true", help="also write PNG figures")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar (there is none either when stderr is not a terminal)")
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("batch", parents=[common, trust], help="run many scenarios in parallel, write summary.csv",
+                       epilog=_BATCH_EPILOG,
+                       formatter_class=_Formatter, description="Run many scenarios (parallel processes).")
+    p.add_argument("paths", nargs="+", metavar="FILE|DIR", help="scenario files or folders of them")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: reports/batch-<time>/)")
+    p.add_argument("--workers", type=_positive_int, metavar="N", help="parallel processes (default: all cores)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_batch)
+
+    p = sub.add_parser("sweep", parents=[common, trust], help="run a parameter sweep (locally or on a dask cluster)",
+                       epilog=_SWEEP_EPILOG,
+                       formatter_class=_Formatter, description="Run a sweep file: factors over scenario fields.")
+    p.add_argument("file", metavar="FILE", help="sweep YAML file")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: reports/<sweep>/)")
+    p.add_argument("--workers", type=_positive_int, metavar="N", help="parallel processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDR", help="dask scheduler address, e.g. tcp://host:8786")
+    p.add_argument("--dask-local", action="store_true", help="use a local dask cluster instead of processes")
+    p.add_argument("--dask-dashboard", metavar="ADDR",
+                   help="with --dask-local: serve its dashboard at ADDR, e.g. 127.0.0.1:8787 (default: off)")
+    p.add_argument("--overwrite", action="store_true", help="rerun points that already have results")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_sweep)
+
+    p = sub.add_parser("report", parents=[common], help="tables and figures from a run/sweep folder or a case study",
+                       epilog=_REPORT_EPILOG, formatter_class=_Formatter,
+                       description="Build report tables (CSV) and figures.")
+    p.add_argument("target", metavar="DIR|NAME", help="a run or sweep folder, or a registered report name")
+    p.add_argument("--out", metavar="DIR", help="where to write (default: next to the input)")
+    p.add_argument("--no-plots", action="store_true", help="tables only")
+    p.set_defaults(func=_cmd_report)
+
+    p = sub.add_parser("validate", parents=[common, trust], help="check scenario files; exit code = number of problems",
+                       epilog=_VALIDATE_EPILOG, formatter_class=_Formatter,
+                       description="Check scenario files completely without running them.")
+    p.add_argument("files", nargs="+", metavar="FILE", help="scenario YAML files")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
+                   help="apply an override before checking (repeatable)")
+    p.set_defaults(func=_cmd_validate)
+
+    p = sub.add_parser("list", parents=[common], help="list registered plants, programs, networks, ...",
+                       epilog=_LIST_EPILOG,
+                       formatter_class=_Formatter, description="List registered building blocks, or show one "
+                       "plugin's parameters.")
+    p.add_argument("kind", nargs="?", metavar="KIND", help="one kind (plural or singular), e.g. plants")
+    p.add_argument("name", nargs="?", metavar="NAME", help="one plugin of KIND: print its parameters")
+    p.set_defaults(func=_cmd_list)
+    return parser
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
