@@ -11,7 +11,8 @@ loop calls, in this order:
 3. ``estimator.predict(u)``, which moves the estimate to the next sample with the input held over the period.
 
 :class:`OutputFeedback` does exactly this and is itself a control law fed with ``y``, so any estimator feeds
-any state-feedback law. Everything here is plain numerics: no simpy, kernel or network.
+any state-feedback law. A delayed measurement is fused at its own sample (``KalmanFilter.correct(y, k=...)``);
+:func:`sample_index` turns its sample time in nanoseconds into that sample index. Everything here is plain numerics: no simpy, kernel or network.
 """
 
 from __future__ import annotations
