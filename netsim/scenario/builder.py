@@ -266,7 +266,13 @@ def _attach_io(kernel: Any, scenario: Any, channels: dict[str, Any], plant: Any,
         obj = channels[name]
         wanted = recorder.wants(name)  # named in record:, or record: omitted (everything)
         if ch.type == "dac":
-            write = _recording_write(recorder, name, obj.write) if wanted else obj.write
+            # the channel's name records what the converter puts out (after saturation and resolution),
+            # '<name>.command' what the program asked for (issue 21: u read +-600 with saturation [-1, 1])
+            write = obj.write
+            if wanted:
+                write = _recording_write(recorder, name, write, lambda value, dac=obj: dac.last)
+            if recorder.wants(f"{name}.command"):
+                write = _recording_write(recorder, f"{name}.command", write)
             kernel.attach_analog_out(name, write)
             continue
         read = obj.read if ch.type == "adc" else _encoder_reader(obj, plant, ch.output, ch.step)
@@ -282,10 +288,12 @@ def _recording_read(recorder: Any, name: str, read: Callable[[int], Any]) -> Cal
     return recorded_read
 
 
-def _recording_write(recorder: Any, name: str, write: Callable[[int, Any], None]) -> Callable[[int, Any], None]:
+def _recording_write(recorder: Any, name: str, write: Callable[[int, Any], None],
+                     recorded: Callable[[Any], Any] | None = None) -> Callable[[int, Any], None]:
+    """``write`` that also records ``recorded(value)`` (default: the value written) under ``name``."""
     def recorded_write(t_ns: int, value: Any) -> None:
         write(t_ns, value)
-        recorder.record(name, t_ns, value)
+        recorder.record(name, t_ns, value if recorded is None else recorded(value))
 
     return recorded_write
 
