@@ -32,6 +32,8 @@ __all__ = [
     "load_surface",
     "find_optimum",
     "plot_surface",
+    "surface_figure",
+    "cell_edges",
     "surface_from_summary",
     "describe_optimum",
 ]
@@ -166,18 +168,35 @@ def _log_ticks(ax: Any, axis: str, values: np.ndarray) -> None:
     getattr(ax, f"set_{axis}ticklabels")([f"1e{t:d}" for t in ticks])
 
 
-def plot_surface(surface: Surface, optimum: dict[str, Any] | None, path: str | Path) -> Path:
-    """Save a figure: 3-D surface (left) and heat map with the optimum marked (right)."""
-    import matplotlib
+def cell_edges(centres: np.ndarray, log: bool) -> np.ndarray:
+    """Edges of the heat-map cells around sorted grid values: midpoints between neighbours, half a step
+    beyond the ends; on a log axis the midpoints are geometric (midpoints of log10), so each cell of a
+    log-spaced grid is equally wide on the log axis (``pcolormesh(shading="nearest")`` put the edges at linear
+    midpoints: on log axes the first column shrank to a sliver and the last row was cut, issue 21).
+    """
+    v = np.asarray(centres, dtype=float)
+    if log:
+        return 10.0 ** cell_edges(np.log10(v), False)
+    if v.size == 1:
+        half = abs(v[0]) * 0.5 or 0.5
+        return np.array([v[0] - half, v[0] + half])
+    mid = (v[:-1] + v[1:]) / 2.0
+    return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+
+def surface_figure(surface: Surface, optimum: dict[str, Any] | None = None) -> Any:
+    """A :class:`matplotlib.figure.Figure`: 3-D surface (left) and heat map with the optimum marked (right).
+
+    The heat map's cells span :func:`cell_edges` (log-spaced edges on a log axis); the optimum's legend sits
+    below the axes, never over a cell.
+    """
+    from matplotlib.figure import Figure
 
     xs, ys, Z = surface.xs, surface.ys, surface.Z
     px = np.log10(xs) if surface.logx else xs
     py = np.log10(ys) if surface.logy else ys
     X, Y = np.meshgrid(px, py)
-    fig = plt.figure(figsize=(13, 5.2))
+    fig = Figure(figsize=(13, 5.6), layout="constrained")
     ax3 = fig.add_subplot(1, 2, 1, projection="3d")
     finite = np.isfinite(Z)
     lo, hi = (float(np.nanmin(Z)), float(np.nanmax(Z))) if finite.any() else (0.0, 1.0)
@@ -192,26 +211,30 @@ def plot_surface(surface: Surface, optimum: dict[str, Any] | None, path: str | P
     if surface.logy:
         _log_ticks(ax3, "y", ys)
     ax = fig.add_subplot(1, 2, 2)
-    mesh = ax.pcolormesh(xs, ys, np.ma.masked_invalid(Z), shading="nearest", cmap="viridis")
+    mesh = ax.pcolormesh(cell_edges(xs, surface.logx), cell_edges(ys, surface.logy), np.ma.masked_invalid(Z),
+                         shading="flat", cmap="viridis")
     fig.colorbar(mesh, ax=ax, label=surface.z)
     if surface.logx:
         ax.set_xscale("log")
     if surface.logy:
         ax.set_yscale("log")
-    ax.set_xlabel(surface.x)
-    ax.set_ylabel(surface.y)
+    ax.set_xlabel(f"{surface.x} (log axis)" if surface.logx else surface.x)
+    ax.set_ylabel(f"{surface.y} (log axis)" if surface.logy else surface.y)
     if optimum is not None:
         ox, oy, oz = optimum["x_value"], optimum["y_value"], optimum["z_value"]
         ax.plot([ox], [oy], marker="*", color="red", markersize=16, markeredgecolor="white", linestyle="none",
-                label=f"min {surface.z} = {oz:.4g}\n{surface.x} = {ox:.3g}, {surface.y} = {oy:.3g}")
-        ax.legend(loc="upper left", fontsize=8, framealpha=0.8)
+                label=f"min {surface.z} = {oz:.4g} at {surface.x} = {ox:.3g}, {surface.y} = {oy:.3g}")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), fontsize=8, frameon=False)
         ax3.scatter([math.log10(ox) if surface.logx else ox], [math.log10(oy) if surface.logy else oy], [oz],
                     color="red", s=60, depthshade=False)
     ax.set_title(f"{surface.z} over {surface.x} x {surface.y}")
-    fig.tight_layout()
+    return fig
+
+
+def plot_surface(surface: Surface, optimum: dict[str, Any] | None, path: str | Path) -> Path:
+    """Save :func:`surface_figure` as a PNG at ``path``; returns the path."""
     out = Path(path)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    surface_figure(surface, optimum).savefig(out, dpi=110)
     return out
 
 
