@@ -276,7 +276,10 @@ def run(
     ----------
     source
         Scenario file path, raw mapping, or validated :class:`~netsim.scenario.schema.Scenario` (the CLI loads
-        the file with ``--seed`` and ``--set`` applied and passes the Scenario: one validation per run).
+        the file with ``--seed`` and ``--set`` applied and passes the Scenario: one validation per run). In a
+        mapping, ``plant`` may be a python-control ``StateSpace`` or ``TransferFunction`` (or
+        ``{system: <it>, x0: ...}``): its matrices are copied once into the ``plant: {type: ss|tf}`` form
+        (:func:`netsim.plant.described.plant_spec_from_system`).
     out
         Run folder, anywhere (default: ``reports/<output.dir>`` when the scenario gives ``output.dir``, else
         ``reports/<name>/<run-id>``).
@@ -325,6 +328,10 @@ def run(
     ov = dict(overrides or {})
     if seed is not None:
         ov["seed"] = int(seed)
+    if isinstance(source, Mapping):  # a python-control system as the plant: its plant: mapping (issue 16)
+        from netsim.plant.described import resolve_plant_object
+
+        source = resolve_plant_object(dict(source))
     scenario = load_scenario(source, overrides=ov or None, allow_plugins=allow_plugins)
     digest = scenario_hash(scenario)
     folder: Path | None = None

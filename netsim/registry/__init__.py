@@ -137,6 +137,7 @@ PLUGIN_MODULES: list[str] = [
     "netsim.metrics",
     "netsim.io.signals",
     "netsim.programs",
+    "netsim.plant.described",
     "models",
 ]
 

@@ -24,7 +24,9 @@ Public classes and their fields (times in ns)
     baseline the loader validated with the scenario);
     property ``source`` (the file it came from, or None).
 ``PlantSpec``
-    ``model, params, x0, disturbances (plant input -> signal name), record_grid, process_noise``.
+    ``model, params, x0, disturbances (plant input -> signal name), record_grid, process_noise``; or
+    ``type`` (e.g. ``ss``, ``tf``: :mod:`netsim.plant.described`) with the model's parameters inline, read as
+    ``model`` and ``params``.
 ``AdcChannel`` / ``DacChannel`` / ``EncoderChannel`` (the ``IOChannel`` union, discriminated by ``type``)
     adc: ``output, noise_std, quant_step, saturation``; dac: ``input, saturation, resolution``;
     encoder: ``output, step, tick, mode``.
@@ -408,8 +410,24 @@ class PlantSpec(PluginSpec):
     record_grid: Duration | None = None
     process_noise: ProcessNoise = None
 
+    @model_validator(mode="before")
+    @classmethod
+    def _described(cls, data: Any) -> Any:
+        """``{type: ss|tf|NAME, ...}``: the plant named by ``type`` with its parameters inline (as networks and
+        signals write theirs); the plant section's own keys (``x0``, ``disturbances`` ...) stay where they are."""
+        if not isinstance(data, dict) or "type" not in data:
+            return data
+        if "model" in data:
+            raise ValueError("give either 'type' (a described plant, e.g. 'type: ss') or 'model', not both")
+        data = {("model" if k == "type" else k): v for k, v in data.items()}
+        return _gather_params(data, _PLANT_KEYS)
+
     def plugin_name(self) -> str:
         return self.model
+
+
+#: The plant section's own keys; with ``type:`` every other key is a parameter of the plant model.
+_PLANT_KEYS = ("model", "x0", "disturbances", "record_grid", "process_noise")
 
 
 def _gather_params(data: Any, fixed: tuple[str, ...]) -> Any:

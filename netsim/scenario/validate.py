@@ -234,8 +234,16 @@ class _Checker:
         plant = self.raw.get("plant")
         if not isinstance(plant, dict):
             return None, None
-        factory = self.lookup("plant", plant.get("model"), ["plant", "model"])
-        params = self.params(factory, plant.get("params", {}) if plant.get("params") is not None else {}, ["plant", "params"], "plant")
+        if "type" in plant:  # a described plant (type: ss, tf, ...): its parameters are inline, at plant.<field>
+            factory = self.lookup("plant", plant.get("type"), ["plant", "type"])
+            fixed = ("type", "model", "params", "x0", "disturbances", "record_grid", "process_noise")
+            raw = {k: v for k, v in plant.items() if k not in fixed}
+            if isinstance(plant.get("params"), dict):
+                raw = {**plant["params"], **raw}
+            params = self.params(factory, raw, ["plant"], "plant")
+        else:
+            factory = self.lookup("plant", plant.get("model"), ["plant", "model"])
+            params = self.params(factory, plant.get("params", {}) if plant.get("params") is not None else {}, ["plant", "params"], "plant")
         inputs, outputs = _ports(factory, params)
         if factory is not None and params is not None and (inputs is None or outputs is None):
             inputs, outputs = self.built_ports(plant.get("model"), factory, params, inputs, outputs)
