@@ -94,7 +94,6 @@ class Interpreter:
         value = job._value
         job._value = None
         send = gen.send
-        ops = self._OPS
         n = 0
         while True:
             try:
@@ -132,7 +131,7 @@ class Interpreter:
                 value = None
                 continue
             try:
-                answer = ops[op]
+                answer = self._OPS[op]
             except (IndexError, TypeError):
                 raise SimulationError(f"node '{self.name}', task '{job.task_name}': unknown request {req!r}; "
                                       "yield a request built by the job, e.g. `yield job.execute(1000)`") from None
