@@ -8,6 +8,9 @@ Generic metrics (:func:`generic_metrics`, always added by the runner), named wit
     from the jobs table (finished jobs; a job unfinished at the end whose deadline passed counts as a miss).
 ``net.<network>.messages`` / ``.utilization`` / ``.lost`` / ``.loss_rate`` / ``.mean_delay_s`` / ``.max_delay_s``
     from the messages table, plus everything the network's own ``metrics(t_end)`` reports (prefixed).
+``control.<node>.<task>.<name>``
+    what a task's program reports from its ``metrics()`` method (e.g. ``state_feedback``: ``fused``,
+    ``prediction_only``, ``stale``, ``mpc_fallbacks``; see :mod:`netsim.programs.state_feedback`).
 
 Registered metrics (scenario ``metrics:`` list, ``fn(result, params, baseline) -> dict``):
 
@@ -150,6 +153,14 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
                 v = extra[k]
                 if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
                     out[f"net.{name}.{k}"] = float(v)
+        programs = getattr(sim, "programs", None) or {}
+        for key in sorted(programs):  # "node.task": a program's own counters (state_feedback: fallbacks ...)
+            fn = getattr(programs[key], "metrics", None)
+            if not callable(fn):
+                continue
+            extra = fn()
+            for k in sorted(extra):
+                out[f"control.{key}.{k}"] = float(extra[k])
     return out
 
 

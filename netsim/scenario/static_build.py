@@ -9,6 +9,10 @@ same code** -- the builder's signals, plant and io channels, :func:`netsim.scena
 ``Kernel.validate`` -- on a throw-away environment with placeholder task bodies, and turns the first error
 into a :class:`~netsim.scenario.problems.Problem` with its YAML path.
 
+It also runs the control design of the tasks whose program declares ``check_design`` (the ``state_feedback``
+program: discretised model, estimator and law built as ``build`` builds them, so a weight that is not positive
+definite, an unstabilisable pair or an MPC whose initial state is infeasible is refused at its YAML path).
+
 What it does not run (for speed, and for issue 14: validating must not run code a scenario brings along):
 programs are never constructed (their ``Params`` are checked by :mod:`netsim.scenario.validate`); plants,
 signals and networks are built only when they come from netsim's own plugin modules
@@ -86,6 +90,21 @@ def _message(exc: ConfigError) -> str:
     return exc.message
 
 
+def _design_checks(scenario: Any, plant: Any) -> None:
+    """The control design of each task whose program (one of netsim's own) declares ``check_design``: e.g. the
+    ``state_feedback`` program's model, estimator and law (shapes, weights, stabilisability, detectability,
+    observer poles, MPC feasibility of ``plant.x0``), exactly as building the program checks them."""
+    from netsim.registry import is_builtin
+
+    for node_name, node in scenario.nodes.items():
+        for i, task in enumerate(node.tasks):
+            cls = _lookup("program", task.program)
+            check = getattr(cls, "check_design", None)
+            if cls is None or not callable(check) or not is_builtin(cls):
+                continue
+            check(scenario, node_name, i, task, plant)
+
+
 def build_problems(scenario: Any) -> list[Problem]:
     """The problem ``build`` would raise for ``scenario`` (a valid Scenario), as a list of at most one.
 
@@ -106,6 +125,7 @@ def build_problems(scenario: Any) -> list[Problem]:
             signals = _make_signals(scenario)
             plant = _build_plant(scenario, env, signals)
             _build_io(scenario, env, plant)
+            _design_checks(scenario, plant)
         kernels, bindings = wire_kernels(scenario, env, _body)
         if _netsim_networks(scenario):
             networks = build_networks(scenario, env, kernels)
