@@ -52,7 +52,7 @@ def test_to_csv_writes_every_run_folder_file_with_fixed_float_format(tmp_path):
         assert (out / name).exists(), name
     text = (out / "signals.csv").read_text()
     assert text.splitlines()[0] == "time_s,y"
-    assert "3.14159265359" in text  # %.12g
+    assert "3.141592653589793" in text  # repr: the shortest text that reads back as the same float
     assert (out / "metrics.csv").read_text().splitlines()[0] == "metric,value"
 
 
@@ -63,4 +63,4 @@ def test_writing_twice_is_byte_identical_and_reads_back(tmp_path):
         assert (a / name).read_bytes() == (b / name).read_bytes()
     back = RunResult.read(a)
     assert back.metrics["b"] == 2.0
-    assert back.signals["y"].tolist()[2] == float("%.12g" % np.pi)
+    assert back.signals["y"].tolist()[2] == np.pi  # exactly (issue 21: %.12g moved it by 2e-12)

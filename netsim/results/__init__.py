@@ -42,6 +42,8 @@ import numpy as np
 import pandas as pd
 
 from netsim.errors import ConfigError
+from netsim.results.files import FLOAT_FORMAT, JOB_TYPES, MESSAGE_TYPES, TIME_COLUMNS, read_table, write_csv
+from netsim.results.summary import key_metrics
 from netsim.timebase import S
 
 __all__ = [
@@ -56,10 +58,10 @@ __all__ = [
     "schedule_table",
     "write_csv",
     "check_out_dir",
+    "key_metrics",
+    "TIME_COLUMNS",
 ]
 
-#: printf format of every float in the run folder's CSVs (12 significant digits: ns resolution up to 1000 s).
-FLOAT_FORMAT = "%.12g"
 
 JOB_COLUMNS = [
     "node",
@@ -264,72 +266,6 @@ def schedule_table(node: str, intervals: Iterable[Any]) -> pd.DataFrame:
                          "end_s": _ns_column(t1s)}, columns=SCHEDULE_COLUMNS)
 
 
-def write_csv(frame: pd.DataFrame, path: Path) -> None:
-    """Write ``frame`` atomically with the run folder's fixed float format and ``\\n`` line ends.
-
-    Values use :data:`FLOAT_FORMAT`; the time columns (:data:`TIME_COLUMNS`, all integer nanoseconds divided by
-    1e9) use the shortest text that reads back as the same float, which is the exact decimal of the
-    nanosecond count for any time below about 10^6 s (``100000.0000005``, where ``%.12g`` wrote
-    ``100000.000001``). The file is written under a temporary name and renamed
-    (:func:`netsim.safe_write.write_atomic`): never half a file, never through a planted symlink.
-    """
-    text = _float_csv(frame)
-    if text is None:
-        times = [c for c in frame.columns if c in TIME_COLUMNS and frame[c].dtype == np.float64]
-        if times:
-            frame = frame.copy()
-            for c in times:
-                frame[c] = [_time_text(v) for v in frame[c].tolist()]
-        text = frame.to_csv(index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
-    from netsim.safe_write import write_atomic
-
-    write_atomic(path, text)
-
-
-#: Columns that hold times (integer ns / 1e9): written with full precision (see :func:`write_csv`).
-TIME_COLUMNS = frozenset({
-    "time_s", "release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s", "sent_s",
-    "tx_start_s", "delivered_s", "delay_s", "tx_end_s", "end_s",
-})
-
-
-def _time_text(v: float) -> str:
-    """A time in seconds as the shortest text that reads back as the same float (empty for NaN)."""
-    if v != v:
-        return ""
-    if v == int(v) and abs(v) < 1e15:
-        return "%d" % v
-    return repr(v)
-
-
-def _float_csv(frame: pd.DataFrame) -> str | None:
-    """The CSV text pandas writes for an all-float64 frame with plain column names, or None otherwise.
-
-    The signals table (thousands of rows) is all floats; formatting it here is ~10x faster than
-    ``DataFrame.to_csv`` and gives the same bytes: every value through ``FLOAT_FORMAT``, NaN as an empty
-    field, no quoting (names with a comma, quote or line break go through pandas).
-    """
-    names = [str(c) for c in frame.columns]
-    if not names or any(t != np.float64 for t in frame.dtypes):
-        return None
-    if any(ch in n for n in names for ch in (",", '"', "\n", "\r")) or any(not n for n in names):
-        return None
-    fmt = FLOAT_FORMAT
-    lines = [",".join(names)]
-    timed = [n in TIME_COLUMNS for n in names]
-    if not any(timed):
-        for row in frame.to_numpy(dtype=np.float64).tolist():
-            lines.append(",".join("" if v != v else fmt % v for v in row))
-    else:
-        def value(v: float) -> str:
-            return "" if v != v else fmt % v
-
-        cells = [_time_text if t else value for t in timed]
-        for row in frame.to_numpy(dtype=np.float64).tolist():
-            lines.append(",".join([f(v) for f, v in zip(cells, row)]))
-    return "\n".join(lines) + "\n"
-
-
 def _json_default(obj: Any) -> Any:
     if isinstance(obj, (np.integer,)):
         return int(obj)
@@ -405,26 +341,91 @@ class RunResult:
         self.out_dir = out
         return out
 
-    def plot(self, out_dir: str | Path | None = None) -> list[Path]:
-        """Write PNG figures (responses, schedule Gantt chart, network timeline); returns their paths."""
-        from netsim.plotting import plot_run
+    def plot(self, save: str | Path | None = None, *, window: Any = None) -> Any:
+        """The responses figure (:func:`netsim.plotting.responses_figure`): a matplotlib ``Figure``.
 
-        target = Path(out_dir) if out_dir is not None else self.out_dir
-        if target is None:
-            raise ValueError("RunResult.plot needs an output folder (none was written yet)")
-        return plot_run(self, target)
+        Parameters
+        ----------
+        save
+            A folder: also write ``responses.png``, ``schedule.png`` and ``network.png`` there (otherwise save
+            the returned figure yourself with ``fig.savefig(path)``).
+        window
+            Time window of the saved Gantt chart and network timeline: ``(t0, t1)`` or a length in seconds
+            (default: the whole run when it is short, see :func:`netsim.plotting.resolve_window`).
+        """
+        from netsim.plotting import responses_figure, save_figures
+
+        if save is not None:
+            save_figures(self, save, window=window)
+        return responses_figure(self.signals, self.scenario, status=self.status,
+                                title=str(self.meta.get("scenario", "")))
+
+    def plot_schedule(self, window: Any = None) -> Any:
+        """Gantt chart of the kernels' schedules over ``window`` (``(t0, t1)`` or a length in seconds; default:
+        the whole run when it is short): a matplotlib ``Figure``."""
+        from netsim.plotting import schedule_figure
+
+        return schedule_figure(self.schedule, self.jobs, window=window, end_s=float(self.meta.get("t_end_s") or 0))
+
+    def plot_network(self, window: Any = None) -> Any:
+        """Network timeline (transmissions, delays, drops) over ``window``: a matplotlib ``Figure``."""
+        from netsim.plotting import network_figure
+
+        return network_figure(self.messages, window=window, end_s=float(self.meta.get("t_end_s") or 0))
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The recorded signals indexed by time in seconds (a copy; python-control's ``to_pandas``)."""
+        return self.signals.set_index("time_s")
+
+    def summary(self) -> dict[str, Any]:
+        """What a reader wants first: status, simulated duration, wall time, run folder, and the key metrics
+        (:func:`key_metrics`: control measures, then worst responses, deadline misses, network loss and
+        delay)."""
+        control, timing = key_metrics(self.metrics)
+        return {"scenario": self.meta.get("scenario", ""), "status": self.status,
+                "duration_s": self.meta.get("t_end_s", self.meta.get("duration_s")),
+                "wall_time_s": self.meta.get("wall_time_s"), "folder": None if self.out_dir is None else
+                str(self.out_dir), "control": control, "timing": timing}
+
+    def _repr_html_(self) -> str:
+        """A notebook's summary: status, duration, key metrics (the same as ``netsim run`` prints)."""
+        from html import escape
+
+        info = self.summary()
+        ok = "green" if self.ok else "red"
+        head = (f"<b>{escape(str(info['scenario']) or 'run')}</b>: <span style='color:{ok}'>"
+                f"{escape(self.status)}</span>")
+        facts = []
+        if info["duration_s"] is not None:
+            facts.append(f"{float(info['duration_s']):.6g} s simulated")
+        if info["wall_time_s"] is not None:
+            facts.append(f"in {float(info['wall_time_s']):.3g} s")
+        if info["folder"]:
+            facts.append(f"folder {escape(info['folder'])}")
+        rows = "".join(f"<tr><td>{escape(k)}</td><td>{escape(v)}</td></tr>" for k, v in info["control"] + info["timing"])
+        table = f"<table>{rows}</table>" if rows else "<p>no metrics</p>"
+        return f"<div>{head} ({', '.join(facts)}){table}</div>"
+
+    def __repr__(self) -> str:
+        return (f"RunResult({self.meta.get('scenario', '')!r}, status={self.status!r}, signals={len(self.signals)} "
+                f"rows, jobs={len(self.jobs)}, messages={len(self.messages)}, metrics={len(self.metrics)})")
 
     @classmethod
     def read(cls, run_dir: str | Path) -> "RunResult":
-        """Load a run folder written by :meth:`to_csv`."""
+        """Load a run folder written by :meth:`to_csv`: the same values and column types as the run had.
+
+        Signals are floats (a signal holding whole numbers stays float), jobs' ``deadline_met`` is a nullable
+        boolean, text columns stay text (an empty ``drop_reason`` is ``""``, not NaN).
+        """
         folder = Path(run_dir)
-        signals = pd.read_csv(folder / "signals.csv")
-        jobs = pd.read_csv(folder / "jobs.csv")
-        messages = pd.read_csv(folder / "messages.csv", keep_default_na=False, na_values=[""])
-        metrics_frame = pd.read_csv(folder / "metrics.csv")
-        metrics = pd.Series(
-            metrics_frame["value"].to_numpy(dtype=float), index=list(metrics_frame["metric"]), name="value"
-        )
+        signals = pd.read_csv(folder / "signals.csv", dtype=np.float64)
+        jobs = read_table(folder / "jobs.csv", JOB_TYPES)
+        messages = read_table(folder / "messages.csv", MESSAGE_TYPES)
+        metrics = pd.Series(dtype=float, name="value")
+        if (folder / "metrics.csv").exists():
+            metrics_frame = pd.read_csv(folder / "metrics.csv", dtype={"metric": str, "value": np.float64})
+            metrics = pd.Series(metrics_frame["value"].to_numpy(dtype=float), index=list(metrics_frame["metric"]),
+                                name="value")
         meta = json.loads((folder / "meta.json").read_text(encoding="utf-8")) if (folder / "meta.json").exists() else {}
         scenario = None
         if (folder / "scenario.yaml").exists():

@@ -1,0 +1,108 @@
+"""The run folder's CSV files: written with a fixed format and read back with the same values and types.
+
+:func:`write_csv` writes every float as the shortest text that reads back as the same float (times as exact
+decimals of their nanoseconds), so the same run gives byte-identical files; :func:`read_table` reads a jobs or
+messages file back with the column types the run had.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["FLOAT_FORMAT", "TIME_COLUMNS", "write_csv", "read_table", "JOB_TYPES", "MESSAGE_TYPES"]
+
+#: Float format of the run folder's CSVs: None is Python's shortest round-trip text (``repr``), so a value read
+#: back is the same float (issue 21: ``%.12g`` moved values by ~5e-12 and wrote ``1.0`` as ``1``, read back as an
+#: integer). Every value is written as pandas' ``to_csv`` writes it without a ``float_format``.
+FLOAT_FORMAT: str | None = None
+
+
+def write_csv(frame: pd.DataFrame, path: Path) -> None:
+    """Write ``frame`` atomically with the run folder's fixed float format and ``\\n`` line ends.
+
+    Values use :data:`FLOAT_FORMAT` (the shortest text that reads back as the same float); the time columns
+    (:data:`TIME_COLUMNS`, all integer nanoseconds divided by 1e9) write whole seconds as integers and other
+    times as their shortest round-trip text, the exact decimal of the nanosecond count for any time below about
+    10^6 s (``100000.0000005``). The file is written under a temporary name and renamed
+    (:func:`netsim.safe_write.write_atomic`): never half a file, never through a planted symlink.
+    """
+    text = _float_csv(frame)
+    if text is None:
+        times = [c for c in frame.columns if c in TIME_COLUMNS and frame[c].dtype == np.float64]
+        if times:
+            frame = frame.copy()
+            for c in times:
+                frame[c] = [_time_text(v) for v in frame[c].tolist()]
+        text = frame.to_csv(index=False, float_format=FLOAT_FORMAT, lineterminator="\n")
+    from netsim.safe_write import write_atomic
+
+    write_atomic(path, text)
+
+
+#: Columns that hold times (integer ns / 1e9): written with full precision (see :func:`write_csv`).
+TIME_COLUMNS = frozenset({
+    "time_s", "release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s", "sent_s",
+    "tx_start_s", "delivered_s", "delay_s", "tx_end_s", "end_s",
+})
+
+
+def _time_text(v: float) -> str:
+    """A time in seconds as the shortest text that reads back as the same float (empty for NaN)."""
+    if v != v:
+        return ""
+    if v == int(v) and abs(v) < 1e15:
+        return "%d" % v
+    return repr(v)
+
+
+def _float_csv(frame: pd.DataFrame) -> str | None:
+    """The CSV text pandas writes for an all-float64 frame with plain column names, or None otherwise.
+
+    The signals table (thousands of rows) is all floats; formatting it here is ~10x faster than
+    ``DataFrame.to_csv`` and gives the same bytes: every value as ``repr`` (``FLOAT_FORMAT`` None), NaN as an
+    empty field, no quoting (names with a comma, quote or line break go through pandas).
+    """
+    names = [str(c) for c in frame.columns]
+    if not names or any(t != np.float64 for t in frame.dtypes):
+        return None
+    if any(ch in n for n in names for ch in (",", '"', "\n", "\r")) or any(not n for n in names):
+        return None
+    lines = [",".join(names)]
+    timed = [n in TIME_COLUMNS for n in names]
+    if not any(timed):
+        for row in frame.to_numpy(dtype=np.float64).tolist():
+            lines.append(",".join("" if v != v else repr(v) for v in row))
+    else:
+        def value(v: float) -> str:
+            return "" if v != v else repr(v)
+
+        cells = [_time_text if t else value for t in timed]
+        for row in frame.to_numpy(dtype=np.float64).tolist():
+            lines.append(",".join([f(v) for f, v in zip(cells, row)]))
+    return "\n".join(lines) + "\n"
+
+
+#: Column types of the jobs and messages tables (the columns :func:`jobs_table` and :func:`messages_table` make).
+JOB_TYPES: dict[str, str] = {
+    "node": "str", "task": "str", "deadline_met": "boolean", "killed": "bool", "outcome": "str",
+    **dict.fromkeys(("release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s"), "float64"),
+}
+MESSAGE_TYPES: dict[str, str] = {
+    "network": "str", "sender": "str", "receiver": "str", "tag": "str", "dropped": "bool", "drop_reason": "str",
+    **dict.fromkeys(("sent_s", "tx_start_s", "delivered_s", "delay_s", "tx_end_s"), "float64"),
+}
+
+
+def read_table(path: Path, types: dict[str, str]) -> pd.DataFrame:
+    """A jobs or messages CSV with its column types: empty cells are NaN/NA in number and boolean columns and
+    ``""`` in text columns."""
+    import csv
+
+    with open(path, newline="", encoding="utf-8") as fh:
+        header = next(csv.reader(fh), [])
+    present = {c: t for c, t in types.items() if c in header}
+    empty_is_na = {c: [""] for c in header if present.get(c) != "str"}
+    return pd.read_csv(path, dtype=present, keep_default_na=False, na_values=empty_is_na)
