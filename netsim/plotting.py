@@ -142,7 +142,7 @@ def _diverged_at(status: str) -> float | None:
         return None
     try:
         return float(status.removeprefix("diverged at t = ").split()[0])
-    except (ValueError, IndexError):
+    except (ValueError, IndexError):  # a status text netsim did not write: no divergence line to draw
         return None
 
 

@@ -105,18 +105,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from netsim.runner import run
 
     show = not (args.no_progress or args.quiet) and sys.stderr.isatty()
+    window = _plot_window(getattr(args, "plot_window", None))
     with _RunProgress(scenario.name, enabled=show) as progress:
-        result = run(scenario, out=args.out, plot=args.plot, progress=progress.callback)
+        if window is None:
+            result = run(scenario, out=args.out, plot=args.plot, progress=progress.callback)
+        else:  # --plot-window implies --plot: the figures are drawn here with that window
+            result = run(scenario, out=args.out, plot=False, progress=progress.callback)
     meta = getattr(result, "meta", {}) or {}
     status = str(meta.get("status", "ok"))
     out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
-    where = f"; wrote {out_dir}" if out_dir else ""
+    if window is not None and out_dir:
+        from netsim.plotting import save_figures
+
+        save_figures(result, out_dir, window=window)
     n_warn = len(meta.get("warnings") or [])
     told = f"{status} ({n_warn} warning{'s' if n_warn != 1 else ''} above)" if n_warn else status
     if not args.quiet or status != "ok":  # quiet: nothing on stdout unless the run failed
-        print(f"{scenario.name}: {told}{where}")
+        print(f"{scenario.name}: {told}{_run_facts(meta)}")
     if not args.quiet:
         _print_metrics(getattr(result, "metrics", None))
+        if out_dir:
+            print(f"run folder: {out_dir}")
     from netsim.status import count_statuses
 
     if status != "ok":
@@ -124,6 +133,37 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if error:
             _err(str(error))
     return count_statuses([status]).exit_code()
+
+
+def _plot_window(text: str | None) -> tuple[float, float] | None:
+    """``--plot-window``: ``T1`` or ``T0:T1`` with time units (``50 ms``, ``1 s:1.2 s``) -> seconds."""
+    if text is None:
+        return None
+    from netsim.errors import ConfigError
+    from netsim.timebase import S, parse_time
+
+    parts = [p.strip() for p in str(text).split(":")]
+    try:
+        if len(parts) == 1:
+            t0, t1 = 0, parse_time(parts[0])
+        elif len(parts) == 2:
+            t0, t1 = parse_time(parts[0]), parse_time(parts[1])
+        else:
+            raise ValueError(text)
+    except (ValueError, TypeError) as exc:
+        raise ConfigError(f"--plot-window {text!r}: write a length or START:END with units, e.g. "
+                          "--plot-window '50 ms' or --plot-window '1 s:1.2 s'") from exc
+    if t1 <= t0:
+        raise ConfigError(f"--plot-window {text!r}: the end must come after the start")
+    return t0 / S, t1 / S
+
+
+def _run_facts(meta: dict[str, Any]) -> str:
+    """`` (2 s simulated in 1.3 s)`` from a run's meta, or nothing."""
+    simulated, wall = meta.get("t_end_s"), meta.get("wall_time_s")
+    if simulated is None:
+        return ""
+    return f" ({float(simulated):.6g} s simulated" + (f" in {float(wall):.3g} s)" if wall is not None else ")")
 
 
 class _RunProgress:
@@ -171,21 +211,26 @@ class _RunProgress:
             self.bar.stop()
 
 
-def _print_metrics(metrics: Any, limit: int = 30) -> None:
+def _print_metrics(metrics: Any) -> None:
+    """The control metrics first, then worst response and deadline misses per task, loss and worst delay per
+    network (:func:`netsim.results.summary.key_metrics`); the rest stays in ``metrics.csv``."""
     if metrics is None:
         return
     try:
-        items = list(metrics.items())
+        items = dict(metrics.items())
     except AttributeError:
         return
     if not items:
         return
-    width = max(len(str(k)) for k, _ in items[:limit])
-    for key, value in items[:limit]:
-        text = f"{value:.6g}" if isinstance(value, float) else str(value)
-        print(f"  {str(key):<{width}}  {text}")
-    if len(items) > limit:
-        print(f"  ... {len(items) - limit} more in metrics.csv")
+    from netsim.results.summary import key_metrics
+
+    control, timing = key_metrics(items)
+    rows = control + timing
+    width = max((len(k) for k, _ in rows), default=0)
+    for key, text in rows:
+        print(f"  {key:<{width}}  {text}")
+    if len(items) > len(control):
+        print(f"  ({len(items)} metrics in all: metrics.csv)")
 
 
 def _expand_batch(paths: Sequence[str]) -> list[Path]:
@@ -341,3 +386,24 @@ def _print_plugin(kind: str, name: str) -> None:
         print(("  " + "  ".join(cells) + "  " + row[4]).rstrip())
     if any(r.unit == registry.TIME_UNIT for r in rows):
         print("times are written with their unit: 20 us, 1.5 ms, 2 s")
+
+
+def _cmd_docs(args: argparse.Namespace) -> int:
+    """``netsim docs``: the scenario reference (Markdown) from the schema and every registered plugin."""
+    from netsim.cli.docs import scenario_reference
+    from netsim.scenario.validate import plugin_load_problems
+
+    for problem in plugin_load_problems():
+        print(f"warning: {problem.message}", file=sys.stderr)
+    sys.stdout.write(scenario_reference())
+    return EXIT_OK
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    """``netsim schema``: the JSON Schema of scenario and sweep files, for a YAML language server."""
+    import json
+
+    from netsim.cli.docs import json_schema
+
+    sys.stdout.write(json.dumps(json_schema(), indent=2, sort_keys=True) + "\n")
+    return EXIT_OK

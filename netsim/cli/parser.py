@@ -7,9 +7,11 @@ import argparse
 from netsim.cli.commands import (
     LIST_KINDS,
     _cmd_batch,
+    _cmd_docs,
     _cmd_list,
     _cmd_report,
     _cmd_run,
+    _cmd_schema,
     _cmd_sweep,
     _cmd_validate,
 )
@@ -25,6 +27,8 @@ examples:
   netsim sweep scenarios/hdd_gpi_sweep.yaml              threshold sweep (parallel), summary.csv + surface
   netsim report reports/hdd_gpi                          tables and figures from a finished sweep
   netsim list programs                                   registered task programs, one per line
+  netsim docs > scenario-reference.md                    every scenario key and plugin parameter
+  netsim schema > netsim.schema.json                     JSON Schema for editor completion
 
 exit codes: 0 ok, 1 a run failed, 2 invalid scenario or usage; validate: number of problems.
 """
@@ -33,6 +37,7 @@ _RUN_EPILOG = """\
 examples:
   netsim run scenarios/dc_servo_ideal.yaml
   netsim run scenarios/dc_servo_can.yaml --out /tmp/can --seed 7 --plot
+  netsim run scenarios/three_servos_dm.yaml --plot-window "0.2 s:0.3 s"
   netsim run scenarios/dc_servo_can.yaml --set networks.can.bitrate="1 Mbit/s" --set 'plant.x0=[1, 0]'
   netsim run scenarios/three_servos_dm.yaml --set nodes.cpu.tasks[2].period="5 ms"
 
@@ -86,6 +91,22 @@ examples:
 kinds: """ + ", ".join(LIST_KINDS)
 
 
+_DOCS_EPILOG = """\
+examples:
+  netsim docs                              the reference on the terminal
+  netsim docs > scenario-reference.md      the same as docs/scenario-reference.md in the repository
+"""
+
+_SCHEMA_EPILOG = """\
+examples:
+  netsim schema > netsim.schema.json
+
+Editors with a YAML language server (VS Code's YAML extension, ...) complete keys and flag errors with it:
+put '# yaml-language-server: $schema=netsim.schema.json' on a scenario's first line, or map the schema to
+your scenario files in the editor's settings (yaml.schemas).
+"""
+
+
 class _Formatter(argparse.RawDescriptionHelpFormatter):
     def __init__(self, prog: str) -> None:
         super().__init__(prog, max_help_position=32, width=100)
@@ -128,6 +149,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
                    help="override a value, e.g. networks.can.bitrate='1 Mbit/s' (repeatable)")
     p.add_argument("--plot", action="store_true", help="also write PNG figures")
+    p.add_argument("--plot-window", metavar="T|T0:T1",
+                   help="time window of the Gantt chart and network timeline, e.g. '50 ms' or '1 s:1.2 s' "
+                        "(implies --plot; default: the whole run, up to 3000 intervals)")
     p.add_argument("--no-progress", action="store_true",
                    help="no progress bar (there is none either when stderr is not a terminal)")
     p.set_defaults(func=_cmd_run)
@@ -178,6 +202,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("kind", nargs="?", metavar="KIND", help="one kind (plural or singular), e.g. plants")
     p.add_argument("name", nargs="?", metavar="NAME", help="one plugin of KIND: print its parameters")
     p.set_defaults(func=_cmd_list)
+
+    p = sub.add_parser("docs", parents=[common], help="print the scenario reference (every key and plugin parameter)",
+                       epilog=_DOCS_EPILOG, formatter_class=_Formatter,
+                       description="Print a Markdown reference of scenario and sweep files: every key, and every "
+                       "registered plugin's parameters with types, defaults and units.")
+    p.set_defaults(func=_cmd_docs)
+
+    p = sub.add_parser("schema", parents=[common], help="print the JSON Schema of scenario and sweep files",
+                       epilog=_SCHEMA_EPILOG, formatter_class=_Formatter,
+                       description="Print a JSON Schema (draft 2020-12) that accepts a scenario or a sweep file.")
+    p.set_defaults(func=_cmd_schema)
     return parser
 
 

@@ -41,8 +41,12 @@ def _fake_module(monkeypatch, name: str, attr: str, result=None, error: Exceptio
     return rec
 
 
+_METRICS = {"cpu.a": 0.125, "task.a.t.jobs": 10.0, "task.a.t.deadline_misses": 1.0, "task.a.t.max_response_s": 0.002,
+            "net.bus.messages": 8.0, "net.bus.loss_rate": 0.25, "net.bus.max_delay_s": 0.0015, "y.ISE": 0.5}
+
+
 def _result(status: str = "ok", **meta):
-    return types.SimpleNamespace(meta={"status": status, **meta}, metrics={"cpu.a": 0.125}, out_dir="/tmp/run-x")
+    return types.SimpleNamespace(meta={"status": status, **meta}, metrics=dict(_METRICS), out_dir="/tmp/run-x")
 
 
 def test_run_validates_applies_overrides_and_calls_the_runner(tmp_path, monkeypatch, capsys, good):
@@ -58,9 +62,15 @@ def test_run_validates_applies_overrides_and_calls_the_runner(tmp_path, monkeypa
     assert scenario.plant.x0 == [2.0]
     assert scenario.seed == 5  # --seed is applied with the --set values, before the one validation
     assert kwargs == {"out": str(tmp_path / "o"), "plot": True, "progress": None}  # no TTY: no bar
-    out = capsys.readouterr().out
-    assert out.splitlines()[0] == "zzc_good: ok; wrote /tmp/run-x"
-    assert "cpu.a" in out and "0.125" in out
+    lines = capsys.readouterr().out.splitlines()
+    # issue 21: the status, the control metrics first, then the timing figures, then the run folder
+    assert lines[0] == "zzc_good: ok"
+    assert [ln.split()[0] for ln in lines[1:4]] == ["y.ISE", "task.a.t", "net.bus"]
+    assert lines[1].split()[1] == "0.5"
+    assert lines[2].endswith("worst response 2 ms, 1 deadline misses in 10 jobs")
+    assert lines[3].endswith("25 % lost of 8 messages, worst delay 1.5 ms")
+    assert lines[-1] == "run folder: /tmp/run-x"
+    assert "cpu.a" not in "\n".join(lines)  # the rest stays in metrics.csv
 
 
 def test_run_of_an_invalid_scenario_runs_nothing_and_exits_2(tmp_path, monkeypatch, capsys, good):
@@ -222,3 +232,22 @@ def test_python_dash_m_netsim_runs_the_cli(tmp_path):
                          env=env, cwd=ROOT)
     assert out.returncode == 1
     assert out.stdout.splitlines()[0] == f"{path}:1: the file is empty; a scenario needs at least 'name' and 'duration'"
+
+
+def test_plot_window_draws_the_gantt_chart_over_that_window(tmp_path, capsys):
+    out = tmp_path / "run"
+    code = main(["run", str(ROOT / "scenarios" / "dc_servo_can.yaml"), "--out", str(out), "--no-progress",
+                 "--set", "duration=0.3 s", "--plot-window", "0.1 s:150 ms"])
+    assert code == 0
+    assert {p.name for p in out.glob("*.png")} == {"responses.png", "schedule.png", "network.png"}
+    assert capsys.readouterr().out.splitlines()[-1] == f"run folder: {out}"
+    assert main(["run", str(ROOT / "scenarios" / "dc_servo_can.yaml"), "--plot-window", "2 s:1 s"]) == 2
+    assert "--plot-window '2 s:1 s': the end must come after the start" in capsys.readouterr().err
+
+
+def test_plot_window_parses_a_length_or_a_range():
+    from netsim.cli.commands import _plot_window
+
+    assert _plot_window("50 ms") == (0.0, 0.05)
+    assert _plot_window("1 s:1.2 s") == (1.0, 1.2)
+    assert _plot_window(None) is None
