@@ -25,7 +25,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = ["Dispatcher"]
 
-log = logging.getLogger("netsim.kernel.kernel")
+log = logging.getLogger("netsim.kernel.kernel")  # the kernel's logger, as before the split
 
 #: Rank of a started non-preemptible task job: below every handler (level 0), above every task (level 1).
 NP_RANK = (0.5, 0)

@@ -19,11 +19,12 @@ What :func:`build` does, in order:
 6. the networks (``make_network``), attached to their nodes' kernels; tasks with
    ``release: on_message:<net>`` and handlers with ``trigger: {on_message: net}`` are bound to receptions;
 7. recording of the scenario signals named in ``record:`` (at 0 and at every jump; continuous ones on the grid).
+
+Steps 5 and 6 are :mod:`netsim.scenario.wiring` (shared with ``netsim validate``); its names are re-exported here.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -32,7 +33,7 @@ import numpy as np
 
 from netsim.env import SimEnv, run_events
 from netsim.errors import BuildError, ConfigError, NetsimError
-from netsim.kernel.task import HandlerSpec, TaskSpec
+from netsim.scenario.wiring import bind_receivers, build_networks, checked_call, wire_kernels
 from netsim.timebase import MS
 
 __all__ = ["Simulation", "build", "make_plant", "wire_kernels", "build_networks", "bind_receivers", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
@@ -181,15 +182,15 @@ def _build_plant(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> Any:
         return None
     plant = make_plant(spec.model, spec.plugin(), spec.validated_params())
     if spec.process_noise is not None:
-        _call(_set_process_noise, "plant.process_noise", plant, spec.process_noise)
+        checked_call(_set_process_noise, "plant.process_noise", plant, spec.process_noise)
     for port, sig_name in spec.disturbances.items():
-        _call(plant.add_disturbance, f"plant.disturbances.{port}", port, signals[sig_name])
+        checked_call(plant.add_disturbance, f"plant.disturbances.{port}", port, signals[sig_name])
     record_events = scenario.record is None or any(
         r in (f"{plant.name}.x", f"{plant.name}.u") for r in scenario.record
     )
     plant.bind(env, record_events=record_events, record_grid_ns=spec.record_grid)
     if spec.x0 is not None:
-        _call(plant.set_state, "plant.x0", np.asarray(spec.x0, dtype=float), 0)
+        checked_call(plant.set_state, "plant.x0", np.asarray(spec.x0, dtype=float), 0)
     return plant
 
 
@@ -348,133 +349,6 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
 
     kernels, bindings = wire_kernels(scenario, env, body, attach)
     return kernels, programs, bindings
-
-
-BodyFn = Callable[[Any, Any, str, str, "int | None"], Any]
-
-
-def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
-                 attach: Callable[[Any], None] | None = None) -> tuple[dict[str, Any], list[tuple[str, str, str]]]:
-    """One kernel per node with its handlers, tasks and triggers, exactly as :func:`build` creates them.
-
-    Parameters
-    ----------
-    body
-        ``body(spec, kernel, node, path, period)`` returns the program body of a task or handler spec
-        (``netsim validate`` passes placeholders, so every kernel check runs without building programs).
-    attach
-        Called with each new kernel before its tasks are created (the builder attaches the io channels).
-
-    Returns
-    -------
-    kernels, bindings
-        The kernels by node name and the ``(node, network, target)`` receive bindings.
-
-    Raises
-    ------
-    BuildError
-        With the YAML path (``nodes.<n>.tasks[i].<field>``) of what the kernel refused.
-    """
-    from netsim.kernel import Kernel
-
-    kernels: dict[str, Any] = {}
-    bindings: list[tuple[str, str, str]] = []
-    for node_name, node in scenario.nodes.items():
-        npath = f"nodes.{node_name}"
-        try:
-            kernel = Kernel(env, node_name, policy=node.policy, context_switch=node.context_switch)
-        except NetsimError as exc:
-            raise BuildError(str(exc), path=npath) from None
-        kernels[node_name] = kernel
-        env.components[f"kernel.{node_name}"] = kernel
-        if attach is not None:
-            attach(kernel)
-        for i, h in enumerate(node.handlers):
-            hpath = f"{npath}.handlers[{i}]"
-            _call(kernel.add_handler, hpath, h.kernel_spec(), body(h, kernel, node_name, hpath, None))
-        for i, t in enumerate(node.tasks):
-            tpath = f"{npath}.tasks[{i}]"
-            _call(kernel.add_task, tpath, t.kernel_spec(), body(t, kernel, node_name, tpath, t.period))
-            if t.release_network is not None:
-                bindings.append((node_name, t.release_network, t.name))
-        # triggers after every handler exists
-        for i, h in enumerate(node.handlers):
-            hpath = f"{npath}.handlers[{i}]"
-            trig = h.trigger
-            if trig is None:
-                continue
-            if trig.kind == "timer":
-                _call(kernel.create_timer, f"{hpath}.trigger", f"{h.name}_timer", h.name,
-                      period=trig.timer.period, start=trig.timer.start)
-            elif trig.kind == "external":
-                _call(kernel.create_trigger, f"{hpath}.trigger", h.name, h.name,
-                      min_interarrival=trig.external.min_interarrival)
-            elif trig.kind == "periodic_load":
-                # the validator made sure the execution time is constant (an int of ns, or {dist: constant})
-                execution = h.execution if isinstance(h.execution, int) else getattr(h.execution, "value", 0)
-                _call(kernel.create_periodic_load, f"{hpath}.trigger", h.name,
-                      period=trig.periodic_load.period, execution=h.latency + int(execution or 0),
-                      start=trig.periodic_load.start, handler=h.name)
-            else:
-                bindings.append((node_name, trig.on_message, h.name))
-    return kernels, bindings
-
-
-def bind_receivers(kernels: dict[str, Any], networks: dict[str, Any], bindings: list[tuple[str, str, str]]) -> None:
-    """Bind each ``(node, network, target)`` reception (the kernels check the targets when the run starts)."""
-    for node, net, target in bindings:
-        if net not in networks:
-            raise BuildError(f"node '{node}' receives on network '{net}', which is not defined",
-                             path=f"nodes.{node}")
-        _call(kernels[node].bind_receive, f"nodes.{node}", net, target)
-
-
-#: Task/handler fields a kernel error may name: the fields of the kernel's descriptions, keys of the scenario's
-#: task or handler.
-_SPEC_FIELDS = frozenset(f.name for cls in (TaskSpec, HandlerSpec) for f in dataclasses.fields(cls))
-
-
-def _call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:
-    """Call a kernel/network constructor, turning its user errors into BuildErrors with ``path`` (and the field
-    a kernel error names, when it is a key of the task or handler at ``path``)."""
-    try:
-        return fn(*args, **kwargs)
-    except ConfigError as exc:
-        if exc.path is None:
-            field = getattr(exc, "field", None)
-            where = f"{path}.{field}" if field in _SPEC_FIELDS and path.endswith("]") else path
-            err = BuildError(exc.message, path=where)
-            for attr in ("node", "task", "field"):
-                if hasattr(exc, attr):
-                    setattr(err, attr, getattr(exc, attr))
-            raise err from None
-        raise
-    except NetsimError as exc:
-        raise BuildError(str(exc), path=path) from None
-    except (ValueError, TypeError) as exc:
-        raise BuildError(str(exc), path=path) from exc
-
-
-def build_networks(scenario: Any, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:
-    """The scenario's networks (``make_network``), each attached to its nodes' kernels."""
-    if not scenario.networks:
-        return {}
-    from netsim.network import make_network
-
-    nets: dict[str, Any] = {}
-    for name, spec in scenario.networks.items():
-        path = f"networks.{name}"
-        net = _call(make_network, path, env, name, spec.type, spec.validated_params())
-        nets[name] = net
-        env.components[f"network.{name}"] = net
-        for node in spec.nodes:
-            kernel = kernels.get(node)
-            if kernel is None:
-                raise BuildError(f"network '{name}' lists node '{node}', which is not defined under 'nodes'",
-                                 path=f"{path}.nodes")
-            _call(net.attach, f"{path}.nodes", node, kernel)
-            kernel.attach_network(net)
-    return nets
 
 
 def _record_signals(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> None:

@@ -1,0 +1,148 @@
+"""Kernels and networks of a scenario, wired exactly as :func:`netsim.scenario.builder.build` makes them.
+
+:func:`wire_kernels` creates one kernel per node (its policy by name, resolved by
+:func:`netsim.kernel.policies.find_policy`), adds each task and handler from its kernel description
+(``TaskSpec.kernel_spec()``, ``HandlerSpec.kernel_spec()``) and creates the timers, external triggers and
+periodic loads; :func:`build_networks` creates the networks and attaches them; :func:`bind_receivers` binds
+message receptions. ``netsim validate`` runs the same functions with placeholder bodies
+(:mod:`netsim.scenario.static_build`), so it refuses what the kernel would refuse, at the same YAML path.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable
+
+from netsim.env import SimEnv
+from netsim.errors import BuildError, ConfigError, NetsimError
+from netsim.kernel.task import HandlerSpec, TaskSpec
+
+__all__ = ["BodyFn", "wire_kernels", "bind_receivers", "build_networks", "checked_call", "SPEC_FIELDS"]
+
+#: ``body(spec, kernel, node, path, period)``: the program body of a task or handler entry.
+BodyFn = Callable[[Any, Any, str, str, "int | None"], Any]
+
+
+def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
+                 attach: Callable[[Any], None] | None = None) -> tuple[dict[str, Any], list[tuple[str, str, str]]]:
+    """One kernel per node with its handlers, tasks and triggers, exactly as
+    :func:`~netsim.scenario.builder.build` creates them.
+
+    Parameters
+    ----------
+    body
+        ``body(spec, kernel, node, path, period)`` returns the program body of a task or handler spec
+        (``netsim validate`` passes placeholders, so every kernel check runs without building programs).
+    attach
+        Called with each new kernel before its tasks are created (the builder attaches the io channels).
+
+    Returns
+    -------
+    kernels, bindings
+        The kernels by node name and the ``(node, network, target)`` receive bindings.
+
+    Raises
+    ------
+    BuildError
+        With the YAML path (``nodes.<n>.tasks[i].<field>``) of what the kernel refused.
+    """
+    from netsim.kernel import Kernel
+
+    kernels: dict[str, Any] = {}
+    bindings: list[tuple[str, str, str]] = []
+    for node_name, node in scenario.nodes.items():
+        npath = f"nodes.{node_name}"
+        try:
+            kernel = Kernel(env, node_name, policy=node.policy, context_switch=node.context_switch)
+        except NetsimError as exc:
+            raise BuildError(str(exc), path=npath) from None
+        kernels[node_name] = kernel
+        env.components[f"kernel.{node_name}"] = kernel
+        if attach is not None:
+            attach(kernel)
+        for i, h in enumerate(node.handlers):
+            hpath = f"{npath}.handlers[{i}]"
+            checked_call(kernel.add_handler, hpath, h.kernel_spec(), body(h, kernel, node_name, hpath, None))
+        for i, t in enumerate(node.tasks):
+            tpath = f"{npath}.tasks[{i}]"
+            checked_call(kernel.add_task, tpath, t.kernel_spec(), body(t, kernel, node_name, tpath, t.period))
+            if t.release_network is not None:
+                bindings.append((node_name, t.release_network, t.name))
+        # triggers after every handler exists
+        for i, h in enumerate(node.handlers):
+            hpath = f"{npath}.handlers[{i}]"
+            trig = h.trigger
+            if trig is None:
+                continue
+            if trig.kind == "timer":
+                checked_call(kernel.create_timer, f"{hpath}.trigger", f"{h.name}_timer", h.name,
+                      period=trig.timer.period, start=trig.timer.start)
+            elif trig.kind == "external":
+                checked_call(kernel.create_trigger, f"{hpath}.trigger", h.name, h.name,
+                      min_interarrival=trig.external.min_interarrival)
+            elif trig.kind == "periodic_load":
+                # the validator made sure the execution time is constant (an int of ns, or {dist: constant})
+                execution = h.execution if isinstance(h.execution, int) else getattr(h.execution, "value", 0)
+                checked_call(kernel.create_periodic_load, f"{hpath}.trigger", h.name,
+                      period=trig.periodic_load.period, execution=h.latency + int(execution or 0),
+                      start=trig.periodic_load.start, handler=h.name)
+            else:
+                bindings.append((node_name, trig.on_message, h.name))
+    return kernels, bindings
+
+
+def bind_receivers(kernels: dict[str, Any], networks: dict[str, Any], bindings: list[tuple[str, str, str]]) -> None:
+    """Bind each ``(node, network, target)`` reception (the kernels check the targets when the run starts)."""
+    for node, net, target in bindings:
+        if net not in networks:
+            raise BuildError(f"node '{node}' receives on network '{net}', which is not defined",
+                             path=f"nodes.{node}")
+        checked_call(kernels[node].bind_receive, f"nodes.{node}", net, target)
+
+
+#: Task/handler fields a kernel error may name: the fields of the kernel's descriptions, keys of the scenario's
+#: task or handler.
+SPEC_FIELDS = frozenset(f.name for cls in (TaskSpec, HandlerSpec) for f in dataclasses.fields(cls))
+
+
+def checked_call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:
+    """Call a kernel/network/plant constructor, turning its user errors into BuildErrors with ``path`` (and the
+    field a kernel error names, when it is a key of the task or handler at ``path``)."""
+    try:
+        return fn(*args, **kwargs)
+    except ConfigError as exc:
+        if exc.path is None:
+            field = getattr(exc, "field", None)
+            where = f"{path}.{field}" if field in SPEC_FIELDS and path.endswith("]") else path
+            err = BuildError(exc.message, path=where)
+            for attr in ("node", "task", "field"):
+                if hasattr(exc, attr):
+                    setattr(err, attr, getattr(exc, attr))
+            raise err from None
+        raise
+    except NetsimError as exc:
+        raise BuildError(str(exc), path=path) from None
+    except (ValueError, TypeError) as exc:
+        raise BuildError(str(exc), path=path) from exc
+
+
+def build_networks(scenario: Any, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:
+    """The scenario's networks (``make_network``), each attached to its nodes' kernels."""
+    if not scenario.networks:
+        return {}
+    from netsim.network import make_network
+
+    nets: dict[str, Any] = {}
+    for name, spec in scenario.networks.items():
+        path = f"networks.{name}"
+        net = checked_call(make_network, path, env, name, spec.type, spec.validated_params())
+        nets[name] = net
+        env.components[f"network.{name}"] = net
+        for node in spec.nodes:
+            kernel = kernels.get(node)
+            if kernel is None:
+                raise BuildError(f"network '{name}' lists node '{node}', which is not defined under 'nodes'",
+                                 path=f"{path}.nodes")
+            checked_call(net.attach, f"{path}.nodes", node, kernel)
+            kernel.attach_network(net)
+    return nets
