@@ -37,6 +37,7 @@ from models.cart.estimators import (
 )
 from models.cart.tuning import Tuning, observer_tuning, pure_pi_tuning
 from netsim.errors import ConfigError
+from netsim.timebase import format_time
 
 __all__ = [
     "KU",
@@ -71,7 +72,7 @@ class CartController(abc.ABC):
 
     def __init__(self, tuning: Tuning, quantizer: Quantizer, period_ns: int, ku: float = KU) -> None:
         if period_ns <= 0:
-            raise ConfigError(f"control period must be positive, got {period_ns} ns")
+            raise ConfigError(f"control period must be positive, got {format_time(period_ns)}")
         if not ku > 0:
             raise ConfigError(f"motor gain Ku must be positive, got {ku}")
         self.tuning = tuning

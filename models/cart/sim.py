@@ -23,6 +23,7 @@ from models.cart.dynamics import propagate
 from models.cart.encoding import DELTA_P, Quantizer
 from models.cart.friction import Friction
 from netsim.errors import ConfigError
+from netsim.timebase import format_time
 
 __all__ = ["CartRun", "simulate"]
 
@@ -99,9 +100,10 @@ def simulate(
     """
     period = controller.period_ns
     if period % tick_ns:
-        raise ConfigError(f"control period {period} ns must be a multiple of the ISR tick {tick_ns} ns")
+        raise ConfigError(f"control period {format_time(period)} must be a multiple of the ISR tick "
+                          f"{format_time(tick_ns)}")
     if not 0 <= delay_ns < period:
-        raise ConfigError(f"actuation delay must be in [0, period), got {delay_ns} ns")
+        raise ConfigError(f"actuation delay must be in [0, period), got {format_time(delay_ns)}")
     if not duration > 0:
         raise ConfigError(f"duration must be positive, got {duration}")
     quant = Quantizer.from_bits(q, delta_p, rounding)

@@ -69,7 +69,7 @@ from netsim.network.records import (
 )
 from netsim.network.stats import BusyMeter
 from netsim.network.timing import Call, call_later, tx_time_ns
-from netsim.timebase import US
+from netsim.timebase import US, format_time
 from netsim.units import Duration
 
 __all__ = ["WirelessMedium", "WirelessParams", "received_dbm"]
@@ -143,8 +143,9 @@ class WirelessMedium(Network):
                              else int(p.ack_delay) + self._ack_ns + 1 * US)
         if self._ack_timeout < int(p.ack_delay) + self._ack_ns:
             raise ConfigError(
-                f"network '{self.name}': ack_timeout ({self._ack_timeout} ns) is shorter than ack_delay + the ACK "
-                f"frame ({int(p.ack_delay) + self._ack_ns} ns): no ACK could ever arrive; raise ack_timeout",
+                f"network '{self.name}': ack_timeout ({format_time(self._ack_timeout)}) is shorter than ack_delay + "
+                f"the ACK frame ({format_time(int(p.ack_delay) + self._ack_ns)}): no ACK could ever arrive; raise "
+                "ack_timeout",
                 path=f"networks.{self.name}.ack_timeout")
         self._active: list[list[Any]] = []  # transmissions on the air: [sender, receptions]
         self._current: dict[str, Frame | None] = {n: None for n in self.nodes}
