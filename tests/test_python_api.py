@@ -93,3 +93,10 @@ def test_the_readme_from_python_example_runs(tmp_path, monkeypatch):
     assert (tmp_path / "out" / "run" / "meta.json").exists()
     pd.testing.assert_frame_equal(scope["back"].signals, scope["result"].signals, check_exact=True)
     assert not (tmp_path / "reports").exists()  # netsim.run from Python wrote no folder of its own
+
+
+def test_the_readme_shows_one_figure_of_each_kind():
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    for name in ("responses", "schedule", "network", "surface"):
+        assert f"](docs/figures/{name}.png)" in text
+        assert (ROOT / "docs" / "figures" / f"{name}.png").stat().st_size > 5000

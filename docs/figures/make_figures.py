@@ -1,0 +1,46 @@
+"""Regenerate the README's example figures (one of each kind) into docs/figures/.
+
+Run from the repository root: ``python docs/figures/make_figures.py``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import netsim  # first: the BLAS pinning of netsim.blas
+
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from netsim.sweep.surface import Surface, find_optimum, surface_figure  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+OUT = Path(__file__).resolve().parent
+DPI = 72
+
+
+def main() -> None:
+    loops = netsim.run(ROOT / "scenarios" / "three_servos_dm.yaml")  # DM loses its lowest-priority loop
+    loops.plot().savefig(OUT / "responses.png", dpi=DPI)
+    loops.plot_schedule(window=(0.0, 0.1)).savefig(OUT / "schedule.png", dpi=DPI)
+    radio = netsim.run(ROOT / "scenarios" / "dc_servo_zigbee.yaml",
+                       overrides={"duration": "0.3 s", "nodes.interference.tasks[0].params.share": 0.5})
+    radio.plot_network().savefig(OUT / "network.png", dpi=DPI)
+    gpi = pd.read_csv(ROOT / "reports" / "hdd" / "gpi.csv")
+    surface = _surface(gpi, "sigma_s", "sigma_c", "et.GPI")
+    surface_figure(surface, find_optimum(surface)).savefig(OUT / "surface.png", dpi=DPI)
+
+
+def _surface(frame: pd.DataFrame, x: str, y: str, z: str) -> Surface:
+    ok = frame[frame["status"] == "ok"] if "status" in frame else frame
+    xs = sorted(ok[x].unique())
+    ys = sorted(ok[y].unique())
+    grid = ok.pivot_table(index=y, columns=x, values=z).reindex(index=ys, columns=xs)
+    cells = pd.DataFrame({"x": ok[x].to_numpy(), "y": ok[y].to_numpy(), "z": ok[z].to_numpy(), "runs": 1,
+                          "index": range(len(ok))})
+    return Surface(x=x, y=y, z=z, cells=cells, xs=np.array(xs), ys=np.array(ys), Z=grid.to_numpy(float),
+                   logx=True, logy=True)
+
+
+if __name__ == "__main__":
+    main()
