@@ -36,8 +36,12 @@ adds ``{base, per_iteration}`` (a model: ``base + per_iteration * solver iterati
 ``{scale}`` (the measured wall time of the step times ``scale``: runs are then not reproducible), so deadline
 misses show in the job table.
 
+*Recording.* ``record_as`` records ``u`` at each job; ``record_estimate`` records the estimate the law used
+(``<name>[i]`` per state) at the sample instant (the job's release).
+
 *Metrics* (added to every run's metrics as ``control.<node>.<task>.<name>``): ``steps``, ``fused``,
-``prediction_only`` (steps without any fused measurement), ``stale``, ``duplicates``, ``partial``, and for MPC
+``prediction_only`` (steps without a measurement of the current sample: lost, missing or still on its way),
+``stale``, ``duplicates``, ``partial``, and for MPC
 ``mpc_fallbacks`` (infeasible QP or solver failure: the saturated LQR law was applied), ``mpc_solver_calls``,
 ``mpc_solver_iterations`` (wall times are left out: the metrics of a run are reproducible).
 
@@ -291,8 +295,9 @@ class StateFeedbackProgram:
             self.counts["prediction_only"] += 1
         self.counts["steps"] += 1
         r = self.ref(job.now) if self.ref is not None else 0.0
+        x_hat = np.array(est.x_hat, dtype=float)  # the estimate the law uses (recorded as record_estimate)
         if self.fed_state:
-            u = np.asarray(self.law.step(est.x_hat, r), dtype=float).reshape(-1)
+            u = np.asarray(self.law.step(x_hat, r), dtype=float).reshape(-1)
         else:
             u = np.asarray(self.law.step(self.y_last[:1], r), dtype=float).reshape(-1)
         est.predict(u)
@@ -313,7 +318,7 @@ class StateFeedbackProgram:
         if p.record_as:
             self.ctx.record(p.record_as, float(u[0]) if self.m == 1 else u, job.now)
         if p.record_estimate:
-            self.ctx.record(p.record_estimate, np.array(est.x_hat, dtype=float), job.now)
+            self.ctx.record(p.record_estimate, x_hat, job.release)
 
     def _solve_time(self) -> int:
         st = self.p.solve_time
