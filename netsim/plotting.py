@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 __all__ = [
+    "bar_figure",
     "responses_figure",
     "schedule_figure",
     "network_figure",
@@ -367,3 +368,38 @@ def save_figures(result: Any, out_dir: str | Path, *, window: Any = None) -> lis
 def plot_run(result: Any, out_dir: str | Path, window: Any = None) -> list[Path]:
     """The run's figures as PNG files in ``out_dir`` (:func:`save_figures`)."""
     return save_figures(result, out_dir, window=window)
+
+
+#: Positive values spanning more than this ratio are drawn on a log axis (a 10 us and a 100 ms bar both show).
+LOG_SPAN = 100.0
+
+
+def bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: list[str], *, title: str = "",
+               xlabel: str = "") -> Any:
+    """Horizontal bars, one group per row of ``frame`` (labelled by ``label_cols``), one bar per value column.
+
+    The value axis is logarithmic when the positive values span more than :data:`LOG_SPAN` (response times
+    from microseconds to tenths of a second); ``xlabel`` names it with its unit. None when nothing has a value.
+    """
+    data = frame.dropna(subset=value_cols, how="all")
+    if data.empty:
+        return None
+    labels = [" / ".join(str(r[c]) for c in label_cols) for _, r in data.iterrows()]
+    y = np.arange(len(data))
+    height = 0.8 / len(value_cols)
+    fig = _figure(9, 1.4 + 0.35 * len(data) * max(1, len(value_cols) / 2))
+    ax = fig.subplots()
+    values = data[value_cols].to_numpy(dtype=float)
+    for i, col in enumerate(value_cols):
+        ax.barh(y + i * height, values[:, i], height=height, label=col)
+    positive = values[np.isfinite(values) & (values > 0)]
+    if positive.size and positive.max() / positive.min() > LOG_SPAN:
+        ax.set_xscale("log")
+        xlabel = f"{xlabel} (log axis)" if xlabel else "(log axis)"
+    ax.set_yticks(y + height * (len(value_cols) - 1) / 2, labels, fontsize=8)
+    ax.invert_yaxis()
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    ax.set_title(title)
+    ax.set_xlabel(xlabel)
+    ax.grid(axis="x", alpha=0.3)
+    return fig

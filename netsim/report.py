@@ -275,30 +275,17 @@ def node_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame
 
 
 # --------------------------------------------------------------------------------------------- figures
-def _bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: list[str], title: str, path: Path) -> Path | None:
+def _bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: list[str], title: str, path: Path,
+                xlabel: str = "") -> Path | None:
+    """Save :func:`netsim.plotting.bar_figure` of the first ``_MAX_PLOTTED`` rows (log axis when the values
+    span decades); None when nothing has a value."""
+    from netsim.plotting import bar_figure
+
     data = frame.dropna(subset=value_cols, how="all").head(_MAX_PLOTTED)
-    if data.empty:
+    fig = bar_figure(data, label_cols, value_cols, title=title, xlabel=xlabel)
+    if fig is None:
         return None
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    labels = [" / ".join(str(r[c]) for c in label_cols) for _, r in data.iterrows()]
-    y = np.arange(len(data))
-    height = 0.8 / len(value_cols)
-    fig, ax = plt.subplots(figsize=(9, 1.2 + 0.35 * len(data) * max(1, len(value_cols) / 2)))
-    for i, col in enumerate(value_cols):
-        ax.barh(y + i * height, data[col].to_numpy(float), height=height, label=col)
-    ax.set_yticks(y + height * (len(value_cols) - 1) / 2)
-    ax.set_yticklabels(labels, fontsize=8)
-    ax.invert_yaxis()
-    ax.legend(fontsize=8)
-    ax.set_title(title)
-    ax.grid(axis="x", alpha=0.3)
-    fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path
 
 
@@ -327,11 +314,11 @@ def _figures(tables: dict[str, pd.DataFrame], out: Path, folder: Path, kind: str
     util = tables["utilization"]
     if kind != "sweep" or len(util) <= _MAX_PLOTTED:
         made.append(_bar_figure(util, ["case"], ["Uc_ratio", "Ua_ratio", "NE_ratio", "GPI"],
-                                "Utilization and performance indices", out / "utilization.png"))
+                                "Utilization and performance indices", out / "utilization.png", "value [ratio]"))
         made.append(_bar_figure(tables["tasks"], ["case", "node", "task"], ["response_mean_s", "response_max_s"],
-                                "Task response times [s]", out / "response_times.png"))
+                                "Task response times", out / "response_times.png", "response time [s]"))
         made.append(_bar_figure(tables["networks"], ["case", "network"], ["delay_mean_s", "delay_max_s"],
-                                "Network delays [s]", out / "network_delays.png"))
+                                "Network delays", out / "network_delays.png", "delay [s]"))
     return [p for p in made if p is not None]
 
 

@@ -109,3 +109,16 @@ def test_a_lossy_link_without_a_bit_rate_shows_its_delays_and_every_drop():
     bars = sum(len(c.get_paths()) for c in ax.collections)
     assert bars == int((~msgs["dropped"]).sum())  # one delay bar per delivered copy
     assert ax.get_xlabel() == "time [s]" and ax.get_ylabel() == "network: sender"
+
+
+def test_response_time_bars_go_on_a_log_axis_when_they_span_decades():
+    from netsim.plotting import bar_figure
+
+    spread = pd.DataFrame({"task": ["isr", "pid"], "response_mean_s": [2e-6, 0.04], "response_max_s": [5e-6, 0.09]})
+    ax = bar_figure(spread, ["task"], ["response_mean_s", "response_max_s"], xlabel="response time [s]").axes[0]
+    assert ax.get_xscale() == "log" and ax.get_xlabel() == "response time [s] (log axis)"
+    assert len(ax.patches) == 4  # two tasks x two measures
+    close = spread.assign(response_mean_s=[0.01, 0.04], response_max_s=[0.02, 0.09])
+    assert bar_figure(close, ["task"], ["response_mean_s"], xlabel="s").axes[0].get_xscale() == "linear"
+    assert bar_figure(spread.assign(response_mean_s=np.nan, response_max_s=np.nan), ["task"],
+                      ["response_mean_s", "response_max_s"]) is None
