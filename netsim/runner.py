@@ -279,7 +279,8 @@ def run(
         the file with ``--seed`` and ``--set`` applied and passes the Scenario: one validation per run). In a
         mapping, ``plant`` may be a python-control ``StateSpace`` or ``TransferFunction`` (or
         ``{system: <it>, x0: ...}``): its matrices are copied once into the ``plant: {type: ss|tf}`` form
-        (:func:`netsim.plant.described.plant_spec_from_system`).
+        (:func:`netsim.plant.described.plant_spec_from_system`); a ``NonlinearIOSystem`` runs its ``updfcn``
+        and ``outfcn`` in a :class:`~netsim.plant.nonlinear.NonlinearPlant` (plant model ``nonlinear_io``).
     out
         Run folder, anywhere (default: ``reports/<output.dir>`` when the scenario gives ``output.dir``, else
         ``reports/<name>/<run-id>``).

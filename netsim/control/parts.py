@@ -34,8 +34,19 @@ from netsim.errors import ConfigError
 from netsim.registry import register
 from netsim.units import StrictModel
 
-__all__ = ["Design", "DirectState", "KalmanPart", "SteadyStateKalmanPart", "LuenbergerPart", "NoEstimatorPart",
-           "LQRPart", "StateFeedbackPart", "MPCPart", "ESTIMATOR_TYPES", "LAW_TYPES"]
+__all__ = [
+    "ESTIMATOR_TYPES",
+    "LAW_TYPES",
+    "Design",
+    "DirectState",
+    "KalmanPart",
+    "LQRPart",
+    "LuenbergerPart",
+    "MPCPart",
+    "NoEstimatorPart",
+    "StateFeedbackPart",
+    "SteadyStateKalmanPart",
+]
 
 #: A weight or covariance: a number (times the identity), a list (the diagonal) or a matrix.
 Weight = Any

@@ -27,22 +27,40 @@ Both take ``inputs``, ``outputs`` (names; default ``u[0]``... / ``y[0]``...), ``
 
 From Python, :func:`plant_spec_from_system` turns a python-control ``StateSpace`` or ``TransferFunction`` into
 the same YAML-able mapping (the matrices are extracted once), so a scenario given as a mapping may hold the
-system object itself as its ``plant``.
+system object itself as its ``plant`` (:func:`resolve_plant_object`). A ``NonlinearIOSystem`` becomes the plant
+model ``nonlinear_io``: a :class:`~netsim.plant.nonlinear.NonlinearPlant` whose right-hand side and output are
+the system's ``updfcn(t, x, u, params)`` and ``outfcn`` (called by the ODE solver between events); the scenario
+data holds a token naming the system (its name, ``updfcn`` and identity in this process), not the functions.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
-from pydantic import Field, ValidationInfo, field_validator
+from pydantic import (
+    BeforeValidator,
+    Field,
+    PlainSerializer,
+    ValidationInfo,
+    field_validator,
+)
 
 from netsim.errors import ConfigError
 from netsim.registry import register
 from netsim.units import Duration, StrictModel
 
-__all__ = ["SSParams", "TFParams", "ss_plant", "tf_plant", "plant_spec_from_system", "is_control_system",
-           "resolve_plant_object"]
+__all__ = [
+    "NonlinearIOParams",
+    "SSParams",
+    "TFParams",
+    "is_control_system",
+    "nonlinear_io_plant",
+    "plant_spec_from_system",
+    "resolve_plant_object",
+    "ss_plant",
+    "tf_plant",
+]
 
 
 def _matrix(value: Any, name: str) -> np.ndarray:
@@ -294,11 +312,88 @@ tf_plant.Params = TFParams  # type: ignore[attr-defined]
 tf_plant.ports = _tf_ports  # type: ignore[attr-defined]
 
 
+#: NonlinearIOSystems given from Python in this process, by the token the scenario data holds instead of them
+#: (scenario data stays plain: it is copied, dumped, hashed and written to run folders).
+_LIVE_SYSTEMS: dict[str, Any] = {}
+
+
+def _system_token(sys: Any) -> str:
+    """The text a scenario holds for a python-control system given from Python (its name and identity)."""
+    token = (f"python-control:{type(sys).__name__}:{getattr(sys, 'name', '?')}:"
+             f"{getattr(getattr(sys, 'updfcn', None), '__qualname__', '?')}:{id(sys):x}")
+    _LIVE_SYSTEMS[token] = sys
+    return token
+
+
+def _live_system(value: Any) -> Any:
+    if isinstance(value, str):
+        sys = _LIVE_SYSTEMS.get(value)
+        if sys is None:
+            raise ValueError("a NonlinearIOSystem plant can only be given from Python, in the process that runs it "
+                             "(netsim.run({..., 'plant': sys})); from YAML, use a registered plant model")
+        return sys
+    return value
+
+
+class NonlinearIOParams(StrictModel):
+    """A python-control ``NonlinearIOSystem`` given from Python (``netsim.run({..., "plant": sys})``)."""
+
+    system: Annotated[Any, BeforeValidator(_live_system), PlainSerializer(_system_token, return_type=str)] = Field(
+        description="the python-control NonlinearIOSystem (continuous)")
+    params: dict[str, Any] = Field(default_factory=dict, description="overrides of the system's own params")
+    method: str = Field("RK45", description="scipy solve_ivp method")
+    rtol: float = Field(1e-8, gt=0, description="solve_ivp relative tolerance")
+    atol: float = Field(1e-10, gt=0, description="solve_ivp absolute tolerance")
+
+    @field_validator("system")
+    @classmethod
+    def _nonlinear(cls, value: Any) -> Any:
+        if not (is_control_system(value) and callable(getattr(value, "updfcn", None))):
+            raise ValueError(f"expected a python-control NonlinearIOSystem, got {type(value).__name__}")
+        if getattr(value, "dt", 0) not in (0, None):
+            raise ValueError(f"the system is discrete (dt = {value.dt}); netsim integrates continuous "
+                             "NonlinearIOSystems (give a StateSpace with dt for a discrete linear plant)")
+        return value
+
+
+@register("plant", "nonlinear_io", "a python-control NonlinearIOSystem given from Python (updfcn, outfcn)")
+def nonlinear_io_plant(params: NonlinearIOParams) -> Any:
+    """A :class:`~netsim.plant.nonlinear.NonlinearPlant` running the system's ``updfcn(t, x, u, params)`` and
+    ``outfcn(t, x, u, params)`` (no ``outfcn``: the output is the state), with ``{**sys.params, **params}``."""
+    from netsim.plant.nonlinear import NonlinearPlant
+
+    sys = params.system
+    out = sys.outfcn
+    if out is None:
+        def out(t: float, x: Any, u: Any, p: Any) -> Any:  # python-control's convention: y = x
+            return x
+    return NonlinearPlant(
+        sys.updfcn, out, sys.nstates, sys.ninputs, sys.noutputs, params={**(sys.params or {}), **params.params},
+        input_names=_labels(sys.input_labels, "u"), output_names=_labels(sys.output_labels, "y"),
+        state_names=_labels(sys.state_labels, "x"), name=str(sys.name) if sys.name else "plant",
+        method=params.method, rtol=params.rtol, atol=params.atol)
+
+
+def _nl_ports(params: NonlinearIOParams) -> tuple[list[Any], list[Any]]:
+    sys = params.system
+    ins, outs = _labels(sys.input_labels, "u"), _labels(sys.output_labels, "y")
+    return (ins or list(range(sys.ninputs))), (outs or list(range(sys.noutputs)))
+
+
+nonlinear_io_plant.Params = NonlinearIOParams  # type: ignore[attr-defined]
+nonlinear_io_plant.ports = _nl_ports  # type: ignore[attr-defined]
+
+
 # --------------------------------------------------------------------------------------------- from Python
 def is_control_system(obj: Any) -> bool:
-    """True for a python-control ``StateSpace``, ``TransferFunction`` (without importing python-control)."""
+    """True for a python-control ``StateSpace``, ``TransferFunction`` or ``NonlinearIOSystem`` (without importing
+    python-control)."""
     module = type(obj).__module__ or ""
     return module.startswith("control.") and hasattr(obj, "ninputs") and hasattr(obj, "noutputs")
+
+
+def _is_nonlinear(obj: Any) -> bool:
+    return type(obj).__name__ == "NonlinearIOSystem"
 
 
 def _dt_text(dt: Any) -> str | None:
@@ -367,8 +462,12 @@ def resolve_plant_object(raw: Any) -> Any:
         return raw
     plant = raw.get("plant")
     if is_control_system(plant):
-        return {**raw, "plant": plant_spec_from_system(plant)}
+        plant = {"system": plant}
     if isinstance(plant, dict) and is_control_system(plant.get("system")):
+        sys = plant["system"]
         rest = {k: v for k, v in plant.items() if k != "system"}
-        return {**raw, "plant": {**plant_spec_from_system(plant["system"]), **rest}}
+        if _is_nonlinear(sys):
+            extra = rest.pop("params", None) or {}  # solver settings, params overrides
+            return {**raw, "plant": {"model": "nonlinear_io", "params": {**extra, "system": _system_token(sys)}, **rest}}
+        return {**raw, "plant": {**plant_spec_from_system(sys), **rest}}
     return raw

@@ -406,6 +406,9 @@ class _SeedWatchEnv(SimEnv):
 def build(scenario: Any) -> Simulation:
     """Create and connect every runtime object of ``scenario`` (a validated Scenario, a path or a dict).
 
+    In a dict, ``plant`` may be a python-control ``StateSpace``, ``TransferFunction`` or ``NonlinearIOSystem``
+    (or ``{system: <it>, x0: ...}``): see :func:`netsim.plant.described.resolve_plant_object`.
+
     Raises
     ------
     BuildError
@@ -416,9 +419,10 @@ def build(scenario: Any) -> Simulation:
     from netsim.scenario.schema import Scenario
 
     if not isinstance(scenario, Scenario):
+        from netsim.plant.described import resolve_plant_object
         from netsim.scenario.loader import load_scenario
 
-        scenario = load_scenario(scenario)
+        scenario = load_scenario(resolve_plant_object(scenario))  # a python-control system as the plant
     env = _SeedWatchEnv(seed=scenario.seed, record=_record_filter(scenario))
     signals = _make_signals(scenario)
     plant = _build_plant(scenario, env, signals)

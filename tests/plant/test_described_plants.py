@@ -87,3 +87,22 @@ def test_wrong_plant_dimensions_are_located_problems(plant: dict, path: str, wor
         load_scenario(_open_loop(plant))
     problems = [(p.path, p.message) for p in err.value.problems]
     assert any(p == path and words in m for p, m in problems), problems
+
+
+def test_a_nonlinear_io_system_from_python_runs_its_updfcn() -> None:
+    def updfcn(t, x, u, params):
+        return [x[1], -params["k"] * x[0] + u[0]]
+
+    def outfcn(t, x, u, params):
+        return [x[0]]
+
+    sys = control.nlsys(updfcn, outfcn, states=2, inputs=["u"], outputs=["y"], params={"k": 1.0}, name="osc")
+    raw = {"name": "nl", "duration": "2 s", "record": ["y"],
+           "plant": {"system": sys, "x0": [1.0, 0.0], "record_grid": "10 ms", "params": {"params": {"k": 4.0}}},
+           "nodes": {"c": {"tasks": [{"name": "t", "program": "idle", "period": "100 ms", "priority": 1}]}}}
+    result = netsim.run(raw)
+    t, y = _y(result)
+    # analytic: x'' = -4 x, x(0) = 1 -> y = cos(2 t) (k = 4 from the scenario overrides the system's k = 1)
+    assert t.size == 201
+    np.testing.assert_allclose(y, np.cos(2.0 * t), atol=1e-7)
+    assert type(build(raw).plant).__name__ == "NonlinearPlant"
