@@ -194,3 +194,51 @@ def test_mpc_scenario_keeps_its_active_input_limit_and_charges_the_solve_time() 
     expected = len(done) * (0.1e-3 + 0.3e-3) + 0.2e-3 * iterations
     assert done["cpu_time_s"].sum() == pytest.approx(expected, rel=1e-9)
     assert m["task.mpc.control.deadline_misses"] >= 1  # a long solve passes the 2 ms deadline
+
+
+def test_two_sensors_feed_one_estimator_selected_by_sender_and_tag() -> None:
+    from netsim.scenario.builder import build
+
+    sensor = {"program": "sensor", "period": "10 ms", "priority": 1}
+    raw = {
+        "name": "two_sensors",
+        "duration": "0.5 s",
+        "plant": {"type": "ss", "A": A_C.tolist(), "B": B_C.ravel().tolist(), "C": [[1, 0], [0, 1]],
+                  "inputs": ["u"], "outputs": ["theta", "omega"], "x0": [1.0, 0.0], "record_grid": "1 ms"},
+        "io": {"th": {"type": "adc", "output": "theta"}, "om": {"type": "adc", "output": "omega"},
+               "u": {"type": "dac", "input": "u"}},
+        "nodes": {
+            "s1": {"tasks": [{**sensor, "name": "a", "params": {"channels": ["th"], "network": "net",
+                                                                 "to": "controller", "tag": "y"}}]},
+            "s2": {"tasks": [{**sensor, "name": "b", "params": {"channels": ["om"], "network": "net",
+                                                                 "to": "controller", "tag": "y"}}]},
+            # a third node sends frames tagged 'y' to the controller every 1 ms: the sender filter leaves them
+            "noise": {"tasks": [{"name": "n", "program": "interference", "period": "1 ms", "priority": 1,
+                                 "params": {"network": "net", "to": "controller", "tag": "y"}}]},
+            "controller": {"tasks": [{
+                "name": "control", "program": "state_feedback", "period": "10 ms", "offset": "1 ms", "priority": 1,
+                "params": {"measurements": [{"network": "net", "sender": "s1", "tag": "y", "outputs": ["theta"]},
+                                            {"network": "net", "sender": "s2", "tag": "y", "outputs": ["omega"]}],
+                           "estimator": {"type": "none"}, "law": {"type": "lqr", "Q": [1, 0], "R": 0.1},
+                           "output_channel": "u", "record_estimate": "x_hat"}}]},
+        },
+        "networks": {"net": {"type": "ideal", "nodes": ["s1", "s2", "noise", "controller"]}},
+        "record": ["theta", "omega", "x_hat"],
+    }
+    sim = build(raw)
+    sim.run()
+    program = sim.programs["controller.control"]
+    assert program.metrics()["fused"] == program.metrics()["steps"] == 50
+    assert program.metrics()["partial"] == 0
+    left = sim.kernels["controller"].inbox("net")
+    assert len(left) > 400 and {m.sender for m in left} == {"noise", "s1", "s2"}  # the other frames stay ...
+    assert {m.sent_ns for m in left if m.sender != "noise"} == {500_000_000}  # ... and the sensors' last sample
+    result = netsim.run(raw)
+    s = result.signals
+    at = np.isin(np.round(s["time_s"].to_numpy() * 1e6), np.round((0.001 + H * np.arange(50)) * 1e6))
+    # the sensors sample at 10 k ms, the controller uses x_hat = y at 10 k + 1 ms: the input written at
+    # 10 (k - 1) + 1 ms moves the plant in between, so compare with the plant 1 ms earlier (the sample instants)
+    before = np.flatnonzero(at) - 1
+    np.testing.assert_array_equal(s["x_hat[0]"].to_numpy()[at], s["theta"].to_numpy()[before])
+    np.testing.assert_array_equal(s["x_hat[1]"].to_numpy()[at], s["omega"].to_numpy()[before])
+    assert np.abs(s["omega"].to_numpy()).max() > 1.0  # the loop moved the servo
