@@ -21,7 +21,7 @@ from netsim.errors import LivelockError, SimulationError
 from netsim.kernel.events import NORMAL, schedule_call
 from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
-from netsim.kernel.requests import Op, Request
+from netsim.kernel.requests import EXECUTE, Op, Request
 from netsim.kernel.states import BLOCKED, DONE
 from netsim.kernel.task import did_you_mean
 from netsim.network.message import Message
@@ -44,7 +44,7 @@ class _GaveUp:
 #: What an ``_op_`` method returns when the job no longer holds the CPU or starts a CPU segment.
 GAVE_UP = _GaveUp()
 
-_EXECUTE = Op.EXECUTE
+_EXECUTE = EXECUTE
 
 
 class Interpreter:
@@ -298,5 +298,5 @@ def _no_method(self: Interpreter, job: Job, req: Request, now: int) -> Any:  # p
     raise AssertionError(f"{req!r} is answered inline by Interpreter._advance")
 
 
-Interpreter._OPS = tuple(_no_method if op is _EXECUTE else getattr(Interpreter, f"_op_{op.name.lower()}")
+Interpreter._OPS = tuple(_no_method if op == _EXECUTE else getattr(Interpreter, f"_op_{op.name.lower()}")
                          for op in Op)
