@@ -79,6 +79,14 @@ def _problems(data: Any, node: dict, root: dict, path: str = "") -> list[str]:
             options = [_problems(data, alt, root, path) for alt in node[key]]
             return [] if any(not o for o in options) else min(options, key=len)
     out: list[str] = []
+    if "const" in node and data != node["const"]:
+        return [f"{path}: expected {node['const']!r}"]
+    for rule in node.get("allOf", []):  # if/then rules: a plugin's own parameters
+        rule = _resolve(rule, root)
+        if "if" in rule and not _problems(data, rule["if"], root, path):
+            out += _problems(data, rule["then"], root, path)
+        elif "if" not in rule:
+            out += _problems(data, rule, root, path)
     wanted = node.get("type")
     if wanted is not None:
         kinds = wanted if isinstance(wanted, list) else [wanted]
@@ -86,6 +94,9 @@ def _problems(data: Any, node: dict, root: dict, path: str = "") -> list[str]:
             return [f"{path}: expected {' or '.join(kinds)}, got {type(data).__name__}"]
     if isinstance(data, dict) and ("properties" in node or "patternProperties" in node):
         props, extra = node.get("properties", {}), node.get("additionalProperties", True)
+        if "allOf" in node:  # keys a rule's "then" lists are allowed too
+            extra = True if extra is False and any(k not in props for k in data) and _allowed_by_rules(
+                data, node, root) else extra
         patterns = node.get("patternProperties", {})
         for k, v in data.items():
             if k in props:
@@ -103,6 +114,14 @@ def _problems(data: Any, node: dict, root: dict, path: str = "") -> list[str]:
         for i, v in enumerate(data):
             out += _problems(v, node["items"], root, f"{path}[{i}]")
     return out
+
+
+def _allowed_by_rules(data: dict, node: dict, root: dict) -> bool:
+    names: set[str] = set()
+    for rule in node["allOf"]:
+        if "if" in rule and not _problems(data, rule["if"], root):
+            names |= set(rule["then"].get("properties", {}))
+    return all(k in node.get("properties", {}) or k in names for k in data)
 
 
 def test_schema_accepts_every_shipped_scenario_and_sweep_file(schema):
@@ -126,6 +145,21 @@ def test_schema_flags_a_misspelt_key_and_a_missing_one(schema):
     assert ".nodes.sensor.tasks[0].perid: not allowed" in problems
     data["duration"] = [2]  # the wrong type for a time
     assert any(p.startswith(".duration: expected") and p.endswith("got list") for p in _problems(data, schema, schema))
+
+
+def test_a_plugin_s_own_parameters_are_completed_and_checked(schema):
+    from netsim.scenario.loader import read_yaml
+
+    data = read_yaml(ROOT / "scenarios" / "dc_servo_can.yaml")[0]
+    assert _problems(data, schema, schema) == []
+    data["nodes"]["controller"]["tasks"][0]["params"]["Kp"] = 1.0  # the controller program's gain is K
+    data["networks"]["can"]["bitrate"] = [80]  # the CAN bus's bit rate: a number or text with its unit
+    problems = _problems(data, schema, schema)
+    assert ".nodes.controller.tasks[0].params.Kp: not allowed" in problems
+    assert any(p.startswith(".networks.can.bitrate: expected") for p in problems)
+    defs = schema["$defs"]
+    can_rule = next(r for r in defs["NetworkSpec"]["allOf"] if r["if"]["properties"]["type"]["const"] == "can")
+    assert "min_frame_bits" in can_rule["then"]["properties"]  # what an editor offers after 'type: can'
 
 
 def test_times_and_bit_rates_may_be_written_with_their_unit(schema):
