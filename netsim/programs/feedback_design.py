@@ -25,7 +25,7 @@ def _part(kind: str, name: Any) -> Any:
 def part_params(kind: str, name: Any) -> Any:
     try:
         obj = _part(kind, name)
-    except ConfigError:
+    except ConfigError:  # unknown type: the caller reports it at <field>.type
         return None
     if kind == "controller" and name == "pid":
         from netsim.control.pid import PIDParams
