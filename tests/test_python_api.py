@@ -100,3 +100,11 @@ def test_the_readme_shows_one_figure_of_each_kind():
     for name in ("responses", "schedule", "network", "surface"):
         assert f"](docs/figures/{name}.png)" in text
         assert (ROOT / "docs" / "figures" / f"{name}.png").stat().st_size > 5000
+
+
+def test_an_empty_result_still_plots_and_summarises():
+    from matplotlib.figure import Figure
+
+    empty = RunResult()
+    assert all(isinstance(f, Figure) for f in (empty.plot(), empty.plot_schedule(), empty.plot_network()))
+    assert empty._repr_html_() == "<div><b>run</b>: <span style='color:green'>ok</span><p>no metrics</p></div>"

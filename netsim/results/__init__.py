@@ -404,7 +404,8 @@ class RunResult:
             facts.append(f"folder {escape(info['folder'])}")
         rows = "".join(f"<tr><td>{escape(k)}</td><td>{escape(v)}</td></tr>" for k, v in info["control"] + info["timing"])
         table = f"<table>{rows}</table>" if rows else "<p>no metrics</p>"
-        return f"<div>{head} ({', '.join(facts)}){table}</div>"
+        said = f" ({', '.join(facts)})" if facts else ""
+        return f"<div>{head}{said}{table}</div>"
 
     def __repr__(self) -> str:
         return (f"RunResult({self.meta.get('scenario', '')!r}, status={self.status!r}, signals={len(self.signals)} "
