@@ -242,3 +242,18 @@ def test_two_sensors_feed_one_estimator_selected_by_sender_and_tag() -> None:
     np.testing.assert_array_equal(s["x_hat[0]"].to_numpy()[at], s["theta"].to_numpy()[before])
     np.testing.assert_array_equal(s["x_hat[1]"].to_numpy()[at], s["omega"].to_numpy()[before])
     assert np.abs(s["omega"].to_numpy()).max() > 1.0  # the loop moved the servo
+
+
+def test_a_lost_measurement_makes_a_prediction_only_step() -> None:
+    params = {"estimator": {"type": "kalman", "Q": [0.0, 0.01], "R": R_KF},
+              "law": {"type": "lqr", "Q": [1.0, 0.0], "R": R_LQR}}
+    raw = _servo(params, network={"type": "link", "loss_probability": 0.3}, duration="1 s", actuator_node=False)
+    result = netsim.run(raw)
+    m = result.metrics
+    msgs = result.messages
+    # the controller's 100 jobs (1 ms after each sample from 0 to 0.99 s) see the samples sent before 1 s
+    seen = msgs[msgs["sent_s"] < 0.995]
+    lost = int(seen["dropped"].sum())
+    assert len(seen) == 100 and 15 < lost < 45  # about 30 % lost (a binomial draw)
+    assert m["control.controller.control.prediction_only"] == lost
+    assert m["control.controller.control.fused"] == 100 - lost
