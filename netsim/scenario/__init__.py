@@ -8,17 +8,23 @@ Examples
 broken.yaml:12: nodes.controller.tasks[1].period: unknown unit 'usec'; did you mean 'us'?
 
 The runtime side (turning a scenario into kernels, networks and a plant) is in
-:mod:`netsim.scenario.builder`, which is not imported here.
+:mod:`netsim.scenario.builder`, imported only when :func:`build` is called.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
 
 from netsim.scenario.loader import check_scenario, dump_resolved, load_scenario, resolved_dict, scenario_hash
 from netsim.scenario.paths import format_path, get_path, parse_override, parse_path, set_path
 from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema import Scenario
 
+if TYPE_CHECKING:
+    from netsim.scenario.builder import Simulation
+
 __all__ = [
+    "build",
     "load_scenario",
     "check_scenario",
     "Scenario",
@@ -33,3 +39,34 @@ __all__ = [
     "format_path",
     "parse_override",
 ]
+
+
+def build(source: Any, *, allow_plugins: bool | None = None) -> "Simulation":
+    """A runnable simulation of ``source``: a :class:`Scenario`, a scenario file, or a dict.
+
+    A path or dict is loaded and validated first (:func:`load_scenario`); in a dict, ``plant`` may be a
+    python-control ``StateSpace``, ``TransferFunction`` or ``NonlinearIOSystem`` (or ``{system: <it>, x0: ...}``,
+    see :func:`netsim.plant.described.resolve_plant_object`).
+
+    Parameters
+    ----------
+    source
+        What to build.
+    allow_plugins
+        Whether the plugin files a scenario's ``plugins:`` names may run (default: the user's settings).
+
+    Raises
+    ------
+    ScenarioError
+        When ``source`` does not validate (every problem with its path).
+    BuildError
+        When a valid description cannot be turned into runtime objects.
+    """
+    from netsim.scenario import builder
+
+    if not isinstance(source, Scenario):
+        from netsim.plant.described import resolve_plant_object
+
+        source = load_scenario(resolve_plant_object(source), allow_plugins=allow_plugins)
+    return builder.build(source)
+

@@ -404,25 +404,23 @@ class _SeedWatchEnv(SimEnv):
 
 
 def build(scenario: Any) -> Simulation:
-    """Create and connect every runtime object of ``scenario`` (a validated Scenario, a path or a dict).
+    """Create and connect every runtime object of a validated :class:`~netsim.scenario.schema.Scenario`.
 
-    In a dict, ``plant`` may be a python-control ``StateSpace``, ``TransferFunction`` or ``NonlinearIOSystem``
-    (or ``{system: <it>, x0: ...}``): see :func:`netsim.plant.described.resolve_plant_object`.
+    To build from a file, a dict or a python-control system, use :func:`netsim.scenario.build`, which loads and
+    validates first (this module never loads: loading validates by building, so the two stay one-way).
 
     Raises
     ------
     BuildError
         When a valid description cannot be turned into runtime objects (the message names the YAML path).
-    ScenarioError
-        When ``scenario`` is a path or dict that does not validate.
+    TypeError
+        When ``scenario`` is not a Scenario.
     """
     from netsim.scenario.schema import Scenario
 
     if not isinstance(scenario, Scenario):
-        from netsim.plant.described import resolve_plant_object
-        from netsim.scenario.loader import load_scenario
-
-        scenario = load_scenario(resolve_plant_object(scenario))  # a python-control system as the plant
+        raise TypeError(f"builder.build takes a validated Scenario, not {type(scenario).__name__}; use "
+                        f"netsim.scenario.build(path_or_dict) or netsim.scenario.load_scenario first")
     env = _SeedWatchEnv(seed=scenario.seed, record=_record_filter(scenario))
     signals = _make_signals(scenario)
     plant = _build_plant(scenario, env, signals)

@@ -197,7 +197,7 @@ def test_mpc_scenario_keeps_its_active_input_limit_and_charges_the_solve_time() 
 
 
 def test_two_sensors_feed_one_estimator_selected_by_sender_and_tag() -> None:
-    from netsim.scenario.builder import build
+    from netsim.scenario import build
 
     sensor = {"program": "sensor", "period": "10 ms", "priority": 1}
     raw = {

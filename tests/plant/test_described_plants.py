@@ -10,7 +10,7 @@ import scipy.signal
 import netsim
 from netsim.plant.described import plant_spec_from_system
 from netsim.scenario import load_scenario
-from netsim.scenario.builder import build
+from netsim.scenario import build
 from netsim.scenario.problems import ScenarioError
 
 # a stable third-order plant with a zero: 1 (s + 2) / (s^3 + 3 s^2 + 2 s + 1) (Routh: 3 * 2 > 1, stable)

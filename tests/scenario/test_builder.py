@@ -114,3 +114,17 @@ def test_program_that_cannot_be_built_gives_build_error_with_yaml_path():
         build(Scenario.model_validate(sc))
     assert err.value.path == "nodes.c.tasks[0]"
     assert "h" in err.value.message
+
+
+def test_the_builder_takes_only_a_validated_scenario_and_names_the_loading_build():
+    # loading validates by building, so the builder never loads (no import circle, tests/test_house.py);
+    # netsim.scenario.build is the one that takes a file or a dict
+    from pathlib import Path
+
+    from netsim.scenario import build as build_from_source
+    from netsim.scenario.builder import build as build_scenario
+
+    with pytest.raises(TypeError, match="netsim.scenario.build"):
+        build_scenario({"name": "x"})
+    sim = build_from_source(str(Path(__file__).resolve().parents[2] / "scenarios" / "dc_servo_ideal.yaml"))
+    assert type(sim).__name__ == "Simulation"

@@ -30,7 +30,7 @@ def _raw(mode: str, duration: str, isr_load: bool = True) -> dict:
 
 def _simulate(raw: dict):
     from netsim.registry import load_plugins
-    from netsim.scenario.builder import build
+    from netsim.scenario import build
 
     load_plugins()
     sim = build(copy.deepcopy(raw))
