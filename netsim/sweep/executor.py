@@ -174,14 +174,14 @@ _DASK_LOGGERS = ("distributed", "tornado")
 @contextlib.contextmanager
 def _quiet_dask_logs() -> Iterator[None]:
     """Dask's own log lines (tracebacks of a closed connection, "reconnecting", "worker killed") are
-    silenced unless netsim logs at DEBUG (``-vv``): the sweep says in one line what happened.
+    silenced unless netsim logs at INFO or below (``-v``): the sweep says in one line what happened.
 
     Dask's logging configuration gives several child loggers their own level and handler
     (``distributed.client``, ``tornado.application`` ...), so each existing logger is set, not just the parents.
     """
     import distributed  # noqa: F401 - configures its loggers on import; they must exist to be quietened
 
-    if logging.getLogger("netsim").isEnabledFor(logging.DEBUG):
+    if logging.getLogger("netsim").isEnabledFor(logging.INFO):
         yield
         return
     names = [name for name in list(logging.root.manager.loggerDict)
