@@ -135,7 +135,7 @@ def parse_time(value: str | int | float, *, allow_negative: bool = False) -> int
             )
         if unit not in UNITS:
             hint = _suggest(unit)
-            tip = f"; did you mean '{hint}'?" if hint else " (units: ns, us, ms, s, min, h)"
+            tip = f"; did you mean '{hint}'?" if hint else "; use one of ns, us, ms, s, min, h"
             raise TimeParseError(f"unknown unit '{unit}'{tip}")
         scale = UNITS[unit]
         # decimal arithmetic: "1.0000005 s" is exactly 1000000500 ns, whatever its length

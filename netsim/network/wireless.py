@@ -113,7 +113,8 @@ class WirelessParams(NetworkParams):
             raise ValueError(f"positions: no position for {missing}; give each node [x, y] in metres")
         extra = [n for n in self.positions if n not in self.nodes]
         if extra:
-            raise ValueError(f"positions: {extra} not in the network's nodes {self.nodes}")
+            raise ValueError(f"positions: {extra} not in the network's nodes {self.nodes}; remove their positions "
+                             "or add them to nodes")
         return self
 
 

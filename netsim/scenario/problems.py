@@ -25,6 +25,11 @@ LONG_MESSAGE = 2000
 _LONG = re.compile(r"\S{%d,}" % (LONG_TOKEN + 1))
 
 
+def _one_line(text: str) -> str:
+    """``text`` with its line breaks (and the spaces around them) turned into single spaces."""
+    return " ".join(part.strip() for part in text.splitlines() if part.strip()) if "\n" in text or "\r" in text else text
+
+
 def shorten(text: str) -> str:
     """``text`` with every token over :data:`LONG_TOKEN` characters cut to its start and its length.
 
@@ -69,9 +74,10 @@ class Problem:
     supersedes: bool = False
 
     def __post_init__(self) -> None:
-        # every problem, whichever check made it, is short (shorten): no message can echo a file
+        # every problem, whichever check made it, is one short line (shorten): no message echoes a file, and a
+        # library's multi-line error text (scipy, slycot) does not spill onto lines without a path
         object.__setattr__(self, "path", shorten(self.path))
-        object.__setattr__(self, "message", shorten(self.message))
+        object.__setattr__(self, "message", shorten(_one_line(self.message)))
 
     @property
     def is_error(self) -> bool:
@@ -97,18 +103,41 @@ class Problem:
         return f"{where}{mark}{body}"
 
 
+_NON_FINITE = re.compile(r"\bnan\b|\binf\b|infinit", re.IGNORECASE)
+
+
+def _inside(path: str, container: str) -> bool:
+    """True when ``path`` lies strictly inside ``container`` (``plant.A[1][0]`` inside ``plant.A``)."""
+    if not container:
+        return bool(path)
+    return len(path) > len(container) and path.startswith(container) and path[len(container)] in ".["
+
+
 def sort_problems(problems: Iterable[Problem]) -> list[Problem]:
     """Problems without duplicates, ordered by file and line (problems without a line keep their order, last).
 
-    An error at the path of a problem with ``supersedes=True`` is dropped (see :class:`Problem`).
+    An error at the path of a problem with ``supersedes=True`` is dropped (see :class:`Problem`), and so is an
+    error about NaN or infinite values at a path that holds such a problem (``plant.A: A contains NaN or
+    infinite entries`` beside ``plant.A[1][0]: infinity is not a usable number; write ...``): it names the same
+    value less precisely.
     """
     problems = list(problems)
-    final = {(p.file, p.path) for p in problems if p.supersedes and p.is_error}
+    final = [(p.file, p.path) for p in problems if p.supersedes and p.is_error]
+    exact = set(final)
+
+    def superseded(p: Problem) -> bool:
+        if not p.is_error or p.supersedes:
+            return False
+        if (p.file, p.path) in exact:
+            return True
+        return _NON_FINITE.search(p.message) is not None and any(
+            f == p.file and _inside(q, p.path) for f, q in final)
+
     seen: set[tuple[str, str, str]] = set()
     unique: list[Problem] = []
     for p in problems:
         key = (p.path, p.message, p.severity)
-        if (p.file, p.path) in final and p.is_error and not p.supersedes:
+        if final and superseded(p):
             continue
         if key not in seen:
             seen.add(key)

@@ -220,3 +220,24 @@ def test_a_refused_number_is_the_only_message_at_its_path(base):
     raw["signals"]["r"]["value"] = math.nan
     problems = [p for p in check_scenario(raw) if p.path == "signals.r.value"]
     assert [p.message.split(";")[0] for p in problems] == ["NaN is not a usable number"]
+
+
+def test_a_container_s_complaint_about_the_same_non_finite_number_is_dropped():
+    """``plant.A: A contains NaN or infinite entries`` (the ss plant's own check, no fix) beside the limit's message
+    at ``plant.A[1][0]``: only the precise one stays; another problem of the container stays too."""
+    from netsim.scenario.problems import Problem, sort_problems
+
+    problems = [Problem("plant.A", "A contains NaN or infinite entries"), Problem("plant.A", "A must be square"),
+                Problem("plant.A[1][0]", "infinity is not a usable number; write a finite number", supersedes=True),
+                Problem("plant.AB", "AB contains NaN")]  # not inside plant.A
+    assert [p.path + ": " + p.message for p in sort_problems(problems)] == [
+        "plant.A: A must be square", "plant.A[1][0]: infinity is not a usable number; write a finite number",
+        "plant.AB: AB contains NaN"]
+
+
+def test_a_multi_line_library_message_becomes_one_line():
+    from netsim.scenario.problems import Problem
+
+    p = Problem("nodes.c.tasks[0].params.law.Q", "Q: no stabilising solution (\nThe computed dimension\n  of the "
+                "solution does not match); make Q weight every unstable mode")
+    assert "\n" not in str(p) and "( The computed dimension of the solution" in p.message
