@@ -1,8 +1,9 @@
 """Fuzz figures: run every generated case (or a sample) through validate and run; print the counts.
 
-Usage: ``python tests/fuzz/fuzz_figures.py [--every N] [--jobs J] [--json OUT]`` (from the repository root).
-Each worker process has a memory limit (a blow-up counts as a traceback: MemoryError) and every command a
-time limit (a hang).
+Usage: ``python tests/fuzz/fuzz_figures.py [--every N] [--jobs J] [--json OUT] [--validate-only] [--scenario S]``
+(from the repository root). Each worker process has a memory limit (a blow-up counts as a traceback: MemoryError)
+and every command a time limit (a hang). ``--json`` also lists every case with a defect, with the message or
+error behind it. ``--validate-only`` skips ``netsim run`` (quick: messages without a path or a fix only).
 """
 
 from __future__ import annotations
@@ -16,10 +17,11 @@ import resource
 import sys
 import tempfile
 from pathlib import Path
+from typing import Iterator
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
-from tests.fuzz.mutations import Figures, all_mutations, case_file_name, evaluate  # noqa: E402
+from tests.fuzz.mutations import Figures, Outcome, all_mutations, case_file_name, evaluate  # noqa: E402
 
 
 def _init() -> None:
@@ -27,10 +29,43 @@ def _init() -> None:
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 
 
-def _one(args: tuple[int, object, float]) -> tuple[int, object]:
-    i, m, seconds = args
+def _one(args: tuple[int, object, float, bool]) -> tuple[int, object]:
+    i, m, seconds, run = args
     with tempfile.TemporaryDirectory() as tmp:
-        return i, evaluate(m, Path(tmp), seconds=seconds)
+        return i, evaluate(m, Path(tmp), seconds=seconds, run=run)
+
+
+#: Cases per pool of worker processes: a fresh pool per chunk bounds what a worker accumulates. (Python 3.11's
+#: ``max_tasks_per_child`` left the executor waiting forever once its workers retired: twice here, 0 cases done.)
+CHUNK = 40
+
+
+def _outcomes(cases: list, a: argparse.Namespace) -> Iterator[tuple[int, Outcome]]:
+    """``(index, outcome)`` of every case, in completion order; a case whose worker died or never answered
+    (stuck outside Python, where the alarm of :func:`evaluate` cannot reach) is a traceback or a hang."""
+    commands = 3 if not a.validate_only else 1
+    for start in range(0, len(cases), CHUNK):
+        chunk = list(range(start, min(start + CHUNK, len(cases))))
+        # workers are not daemonic (a scenario's run may start processes of its own)
+        pool = cf.ProcessPoolExecutor(a.jobs, mp_context=mp.get_context("spawn"), initializer=_init)
+        late: set[cf.Future] = set()
+        try:
+            futures = {pool.submit(_one, (i, cases[i], a.seconds, not a.validate_only)): i for i in chunk}
+            # every case may use its full time limit per command, plus start-up
+            limit = (len(chunk) / a.jobs + 1) * (commands * a.seconds + 10)
+            finished, late = cf.wait(futures, timeout=limit)
+            for future in finished:
+                try:
+                    yield future.result()
+                except Exception as exc:  # noqa: BLE001 - a worker that died (BrokenProcessPool) is a defect
+                    yield futures[future], Outcome(traceback=f"worker died: {type(exc).__name__}: {exc}"[:300])
+            for future in late:
+                yield futures[future], Outcome(hang=f"no answer from the worker after {limit:.0f} s")
+        finally:
+            if late:
+                for proc in list(getattr(pool, "_processes", {}).values()):  # stuck: nothing else stops them
+                    proc.kill()
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def main() -> int:
@@ -39,25 +74,25 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--seconds", type=float, default=20.0)
     ap.add_argument("--json", default=None)
+    ap.add_argument("--validate-only", action="store_true", help="run only netsim validate on each case")
+    ap.add_argument("--scenario", action="append", default=None, help="only cases of this scenario file name")
     a = ap.parse_args()
     by_kind: dict[str, list] = {}
     for m in all_mutations():
-        by_kind.setdefault(m.kind, []).append(m)
+        if a.scenario is None or m.scenario in a.scenario:
+            by_kind.setdefault(m.kind, []).append(m)
     # every N-th case of each kind; kinds with few cases (names, duplicates, empties) are taken whole
     cases = [m for ms in by_kind.values() for m in (ms if len(ms) < 60 else ms[:: a.every])]
     figures = Figures()
     defects = []
-    # workers are not daemonic (a scenario's run may start processes of its own)
-    with cf.ProcessPoolExecutor(a.jobs, mp_context=mp.get_context("spawn"), initializer=_init,
-                                max_tasks_per_child=25) as pool:
-        futures = [pool.submit(_one, (i, m, a.seconds)) for i, m in enumerate(cases)]
-        for future in cf.as_completed(futures):
-            i, outcome = future.result()
-            m = cases[i]
-            bad = figures.add(m, outcome, case_file_name(m))
-            if bad:
-                defects.append({"scenario": m.scenario, "kind": m.kind, "path": m.path, "detail": m.detail,
-                                "defects": bad})
+    for done, (i, outcome) in enumerate(_outcomes(cases, a), 1):
+        m = cases[i]
+        if done % 50 == 0 or done == len(cases):
+            print(f"{done}/{len(cases)} cases", file=sys.stderr, flush=True)
+        bad = figures.add(m, outcome, case_file_name(m))
+        if bad:
+            defects.append({"scenario": m.scenario, "kind": m.kind, "path": m.path, "detail": m.detail,
+                            "defects": bad})
     d = dataclasses.asdict(figures)
     examples = d.pop("examples")
     print(json.dumps(d, indent=1))

@@ -132,6 +132,8 @@ def fmt(path: Path_) -> str:
 _TIME = re.compile(r"^\s*[-+]?[\d.]+(?:[eE][-+]?\d+)?\s*(ns|us|µs|ms|s|min|h)\s*$")
 _RATE = re.compile(r"^\s*[\d.eE+-]+\s*[kKMG]?(bit/s|bps|b/s)\s*$")
 _SKIP_TOP = ("description", "baseline")  # free text; overrides may hold anything
+#: Keys whose text values are labels a scenario makes up, not references to something declared.
+_LABEL_KEYS = ("tag", "record_as", "sensor_tag", "actuator_tag")
 
 
 def _numeric(v: Any) -> bool:
@@ -220,7 +222,10 @@ def mutations(path: Path) -> list[Mutation]:
         elif isinstance(value, str) and _RATE.match(value):
             add("unit", at, "unknown rate unit", True, _set(raw, at, "1 Mbyte/s"))
         elif isinstance(value, str) and value in names and at[-1] != "name":
-            add("reference", at, f"'{value}' -> ghost", True, _set(raw, at, "ghost_ref"))
+            # a message tag, a record_as name and a record entry only happen to equal a declared name: they are
+            # labels (record names are checked after the run, in meta.json), so 'ghost_ref' may be fine there
+            label = at[-1] in _LABEL_KEYS or at[0] == "record"
+            add("reference", at, f"'{value}' -> ghost", None if label else True, _set(raw, at, "ghost_ref"))
     for n, node in (raw.get("nodes") or {}).items():
         tasks = node.get("tasks") or []
         if tasks:
@@ -322,7 +327,7 @@ FIX_WORDS = ("add ", "remove", "write", "use ", "set ", "did you mean", "expecte
              "e.g.", "between", "at most", "at least", "rename", "needs", "only ", "one of", "change", "put ",
              "input should", "field required", "shorten", "lower", "raise", "choose", "send ", "attach",
              "not allowed", "extra inputs", "valid", "fix ", "replace", "refused", "make ", "define ",
-             "(known ")  # a list of the known names says what may be written
+             "(known ", "(known: ")  # a list of the known names says what may be written
 
 
 def message_has_path(line: str, file_name: str) -> bool:
@@ -367,11 +372,11 @@ class Figures:
         bad: list[str] = []
         if o.traceback:
             self.tracebacks += 1
-            bad.append("traceback")
+            bad.append(f"traceback: {o.traceback}")
             self.note("traceback", m, o.traceback)
         if o.hang:
             self.hangs += 1
-            bad.append("hang")
+            bad.append(f"hang: {o.hang}")
             self.note("hang", m, o.hang)
         if m.must_refuse and o.validate_exit == 0:
             self.exit0_on_bad_validate += 1
@@ -383,22 +388,30 @@ class Figures:
             self.note("exit0_run", m)
         if o.run_validate_exit is not None and o.run_exit is not None and (o.run_validate_exit == 0) != (o.run_exit == 0):
             self.disagree += 1
-            bad.append("run and validate disagree")
+            bad.append(f"run and validate disagree: validate={o.run_validate_exit} run={o.run_exit}: "
+                       f"{o.run_out.strip()[-300:]}")
             self.note("disagree", m, f"validate={o.run_validate_exit} run={o.run_exit}: {o.run_out.strip()[-200:]}")
         lines = o.error_lines() if o.validate_exit else []
         if any(not message_has_path(ln, file_name) for ln in lines) and m.path:
             self.no_path += 1
-            bad.append("message without a path")
-            self.note("no_path", m, next(ln for ln in lines if not message_has_path(ln, file_name))[:200])
+            line = next(ln for ln in lines if not message_has_path(ln, file_name))
+            bad.append(f"message without a path: {_after_file(line, file_name)[:300]}")
+            self.note("no_path", m, line[:200])
         if any(not message_has_fix(ln) for ln in lines):
             self.no_fix += 1
-            bad.append("message without a fix")
-            self.note("no_fix", m, next(ln for ln in lines if not message_has_fix(ln))[:200])
+            line = next(ln for ln in lines if not message_has_fix(ln))
+            bad.append(f"message without a fix: {_after_file(line, file_name)[:300]}")
+            self.note("no_fix", m, line[:200])
         if o.leaked_warnings:
             self.leaked_warnings += 1
-            bad.append("python warning shown")
+            bad.append(f"python warning shown: {o.leaked_warnings[0]}")
             self.note("warnings", m, o.leaked_warnings[0])
         return bad
+
+
+def _after_file(line: str, file_name: str) -> str:
+    """``line`` from the character after the case file's name (the temporary folder differs per case)."""
+    return line.split(f"{file_name}:", 1)[-1].strip()
 
 
 def case_file_name(m: Mutation) -> str:
