@@ -94,7 +94,6 @@ from netsim.units import Duration, StrictModel, Time
 __all__ = [
     "NAME_PATTERN",
     "TAG_MARK",
-    "BUILTIN_POLICIES",
     "EXEC_DISTS",
     "IO_TYPES",
     "SpecModel",
@@ -127,8 +126,6 @@ __all__ = [
 NAME_PATTERN = r"^[A-Za-z0-9_-]+$"
 #: Prefix of the internal tags of discriminated unions (dropped from error paths).
 TAG_MARK = "§"
-#: Scheduling policies every kernel knows; anything else must be a registered ``policy`` or ``module:Class``.
-BUILTIN_POLICIES = ("fp", "rm", "dm", "edf")
 EXEC_DISTS = ("constant", "uniform", "normal", "empirical")
 IO_TYPES = ("adc", "dac", "encoder")
 

@@ -56,7 +56,7 @@ from netsim.scenario.limits import NAME_MAX, LineOf, limit_problems
 from netsim.scenario.messages import problems_from_validation_error
 from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path
 from netsim.scenario.problems import WARNING, Problem, ScenarioError
-from netsim.scenario.schema import BUILTIN_POLICIES
+from netsim.kernel.policies import find_policy, is_builtin_policy
 from netsim.timebase import TimeParseError, format_time, parse_time
 
 __all__ = ["validate_params", "check_raw", "plugin_load_problems"]
@@ -339,16 +339,12 @@ class _Checker:
     def node(self, name: str, node: dict[str, Any]) -> None:
         base: list[PathPart] = ["nodes", name]
         policy = node.get("policy", "fp")
-        if isinstance(policy, str) and policy not in BUILTIN_POLICIES:
-            from netsim import registry
-
+        if isinstance(policy, str) and not is_builtin_policy(policy):
             try:
-                registry.lookup("policy", policy)
+                find_policy(policy)  # the one resolver the kernel uses (issue 15 C)
             except ConfigError as exc:
-                known = [*BUILTIN_POLICIES, *(e.name for e in registry.entries("policy"))]
-                msg = exc.message if ":" in policy else f"unknown policy '{policy}'{did_you_mean(policy, known, what='policies')}"
-                self.error([*base, "policy"], msg)
-            except Exception as exc:  # noqa: BLE001
+                self.error([*base, "policy"], exc.message)
+            except Exception as exc:  # noqa: BLE001 - a policy plugin that fails to load is a problem at its path
                 self.error([*base, "policy"], f"cannot load policy '{policy}': {type(exc).__name__}: {exc}")
         handlers = [h.get("name") for h in _l(node.get("handlers")) if isinstance(h, dict)]
         self.receivers: dict[str, str] = {}
@@ -415,7 +411,6 @@ class _Checker:
         """
         from netsim.errors import BuildError
         from netsim.kernel.building import task_spec
-        from netsim.kernel.policies import BUILTIN_POLICIES as KERNEL_POLICIES
 
         times: dict[str, int | None] = {}
         for key in ("period", "offset", "deadline", "wcet"):
@@ -434,8 +429,8 @@ class _Checker:
             spec = task_spec(node_name, name, period=times["period"], offset=times["offset"] or 0,
                              deadline=times["deadline"], priority=priority, wcet=times["wcet"],
                              wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"))
-            if isinstance(policy_name, str) and policy_name in KERNEL_POLICIES:
-                KERNEL_POLICIES[policy_name]().check(node_name, spec)
+            if is_builtin_policy(policy_name):
+                find_policy(policy_name)().check(node_name, spec)
         except BuildError as exc:
             field = getattr(exc, "field", None)
             prefix = f"node '{node_name}', task '{name}', field '{field}': "
