@@ -241,3 +241,14 @@ def test_a_multi_line_library_message_becomes_one_line():
     p = Problem("nodes.c.tasks[0].params.law.Q", "Q: no stabilising solution (\nThe computed dimension\n  of the "
                 "solution does not match); make Q weight every unstable mode")
     assert "\n" not in str(p) and "( The computed dimension of the solution" in p.message
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_a_non_finite_radio_position_is_refused(bad):
+    """Issue 14 B: NaN radio positions ran to 'ok' with every message delivered (NaN distances compare False)."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "dc_servo_zigbee.yaml"
+    problems = [p for p in check_scenario(path, {"networks.bus.positions.sensor": [bad, 0]}) if p.is_error]
+    assert [p.path for p in problems] == ["networks.bus.positions.sensor[0]"]
+    assert "write a finite number" in problems[0].message
