@@ -22,7 +22,8 @@ import numpy as np
 from models.pendulum.model import SENSOR_STD, TS, Linear, PendulumParams, discretise, observability_rank, process_noise_cov
 
 __all__ = ["POLES", "Q_LQR", "R_LQR", "FD_CUTOFF_HZ", "MPC_HORIZON", "Designs", "designs", "estimator_dynamics",
-           "hold_still_std", "ESTIMATORS"]
+           "hold_still_std", "ESTIMATORS", "kalman_entry", "linear_motion", "motion_errors",
+           "loop_gain", "delay_margin"]
 
 #: The slides' observer poles.
 POLES = (0.55 + 0.20j, 0.55 - 0.20j, 0.72, 0.82)
@@ -128,3 +129,98 @@ def hold_still_std(name: str, d: Designs, cutoff_hz: float = FD_CUTOFF_HZ) -> np
     F, G, H = estimator_dynamics(name, d, cutoff_hz)
     P = solve_discrete_lyapunov(F, G @ d.Rn @ G.T)
     return np.sqrt(np.diag(H @ P @ H.T))
+
+
+def linear_motion(d: Designs, n: int = 400, tilt: float = 0.05, amp: float = 0.5, freq: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """A noise-free trajectory of the discrete linear model in motion: LQR from ``alpha = tilt`` plus a sine
+    input of ``amp`` V at ``freq`` Hz; returns the states ``x[k]`` and inputs ``u[k]``."""
+    lin = d.lin
+    x = np.array([0.0, 0.0, tilt, 0.0])
+    xs, us = [], []
+    for k in range(n):
+        u = float(-(d.K_lqr @ x)[0] + amp * math.sin(2 * math.pi * freq * k * lin.h))
+        xs.append(x.copy())
+        us.append(u)
+        x = lin.Ad @ x + lin.Bd[:, 0] * u
+    return np.array(xs), np.array(us)
+
+
+def motion_errors(d: Designs, skip: int = 200) -> dict[str, np.ndarray]:
+    """RMS estimation error of ``[theta, theta_dot, alpha, alpha_dot]`` per Luenberger form on
+    :func:`linear_motion`, noise-free, after ``skip`` samples (the initial error has then decayed)."""
+    from models.pendulum.estimators import PrintedLuenberger
+    from netsim.control import LuenbergerObserver
+
+    lin = d.lin
+    xs, us = linear_motion(d)
+    out = {}
+    for name, obj in (("current", LuenbergerObserver(lin.Ad, lin.Bd, lin.C, POLES, form="current")),
+                      ("predictor", LuenbergerObserver(lin.Ad, lin.Bd, lin.C, POLES, form="predictor")),
+                      ("printed", PrintedLuenberger(lin.Ad, lin.Bd, lin.C, POLES))):
+        est = []
+        for x, u in zip(xs, us):
+            obj.correct(lin.C @ x)
+            est.append(np.array(obj.x_hat))
+            obj.predict([u])
+        e = xs - np.array(est)
+        out[name] = np.sqrt(np.mean(e[skip:] ** 2, axis=0))
+    out["motion_rms"] = np.sqrt(np.mean(xs[skip:] ** 2, axis=0))
+    return out
+
+
+def _estimator_fr(name: str, d: Designs, z: complex, cutoff_hz: float = FD_CUTOFF_HZ) -> tuple[np.ndarray, np.ndarray]:
+    """``(E_y, E_u)`` with ``X_hat(z) = E_y Y(z) + E_u U(z)`` for the estimator ``name`` at ``z``."""
+    A, B, C = d.lin.Ad, d.lin.Bd, d.lin.C
+    I = np.eye(4)
+    zi = 1.0 / z
+    if name in ("luenberger", "kalman"):
+        L = d.L_cur if name == "luenberger" else d.K_kal
+        F = (I - L @ C) @ A
+        Minv = np.linalg.inv(I - zi * F)
+        return Minv @ L, Minv @ (zi * (I - L @ C) @ B)
+    if name == "luenberger_printed":
+        Minv = np.linalg.inv(I - zi * (A - d.L_pred @ C))
+        return Minv @ d.L_pred, Minv @ (zi * B)
+    if name in ("fd_raw", "fd_lowpass"):
+        h = d.lin.h
+        a = 0.0 if name == "fd_raw" else math.exp(-h * 2.0 * math.pi * cutoff_hz)
+        D = (1.0 - a) / h * (1.0 - zi) / (1.0 - a * zi)
+        Ey = np.array([[1, 0], [D, 0], [0, 1], [0, D]], dtype=complex)
+        return Ey, np.zeros((4, 1), dtype=complex)
+    raise ValueError(f"unknown estimator {name!r}")
+
+
+def loop_gain(name: str, d: Designs, w: float) -> complex:
+    """Loop gain at the plant input, ``L = (1 + K E_u)^-1 K E_y P`` (``u = -K x_hat``), at ``w`` rad/s."""
+    z = complex(math.cos(w * d.lin.h), math.sin(w * d.lin.h))
+    P = d.lin.C @ np.linalg.solve(z * np.eye(4) - d.lin.Ad, d.lin.Bd)
+    Ey, Eu = _estimator_fr(name, d, z)
+    K = d.K_lqr
+    return complex((np.linalg.inv(np.eye(1) + K @ Eu) @ K @ Ey @ P)[0, 0])
+
+
+def delay_margin(name: str, d: Designs, n: int = 20000) -> dict[str, float]:
+    """Delay margin of the LQR loop with estimator ``name`` predicted from the linear model.
+
+    At each gain crossover ``|L(e^{j w h})| = 1`` (found on a log grid of ``n`` frequencies up to Nyquist, then
+    refined by bisection) the phase margin ``pm`` is ``angle(L) + pi`` (mod ``2 pi``); an extra input delay
+    ``tau`` adds the phase lag ``w tau``, so the loop is lost at ``tau = min pm / w``. Returns the crossover
+    frequency ``wc`` (rad/s), ``pm_deg`` and ``margin_s`` of the binding crossover.
+    """
+    h = d.lin.h
+    ws = np.logspace(-2, math.log10(math.pi / h * 0.9999), n)
+    mag = np.array([abs(loop_gain(name, d, w)) for w in ws]) - 1.0
+    best = {"wc": math.nan, "pm_deg": math.nan, "margin_s": math.inf}
+    for i in np.where(np.sign(mag[:-1]) != np.sign(mag[1:]))[0]:
+        lo, hi = ws[i], ws[i + 1]
+        for _ in range(60):
+            mid = math.sqrt(lo * hi)
+            if np.sign(abs(loop_gain(name, d, mid)) - 1.0) == np.sign(mag[i]):
+                lo = mid
+            else:
+                hi = mid
+        wc = math.sqrt(lo * hi)
+        pm = (math.atan2(loop_gain(name, d, wc).imag, loop_gain(name, d, wc).real) + math.pi) % (2 * math.pi)
+        if pm / wc < best["margin_s"]:
+            best = {"wc": wc, "pm_deg": math.degrees(pm), "margin_s": pm / wc}
+    return best
