@@ -4,6 +4,8 @@
   release-jitter terms) and the EDF processor-demand test.
 - :mod:`netsim.analysis.can`: worst-case response times of CAN messages (non-preemptive fixed priority,
   blocking by one lower-priority frame).
+- :mod:`netsim.analysis.lqg`: the expected quadratic cost of a sampled LTI loop under random input-output delay
+  and sampling jitter (Jitterbug-style covariance computation; imported on its own, it needs scipy).
 """
 
 from netsim.analysis.can import CanMessage, CanResponse, can_analysis, can_response_times
