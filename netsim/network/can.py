@@ -5,6 +5,13 @@ with the lowest priority number wins (equal priorities: the one queued first, th
 once started, is never preempted. The next arbitration happens when the bus goes idle again, among the
 frames queued by then (including those queued in that very instant).
 
+The winner is the least ``(priority, order)`` among the heads of the sender queues (``order`` is unique, so
+there are no ties). The bus keeps the heads in one heap of candidates instead of visiting every node at each
+arbitration: a frame enters it when it becomes the head of its queue (queued into an empty queue, or ahead of
+the head of a priority queue, or left at the head when the winner is taken); an entry whose frame is no
+longer a head is dropped when it comes to the top. So an arbitration costs O(log n) whatever the number of
+nodes, not O(nodes) (CAN at 50 nodes ran at half the messages per second of 10 nodes).
+
 Frame sizes:
 
 ``frame_format: raw`` (default, TrueTime)
@@ -18,6 +25,7 @@ Frame sizes:
 
 from __future__ import annotations
 
+from heapq import heappop, heappush
 from typing import Literal
 
 from pydantic import model_validator
@@ -74,7 +82,8 @@ class CanBus(Network):
         self._meter = self.meters["bus"] = BusyMeter(self.params.utilization_bin)
         self._busy = False
         self._arb_pending = False
-        self._heads = [self.queues[n] for n in self.nodes]
+        self._cands: list[tuple[int, int, str]] = []  # (priority, order, sender): heads of queues, maybe stale
+        self._queued = 0  # frames waiting in all sender queues
 
     def wire_bits(self, msg: Message) -> int:
         p = self.params
@@ -89,7 +98,11 @@ class CanBus(Network):
         return max(can_frame_bits(msg.bits, p.frame_format, p.bit_stuffing), p.min_frame_bits)
 
     def _offer(self, frame: Frame) -> None:
-        if self._push(self.queues[frame.sender], frame):
+        q = self.queues[frame.sender]
+        if self._push(q, frame):
+            self._queued += 1
+            if q.peek() is frame:  # the new head of its queue: a candidate
+                heappush(self._cands, (frame.priority, frame.order, frame.sender))
             self._request_arbitration()
 
     def _request_arbitration(self) -> None:
@@ -101,17 +114,25 @@ class CanBus(Network):
         self._arb_pending = False
         if self._busy:
             return
-        best = None
-        best_q = None
-        for q in self._heads:
-            if len(q):
-                f = q.peek()
-                if best is None or (f.priority, f.order) < (best.priority, best.order):
-                    best, best_q = f, q
-        if best is None or best_q is None:
+        cands = self._cands
+        queues = self.queues
+        while cands:
+            _, order, sender = cands[0]
+            q = queues[sender]
+            if q._len:
+                best = q.peek()
+                if best.order == order:  # orders are unique: this entry is the head of its queue
+                    break
+            heappop(cands)  # no longer the head of its queue (sent, or overtaken in a priority queue)
+        else:
             return
+        heappop(cands)
         now = self.sim.now
-        best_q.pop(now)
+        q.pop(now)
+        self._queued -= 1
+        if q._len:
+            head = q.peek()
+            heappush(cands, (head.priority, head.order, head.sender))
         self._busy = True
         best.tx_start_ns = now
         self._meter.start(now)
@@ -123,7 +144,5 @@ class CanBus(Network):
         self._busy = False
         start = frame.tx_start_ns
         self._transmitted(frame, now if start is None else start, now)
-        for q in self._heads:
-            if len(q):
-                self._request_arbitration()
-                break
+        if self._queued:
+            self._request_arbitration()

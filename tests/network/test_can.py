@@ -33,6 +33,43 @@ def test_frame_queued_when_the_bus_goes_idle_takes_part_in_arbitration(bench):
     assert [t for _, t in b.deliveries("c")] == ["first", "urgent", "waiting"]
 
 
+def test_frame_overtaken_in_its_priority_queue_still_competes_when_it_is_the_head_again(bench):
+    # a's p5 takes the idle bus at 0; while it is sent, a queues p7 then p1 (p1 overtakes p7 in a's priority
+    # queue) and b queues p4. The bus then sends the least priority among the queue heads each time:
+    # a:p1 (heads a:p1, b:p4), then b:p4 (heads a:p7, b:p4), then a:p7
+    b = bench("can", {"nodes": ["a", "b", "c"], "bitrate": RATE})
+    b.send_at(0, "a", "c", 100, priority=5, tag="p5")
+    b.send_at(1, "a", "c", 100, priority=7, tag="p7")
+    b.send_at(2, "a", "c", 100, priority=1, tag="p1")
+    b.send_at(3, "b", "c", 100, priority=4, tag="p4")
+    b.run(10 * MS)
+    assert b.deliveries("c") == [(1 * MS, "p5"), (2 * MS, "p1"), (3 * MS, "p4"), (4 * MS, "p7")]
+
+
+def test_fifo_sender_queue_offers_its_oldest_frame_to_arbitration(bench):
+    # with FIFO sender queues a node offers its oldest frame, not its most urgent: a's p0 waits behind a's p5,
+    # so b's p3 goes before both (heads a:p5, b:p3), then a:p5, then a:p0
+    b = bench("can", {"nodes": ["a", "b", "c"], "bitrate": RATE, "queue_discipline": "fifo"})
+    b.send_at(0, "c", "a", 100, priority=9, tag="busy")  # holds the bus while the others queue
+    b.send_at(1, "a", "c", 100, priority=5, tag="a5")
+    b.send_at(2, "a", "c", 100, priority=0, tag="a0")
+    b.send_at(3, "b", "c", 100, priority=3, tag="b3")
+    b.run(10 * MS)
+    assert b.deliveries("c") == [(2 * MS, "b3"), (3 * MS, "a5"), (4 * MS, "a0")]
+
+
+def test_fifty_nodes_sending_together_go_in_priority_order(bench):
+    # 50 nodes each queue two frames at the same instant, priorities a permutation of 0..99: the bus sends
+    # them in priority order (arbitration among the heads of 50 queues, each head replaced when it is sent)
+    nodes = [f"n{i}" for i in range(50)] + ["sink"]
+    b = bench("can", {"nodes": nodes, "bitrate": RATE})
+    prios = [(37 * k) % 100 for k in range(100)]  # 37 is coprime with 100: a permutation
+    for k, p in enumerate(prios):
+        b.send_at(0, nodes[k % 50], "sink", 100, priority=p, tag=f"p{p}")
+    b.run(200 * MS)
+    assert b.deliveries("sink") == [((p + 1) * MS, f"p{p}") for p in range(100)]
+
+
 def test_standard_frame_with_worst_case_stuffing(bench):
     # 8 data bytes, 11-bit identifier: 47 + 64 = 111 bits + floor((34 + 64 - 1) / 4) = 24 stuff bits = 135
     b = bench("can", {"nodes": ["a", "b"], "bitrate": RATE, "frame_format": "standard", "bit_stuffing": True})
