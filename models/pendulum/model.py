@@ -45,8 +45,12 @@ Other choices of the study (the same in every scenario; stated again in the YAML
   PWM ripple, friction the model lacks); Qn of the Kalman filter is that noise mapped through the discrete
   model (:func:`process_noise_cov`).
 * Weights: LQR ``Q = diag(5, 0, 20, 0)``, ``R = 1`` (angles in rad, voltage in V), the MPC the same with
-  horizon 20 (100 ms) and ``|u| <= 3 V``; the initial tilt of 0.1 rad makes the unconstrained LQR ask for more
-  than 3 V at the start, so the limit is active in the transient.
+  horizon 20 (100 ms) and ``|u| <= 3 V`` (also the DAC's limit, so the LQR is clipped there); the initial tilt
+  of 0.2 rad, with every estimator starting from zero, makes the loop ask for more than 3 V in the first
+  samples, so the limit is active in the transient.
+* Estimators start from a zero estimate (the slides' firmware: the pendulum is held near upright when the
+  program starts); the finite differences start from the first measurement.
+* Execution time of the control task 0.5 ms (u written 0.5 ms after the sample; the design ignores it).
 """
 
 from __future__ import annotations
