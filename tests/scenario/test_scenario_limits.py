@@ -252,3 +252,14 @@ def test_a_non_finite_radio_position_is_refused(bad):
     problems = [p for p in check_scenario(path, {"networks.bus.positions.sensor": [bad, 0]}) if p.is_error]
     assert [p.path for p in problems] == ["networks.bus.positions.sensor[0]"]
     assert "write a finite number" in problems[0].message
+
+
+def test_a_task_without_period_and_release_warns_that_nothing_releases_it(base):
+    """Deleting the period of a task that had no 'release:' left an aperiodic task no netsim program ever releases
+    (issue 14 B: a deleted required key that validate accepted without a word)."""
+    raw = base()
+    del raw["nodes"]["sensor"]["tasks"][0]["period"]
+    assert _errors(raw) == {}
+    assert "add e.g. 'period: 10 ms'" in _warnings(raw)["nodes.sensor.tasks[0]"]
+    raw["nodes"]["sensor"]["tasks"][0]["release"] = "aperiodic"  # said on purpose: no warning
+    assert "nodes.sensor.tasks[0]" not in _warnings(raw)
