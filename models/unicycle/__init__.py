@@ -10,6 +10,6 @@ loop of the same filter and law, for Monte-Carlo studies and the benchmark) and 
 
 from __future__ import annotations
 
-from models.unicycle import design, model, plant, programs
+from models.unicycle import design, metrics, model, plant, programs
 
-__all__ = ["design", "model", "plant", "programs"]
+__all__ = ["design", "metrics", "model", "plant", "programs"]

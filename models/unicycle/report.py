@@ -1,0 +1,182 @@
+"""The 2WD cart reproduction report (registered as kind ``report``, name ``unicycle``): ``netsim report unicycle``.
+
+Writes ``reports/unicycle/README.md`` (one section per experiment: what the report claims, what we measured,
+why it differs), ``table.csv`` (``experiment, setting, quantity, ours, source, reason``) and figures. Every
+number in the README is computed here from runs: the numpy loop for the Monte-Carlo studies with hundreds of
+runs per setting (:mod:`models.unicycle.studies`), netsim scenarios and sweeps (``replicates``) for everything
+with sensors, estimator and drive on their own nodes (sweep folders under ``reports/unicycle/runs/``; a second
+call resumes them).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from models.unicycle import studies as S
+from models.unicycle.design import PHASES
+from netsim.registry import register
+
+__all__ = ["unicycle_report"]
+
+_ROOT = Path(__file__).resolve().parents[2]
+_SCEN = _ROOT / "scenarios"
+
+
+def _f(x: float, nd: int = 3) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "n/a"
+    if x == 0:
+        return "0"
+    return f"{x:.{nd}g}"
+
+
+class _Table:
+    def __init__(self) -> None:
+        self.rows: list[dict[str, Any]] = []
+
+    def add(self, experiment: str, setting: str, quantity: str, ours: Any, source: str = "", reason: str = "") -> Any:
+        self.rows.append({"experiment": experiment, "setting": setting, "quantity": quantity,
+                          "ours": ours if isinstance(ours, str) else _f(float(ours), 4), "source": source,
+                          "reason": reason})
+        return ours
+
+    def frame(self) -> pd.DataFrame:
+        return pd.DataFrame(self.rows, columns=["experiment", "setting", "quantity", "ours", "source", "reason"])
+
+
+def _sweep(name: str, out: Path, workers: int | None) -> pd.DataFrame:
+    import netsim
+
+    res = netsim.sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers, progress=False)
+    df = res.summary
+    return df[df["status"] == "ok"].copy()
+
+
+def _plots(out: Path, base: Any, qr: dict[str, list[dict]], t: np.ndarray) -> None:
+    import matplotlib.pyplot as plt
+
+    sig = base.to_pandas()
+    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    for j, (s, unit) in enumerate((("x", "m"), ("y", "m"), ("theta", "rad"))):
+        tt = sig.index.to_numpy()
+        m, sd = sig[f"xhat[{j}]"].to_numpy(), sig[f"sd[{j}]"].to_numpy()
+        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C0", alpha=0.25, label="95 % band")
+        ax[j].plot(tt, m, "C0", label="estimate")
+        ax[j].plot(tt, sig[s].to_numpy(), "k--", lw=1, label="truth")
+        ax[j].axvspan(4, 6, color="0.9")
+        ax[j].set_ylabel(f"{s} [{unit}]")
+    ax[0].legend(loc="best", fontsize=8)
+    ax[-1].set_xlabel("time [s] (grey: both sensors off)")
+    fig.tight_layout()
+    fig.savefig(out / "fig2_bands.png", dpi=90)
+    plt.close(fig)
+    fig, ax = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
+    for j, name in enumerate(("front", "side")):
+        tt = sig.index.to_numpy()
+        m, sd = sig[f"zhat[{j}]"].to_numpy(), sig[f"zsd[{j}]"].to_numpy()
+        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C1", alpha=0.25, label="95 % band of z")
+        ax[j].plot(tt, m, "C1", label="predicted reading")
+        ax[j].plot(tt, sig["z_front" if j == 0 else "z_side"].to_numpy(), "k--", lw=1, label="noiseless reading")
+        ax[j].set_ylabel(f"z {name} [m]")
+    ax[0].legend(fontsize=8)
+    ax[-1].set_xlabel("time [s]")
+    fig.tight_layout()
+    fig.savefig(out / "fig3_measurements.png", dpi=90)
+    plt.close(fig)
+    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    for name, runs in qr.items():
+        E = np.stack([r["e"] for r in runs]).astype(float)
+        for j, s in enumerate(("x", "y", "theta")):
+            ax[j].plot(t, np.sqrt(np.mean(E[:, :, j] ** 2, axis=0)), label=name)
+            ax[j].set_ylabel(f"RMS error {s}")
+    ax[0].legend(fontsize=8)
+    ax[-1].set_xlabel(f"time [s] ({len(next(iter(qr.values())))} runs per setting)")
+    fig.tight_layout()
+    fig.savefig(out / "fig1_qr_rms.png", dpi=90)
+    plt.close(fig)
+    fig, ax = plt.subplots(1, 1, figsize=(8, 3.5))
+    ax.semilogy(sig.index.to_numpy(), sig["detP"].to_numpy())
+    ax.axvspan(4, 6, color="0.9")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("det P")
+    fig.tight_layout()
+    fig.savefig(out / "detP.png", dpi=90)
+    plt.close(fig)
+
+
+@register("report", "unicycle", "2WD cart (seed 001): EKF bands and coverage, blackout, Q/R study, LQR, network")
+def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: int = 200, replicates_note: str = "",
+                    workers: int | None = None, sweeps: bool = True, progress: Any = None) -> dict[str, pd.DataFrame]:
+    """Run the studies and write ``reports/unicycle`` (or ``out_dir``); returns ``{"table": ...}``.
+
+    Parameters
+    ----------
+    out_dir
+        Output folder (default ``reports/unicycle``).
+    plots
+        Write the figures.
+    runs
+        Monte-Carlo runs per (Q, R) setting of the numpy loop (default 200).
+    workers
+        Processes for the Monte-Carlo runs and the sweeps (default: up to 4, one per CPU).
+    sweeps
+        Also run (or resume) the netsim sweeps ``unicycle_net_sweep`` and ``unicycle_lqr_delay``.
+    """
+    import netsim
+
+    t0 = time.perf_counter()
+    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
+    out.mkdir(parents=True, exist_ok=True)
+    T = _Table()
+    from models.unicycle.readme import write_readme
+
+    facts: dict[str, Any] = {"runs": runs}
+    # ---------------------------------------------------------------- model and design facts
+    facts["lqr"] = S.lqr_facts()
+    facts["obs"] = {"straight": S.observability(PHASES[0], 0.0), "front": S.observability(PHASES[2], math.pi / 2)}
+    facts["lqr_nf"] = S.lqr_noise_free("lqr")
+    facts["lqr_ff_nf"] = S.lqr_noise_free("lqr_ff")
+    facts["printed_lqr"] = S.printed_lqr_study()
+    facts["delay_margin"] = {v: S.delay_margin(v) for v in (0.03, 0.02, 0.015)}
+    # ---------------------------------------------------------------- netsim runs of the two scenarios
+    base = netsim.run(_SCEN / "unicycle_ekf.yaml")
+    lqr = netsim.run(_SCEN / "unicycle_lqr.yaml")
+    facts["base"], facts["lqr_run"] = base.metrics, lqr.metrics
+    # ---------------------------------------------------------------- Monte-Carlo (numpy loop)
+    t = np.arange(int(round(10 / 0.01)) + 1) * 0.01
+    qr_runs: dict[str, list[dict]] = {}
+    facts["qr"] = {}
+    for name, (fq, fr) in S.QR_SETTINGS.items():
+        from models.unicycle.model import Q_REPORT, R_REPORT
+
+        rs = S.mc_runs(runs, seed0=10_000, workers=workers, Q_filter=fq * Q_REPORT, R_filter=fr * R_REPORT)
+        qr_runs[name] = rs
+        facts["qr"][name] = S.qr_study(rs, t)
+        facts["qr"][name]["blackout_monotone"] = float(np.mean([r["m"]["detP_monotone_turn"] for r in rs]))
+        facts["qr"][name]["detP_ratio"] = float(np.median([r["m"]["detP_ratio_turn"] for r in rs]))
+        for s in ("x", "y", "theta"):
+            for p in ("straight", "turn", "front"):
+                facts["qr"][name][f"sd_{s}_end_{p}"] = float(np.mean([r["m"][f"sd_{s}_end_{p}"] for r in rs]))
+                facts["qr"][name][f"cover_{s}_{p}"] = float(np.mean([r["m"][f"cover_{s}_{p}"] for r in rs]))
+    # measurement-prediction band coverage of the actual (noisy) readings, baseline
+    zc = []
+    for r in qr_runs["(Q, R)"]:
+        ok = ~np.isnan(r["z"])
+        zc.append(np.abs(r["z"][ok] - r["zhat"][ok]) <= 1.96 * r["zsd"][ok])
+    facts["zcover"] = float(np.mean(np.concatenate(zc)))
+    facts["printed_side"] = S.printed_side_study(min(runs, 100), workers)
+    # ---------------------------------------------------------------- netsim sweeps
+    facts["net"] = _sweep("unicycle_net_sweep", out, workers) if sweeps else None
+    facts["delay"] = _sweep("unicycle_lqr_delay", out, workers) if sweeps else None
+    if plots:
+        _plots(out, base, qr_runs, t)
+    facts["wall_s"] = time.perf_counter() - t0
+    text = write_readme(out, T, facts)
+    T.frame().to_csv(out / "table.csv", index=False)
+    return {"table": T.frame(), "readme": pd.DataFrame({"text": [text]})}
