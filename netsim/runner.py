@@ -51,13 +51,17 @@ import pandas as pd  # noqa: E402
 
 from netsim.errors import DivergenceError  # noqa: E402
 from netsim.results import (  # noqa: E402
+    JOB_SUMMARY_COLUMNS,
+    MESSAGE_SUMMARY_COLUMNS,
     RunResult,
     check_out_dir,
     jobs_table,
     messages_table,
     schedule_table,
     signals_table,
+    summary_table,
 )
+from netsim.results.traces import JobSummary, MessageSummary, attach_traces, trace_problems  # noqa: E402
 from netsim.timebase import S  # noqa: E402
 
 __all__ = [
@@ -141,17 +145,27 @@ def _collect(sim: Any, t_end_ns: int) -> RunResult:
     """The tables of a (finished or aborted) simulation."""
     rec = sim.env.recorder
     signals = signals_table(rec.times, rec.values, order=sim.scenario.record)
-    job_frames = [jobs_table(k.job_records, name) for name, k in sim.kernels.items()]
+    output = sim.scenario.output
+    job_rows = [row for k in sim.kernels.values() if isinstance(k.job_records, JobSummary)
+                for row in k.job_records.rows()]
+    msg_rows = [row for n in sim.networks.values() if isinstance(n.records, MessageSummary) for row in n.records.rows()]
+    job_frames = [jobs_table(k.job_records, name) for name, k in sim.kernels.items()
+                  if not isinstance(k.job_records, JobSummary)]
     jobs = pd.concat(job_frames, ignore_index=True) if job_frames else jobs_table([])
     if not jobs.empty:
         jobs = jobs.sort_values(["release_s", "node", "task", "job_id"], kind="stable").reset_index(drop=True)
-    msg_frames = [messages_table(net.records) for net in sim.networks.values()]
+    msg_frames = [messages_table(net.records) for net in sim.networks.values()
+                  if not isinstance(net.records, MessageSummary)]
     messages = pd.concat(msg_frames, ignore_index=True) if msg_frames else messages_table([])
     if not messages.empty:
         messages = messages.sort_values(["msg_id", "network", "receiver"], kind="stable").reset_index(drop=True)
     sched_frames = [schedule_table(name, getattr(k, "schedule", [])) for name, k in sim.kernels.items()]
     schedule = pd.concat(sched_frames, ignore_index=True) if sched_frames else schedule_table("", [])
-    return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule)
+    traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
+    return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
+                     job_summary=summary_table(job_rows, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
+                     message_summary=summary_table(msg_rows, MESSAGE_SUMMARY_COLUMNS)
+                     if output.messages == "summary" else None)
 
 
 def _event_count(env: Any) -> int | None:
@@ -172,6 +186,7 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
 
     t0 = time.perf_counter()
     sim = build(scenario)
+    attach_traces(sim, scenario.output)  # jobs / messages: full | summary | off, schedule: on | off (issue 19)
     failure: BaseException | None = None
     status, error = "ok", ""
     try:
@@ -334,6 +349,11 @@ def run(
 
         source = resolve_plant_object(dict(source))
     scenario = load_scenario(source, overrides=ov or None, allow_plugins=allow_plugins)
+    needs = trace_problems(scenario)
+    if needs:
+        from netsim.errors import ConfigError
+
+        raise ConfigError(f"{scenario.name}: " + "; ".join(needs))
     digest = scenario_hash(scenario)
     folder: Path | None = None
     if write:
@@ -362,7 +382,10 @@ def run(
     if failure is None:
         from netsim.run_warnings import load_warnings
 
-        extra = load_warnings(result.metrics.to_dict(), result.jobs, scenario.nodes, scenario.networks or {})
+        mode = result.traces.get("jobs", "full")  # 'never ran' is known from the rows or the summary, not when off
+        ran = result.jobs if mode == "full" else result.job_summary
+        extra = load_warnings(result.metrics.to_dict(), ran, scenario.nodes if mode != "off" else {},
+                              scenario.networks or {})
         for text in extra:
             log.warning("%s: %s", scenario.name, text)
         result.meta["warnings"] = list(result.meta.get("warnings") or []) + extra
@@ -435,7 +458,8 @@ def _shared(result: RunResult) -> RunResult:
     return RunResult(signals=result.signals.copy(deep=False), jobs=result.jobs.copy(deep=False),
                      messages=result.messages.copy(deep=False), metrics=result.metrics.copy(deep=False),
                      meta=dict(result.meta), scenario=result.scenario,
-                     schedule=result.schedule.copy(deep=False))
+                     schedule=result.schedule.copy(deep=False), traces=dict(result.traces),
+                     job_summary=result.job_summary, message_summary=result.message_summary)
 
 
 def _baseline(base_sc: Any) -> RunResult:

@@ -86,9 +86,18 @@ def isep(y_ets, y_tts) -> float:
 
 
 def sampling_efficiency(isep_value: float, ise_value: float) -> float:
-    """Eq (25): ``NE = ISEP / ISE``."""
+    """Eq (25): ``NE = ISEP / ISE``; 0 when both are 0 (the ETS output equals a TTS output that tracks exactly).
+
+    Raises
+    ------
+    ConfigError
+        When ISE is 0 and ISEP is not: the ratio has no value (never a division by zero or an inf).
+    """
     if ise_value <= 0:
-        raise ConfigError("NE = ISEP/ISE is undefined when ISE is 0 (the TTS run tracks perfectly)")
+        if isep_value == 0:
+            return 0.0
+        raise ConfigError("NE = ISEP/ISE is undefined when ISE is 0 and ISEP is not (the TTS run tracks its "
+                          "reference exactly); use a reference the time-triggered loop does not track exactly")
     return float(isep_value) / float(ise_value)
 
 
@@ -244,13 +253,22 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
     else:
         res["ISE"] = own_ise
         res["ISEP"] = 0.0
-    res["NE"] = sampling_efficiency(res["ISEP"], res["ISE"])
-    res["GPI"] = gpi(uc, ua, res["NE"], p.weights)
+    if res["ISE"] > 0 or res["ISEP"] == 0:
+        res["NE"] = sampling_efficiency(res["ISEP"], res["ISE"])
+        res["GPI"] = gpi(uc, ua, res["NE"], p.weights)
+    else:  # NE has no value: leave NE and GPI out and say why (the run itself is fine)
+        log.warning("et_control: et.NE and et.GPI are left out: the time-triggered run tracks the reference "
+                    "exactly (ISE = 0, eq 23) but this run does not (ISEP = %.3g), so NE = ISEP/ISE (eq 25) has no "
+                    "value; use a reference the time-triggered loop does not track exactly (e.g. a nonzero step)",
+                    res["ISEP"])
     gap = _packet_gap_max(result.messages, p, n_tts, window_s)
     res.update(_horizon_measures(sig, p, t_k, window_s, gap))
     if gap is not None:
         res["u_gap_max"] = gap
     return {f"{ET_PREFIX}.{k}": v for k, v in res.items()}
+
+
+et_control.tables = ("messages",)  # type: ignore[attr-defined]  # rows it reads (output.messages: full)
 
 
 def _packet_gap_max(messages, p: EtControlParams, n_tts: int, window_s: float) -> float | None:

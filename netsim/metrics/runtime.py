@@ -118,6 +118,28 @@ def _network_metrics(messages: pd.DataFrame) -> dict[str, float]:
     return out
 
 
+#: Summary columns (``output.jobs: summary``) -> metric names: the same names as from the rows, plus percentiles.
+_JOB_SUMMARY_KEYS = {"jobs": "jobs", "deadline_misses": "deadline_misses", "killed": "killed", "pending": "pending",
+                     "max_response_s": "max_response_s", "mean_response_s": "mean_response_s",
+                     "p50_response_s": "p50_response_s", "p95_response_s": "p95_response_s",
+                     "p99_response_s": "p99_response_s"}
+_MESSAGE_SUMMARY_KEYS = {"messages": "messages", "lost": "lost", "loss_rate": "loss_rate",
+                         "mean_delay_s": "mean_delay_s", "max_delay_s": "max_delay_s", "p50_delay_s": "p50_delay_s",
+                         "p95_delay_s": "p95_delay_s", "p99_delay_s": "p99_delay_s"}
+
+
+def _summary_metrics(table: Any, scope: str, keys: tuple[str, ...], names: dict[str, str]) -> dict[str, float]:
+    """``<scope>.<key...>.<name>`` metrics from a summary table (:mod:`netsim.results.traces`); none if absent."""
+    out: dict[str, float] = {}
+    if table is None or len(table) == 0:
+        return out
+    for row in table.to_dict("records"):
+        base = ".".join([scope] + [str(row[k]) for k in keys])
+        for column, name in names.items():
+            out[f"{base}.{name}"] = float(row[column])
+    return out
+
+
 def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = None) -> dict[str, float]:
     """The metrics the runner always adds (see the module docstring).
 
@@ -138,8 +160,16 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
     elif not result.jobs.empty and t_end_s > 0:
         for node, grp in result.jobs.groupby("node", sort=True):
             out[f"cpu.{node}.utilization"] = float(grp["cpu_time_s"].astype(float).sum() / t_end_s)
-    out.update(_task_metrics(result.jobs, t_end_s))
-    out.update(_network_metrics(result.messages))
+    traces = getattr(result, "traces", None) or {}
+    if traces.get("jobs", "full") == "full":
+        out.update(_task_metrics(result.jobs, t_end_s))
+    else:
+        out.update(_summary_metrics(getattr(result, "job_summary", None), "task", ("node", "task"), _JOB_SUMMARY_KEYS))
+    if traces.get("messages", "full") == "full":
+        out.update(_network_metrics(result.messages))
+    else:
+        out.update(_summary_metrics(getattr(result, "message_summary", None), "net", ("network",),
+                                    _MESSAGE_SUMMARY_KEYS))
     if sim is not None:
         for name in sorted(getattr(sim, "networks", {})):
             net = sim.networks[name]
@@ -345,6 +375,9 @@ def latency(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
         f"{n}.min_s": int(values.min()) / S,
         f"{n}.count": float(values.size),
     }
+
+
+latency.tables = ("jobs", "messages")  # type: ignore[attr-defined]  # rows it reads (output.jobs/messages: full)
 
 
 def compute_metrics(result: Any, specs: list[Any], baseline: Any = None) -> dict[str, float]:

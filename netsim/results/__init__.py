@@ -26,7 +26,9 @@ A :class:`RunResult` holds
 
 Run folder layout (see :meth:`RunResult.to_csv`): ``scenario.yaml``, ``signals.csv``, ``jobs.csv``,
 ``messages.csv``, ``metrics.csv`` (``metric,value``), ``meta.json``. CSVs use a fixed float format and a
-stable column order, so the same scenario and seed give byte-identical files.
+stable column order, so the same scenario and seed give byte-identical files. A scenario's ``output: {jobs:
+summary}`` (``messages: summary``) writes ``jobs_summary.csv`` (``messages_summary.csv``) instead of the rows;
+``off`` writes neither (:mod:`netsim.results.traces`).
 """
 
 from __future__ import annotations
@@ -56,6 +58,9 @@ __all__ = [
     "jobs_table",
     "messages_table",
     "schedule_table",
+    "summary_table",
+    "JOB_SUMMARY_COLUMNS",
+    "MESSAGE_SUMMARY_COLUMNS",
     "write_csv",
     "check_out_dir",
     "key_metrics",
@@ -95,6 +100,12 @@ MESSAGE_COLUMNS = [
     "tx_end_s",
 ]
 SCHEDULE_COLUMNS = ["node", "task", "state", "start_s", "end_s"]
+#: Columns of ``jobs_summary.csv`` (``output.jobs: summary``, :class:`netsim.results.traces.JobSummary`).
+JOB_SUMMARY_COLUMNS = ["node", "task", "jobs", "met", "missed", "killed", "pending", "done", "deadline_misses",
+                       "mean_response_s", "max_response_s", "p50_response_s", "p95_response_s", "p99_response_s"]
+#: Columns of ``messages_summary.csv`` (``output.messages: summary``, :class:`netsim.results.traces.MessageSummary`).
+MESSAGE_SUMMARY_COLUMNS = ["network", "messages", "delivered", "lost", "in_flight", "loss_rate", "mean_delay_s",
+                           "max_delay_s", "p50_delay_s", "p95_delay_s", "p99_delay_s"]
 
 
 def check_out_dir(path: str | Path) -> Path:
@@ -266,6 +277,11 @@ def schedule_table(node: str, intervals: Iterable[Any]) -> pd.DataFrame:
                          "end_s": _ns_column(t1s)}, columns=SCHEDULE_COLUMNS)
 
 
+def summary_table(rows: list[dict[str, Any]], columns: list[str]) -> pd.DataFrame:
+    """A jobs or messages summary table (``output: {jobs|messages: summary}``) from its rows."""
+    return pd.DataFrame(rows, columns=columns)
+
+
 def _json_default(obj: Any) -> Any:
     if isinstance(obj, (np.integer,)):
         return int(obj)
@@ -288,6 +304,13 @@ class RunResult:
     scenario: dict[str, Any] | None = None
     schedule: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=SCHEDULE_COLUMNS))
     out_dir: Path | None = None
+    #: The scenario's trace settings (``output.jobs``, ``messages``, ``schedule``): a table not kept in ``full``
+    #: is not written (``jobs.csv`` / ``messages.csv``), its summary is (:mod:`netsim.results.traces`).
+    traces: dict[str, str] = field(default_factory=lambda: {"jobs": "full", "messages": "full", "schedule": "on"})
+    #: Per-task statistics (``output.jobs: summary``; columns :data:`JOB_SUMMARY_COLUMNS`), else None.
+    job_summary: pd.DataFrame | None = None
+    #: Per-network statistics (``output.messages: summary``; columns :data:`MESSAGE_SUMMARY_COLUMNS`), else None.
+    message_summary: pd.DataFrame | None = None
 
     @property
     def status(self) -> str:
@@ -330,8 +353,12 @@ class RunResult:
             write_atomic(out / "scenario.yaml",
                          yaml.dump(self.scenario, Dumper=dumper, sort_keys=False, allow_unicode=True))
         write_csv(self.signals, out / "signals.csv")
-        write_csv(self.jobs, out / "jobs.csv")
-        write_csv(self.messages, out / "messages.csv")
+        for name, table, summary in (("jobs", self.jobs, self.job_summary),
+                                     ("messages", self.messages, self.message_summary)):
+            if self.traces.get(name, "full") == "full":
+                write_csv(table, out / f"{name}.csv")
+            if summary is not None:
+                write_csv(summary, out / f"{name}_summary.csv")
         from netsim.status import ERROR, INTERRUPTED, kind_of
 
         if kind_of(self.status) not in (ERROR, INTERRUPTED):  # a failed or cut run has no metrics: see meta.json
@@ -420,8 +447,12 @@ class RunResult:
         """
         folder = Path(run_dir)
         signals = pd.read_csv(folder / "signals.csv", dtype=np.float64)
-        jobs = read_table(folder / "jobs.csv", JOB_TYPES)
-        messages = read_table(folder / "messages.csv", MESSAGE_TYPES)
+        jobs = read_table(folder / "jobs.csv", JOB_TYPES) if (folder / "jobs.csv").exists() else \
+            pd.DataFrame(columns=JOB_COLUMNS)
+        messages = read_table(folder / "messages.csv", MESSAGE_TYPES) if (folder / "messages.csv").exists() else \
+            pd.DataFrame(columns=MESSAGE_COLUMNS)
+        summaries = {name: pd.read_csv(folder / f"{name}_summary.csv") if (folder / f"{name}_summary.csv").exists()
+                     else None for name in ("jobs", "messages")}
         metrics = pd.Series(dtype=float, name="value")
         if (folder / "metrics.csv").exists():
             metrics_frame = pd.read_csv(folder / "metrics.csv", dtype={"metric": str, "value": np.float64})
@@ -433,4 +464,9 @@ class RunResult:
             from netsim.scenario.loader import read_yaml  # bounded and tag-free: a run folder may come from anyone
 
             scenario = read_yaml(folder / "scenario.yaml")[0]
-        return cls(signals, jobs, messages, metrics, meta, scenario, out_dir=folder)
+        traces = {"jobs": "full", "messages": "full", "schedule": "on"}
+        for name in ("jobs", "messages"):
+            if not (folder / f"{name}.csv").exists():
+                traces[name] = "summary" if summaries[name] is not None else "off"
+        return cls(signals, jobs, messages, metrics, meta, scenario, out_dir=folder, traces=traces,
+                   job_summary=summaries["jobs"], message_summary=summaries["messages"])

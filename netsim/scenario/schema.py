@@ -57,7 +57,8 @@ Public classes and their fields (times in ns)
 ``BaselineSpec``
     ``overrides: dict[str, Any]`` (dotted path -> value).
 ``OutputSpec``
-    ``dir`` (relative to ``reports/``, cannot leave it), ``plot``.
+    ``dir`` (relative to ``reports/``, cannot leave it), ``plot``, and the traces a run keeps: ``jobs``,
+    ``messages`` (``full`` | ``summary`` | ``off``), ``schedule`` (``on`` | ``off``).
 
 Every plugin spec (``PlantSpec``, ``TaskSpec``, ``HandlerSpec``, ``NetworkSpec``, ``SignalSpec``,
 ``MetricSpec``) has ``plugin()`` (the registered object) and ``validated_params()`` (its ``Params`` model
@@ -695,6 +696,15 @@ class BaselineSpec(SpecModel):
 MAX_NAME_LENGTH = 100
 
 
+def _on_off(value: Any) -> Any:
+    """``output.schedule``: ``on``/``off``, also as a YAML boolean (``true``/``false``)."""
+    if value is True:
+        return "on"
+    if value is False:
+        return "off"
+    return value
+
+
 def _output_dir(value: Any) -> Any:
     """``output.dir``: a relative folder below the output root (``reports/``) that cannot leave it."""
     if not isinstance(value, str):
@@ -713,15 +723,28 @@ def _output_dir(value: Any) -> Any:
 
 
 class OutputSpec(SpecModel):
-    """Where the run folder goes and whether to draw figures.
+    """Where the run folder goes, whether to draw figures, and which traces a run keeps.
 
     ``dir`` is a folder relative to the output root ``reports/`` (no absolute path, no ``..``): a scenario
     file cannot choose where files are written outside it; the user does, with ``--out`` (or ``out=``).
     None: ``reports/<name>/<run-id>``.
+
+    Traces (issue 19; :mod:`netsim.results.traces`): ``jobs`` and ``messages`` are ``full`` (one row per job,
+    per message copy: ``jobs.csv``, ``messages.csv``), ``summary`` (per task, per network: count, outcomes,
+    mean, max and percentiles of the response time or delay, kept online in flat memory: ``jobs_summary.csv``,
+    ``messages_summary.csv``) or ``off``; ``schedule`` (``on``/``off``) keeps the kernels' schedule trace (the
+    Gantt chart). Metrics that read the rows (``latency``, ``et_control``) need ``full``.
     """
 
     dir: Annotated[str | None, BeforeValidator(_output_dir)] = None
     plot: bool = False
+    jobs: Literal["full", "summary", "off"] = "full"
+    messages: Literal["full", "summary", "off"] = "full"
+    schedule: Annotated[Literal["on", "off"], BeforeValidator(_on_off)] = "on"
+
+    #: The trace settings' defaults: left out of :meth:`Scenario.resolved_dict` when unchanged, so the resolved
+    #: form (and the run folder's ``scenario.yaml``) of a scenario that does not set them stays as it was.
+    TRACE_DEFAULTS: ClassVar[dict[str, str]] = {"jobs": "full", "messages": "full", "schedule": "on"}
 
 
 # --------------------------------------------------------------------------------------------- scenario
@@ -780,6 +803,9 @@ class Scenario(SpecModel):
         data = self.model_dump(mode="json")
         if not data.get("plugins"):
             data.pop("plugins", None)  # most scenarios have none: their resolved form (and hash) stays as it was
+        for key, default in OutputSpec.TRACE_DEFAULTS.items():  # the same for the trace settings (issue 19)
+            if data["output"].get(key) == default:
+                data["output"].pop(key)
         for path, spec in self.plugin_specs():
             params = _params_json(spec)
             parts = parse_path(path)

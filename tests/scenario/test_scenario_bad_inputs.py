@@ -42,7 +42,7 @@ def test_the_base_scenario_is_valid(base):
 def test_unknown_key_lists_the_known_keys(base):
     raw = base()
     raw["output"] = {"dir": None, "colour": "red"}
-    assert _only(raw) == ("output.colour", "unknown key 'colour' (known keys: dir, plot)")
+    assert _only(raw) == ("output.colour", "unknown key 'colour' (known keys: dir, jobs, messages, plot, schedule)")
 
 
 def test_misspelt_key_gets_a_did_you_mean(base):
