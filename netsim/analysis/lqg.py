@@ -34,6 +34,9 @@ infinite. ``J = E[period cost] / h``: the average period is ``h``.
 
 With one delay value and no jitter this is the ordinary sampled-data cost (Astrom & Wittenmark,
 *Computer-Controlled Systems*, ch. 11); with one delay equal to the period it is a one-sample delay loop.
+Why this module is long: the stationary cost, the finite-horizon cost and the period maps they share (with
+the segment integrals and the timing checks) are one computation; split, each part would need the others.
+
 The same idea underlies Lincoln, Cervin et al.'s Jitterbug; this module is written from the mathematics
 above, not from that toolbox.
 
@@ -56,7 +59,7 @@ from scipy.linalg import expm
 
 from netsim.errors import ConfigError
 
-__all__ = ["TimingDistribution", "SampledLoop", "LQGCost", "lqg_cost", "segment_matrices", "pid_controller"]
+__all__ = ["TimingDistribution", "SampledLoop", "LQGCost", "lqg_cost", "transient_cost", "segment_matrices", "pid_controller"]
 
 
 @dataclass(frozen=True)
@@ -253,55 +256,126 @@ def segment_matrices(
 
 
 def _period_maps(
-    loop: SampledLoop, length: float, tau: float
+    loop: SampledLoop,
+    length: float,
+    tau: float,
+    jumps: Sequence[tuple[float, np.ndarray]] = (),
+    sample: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """``F, Wz, Qz, c`` of one period of ``length`` s with input-output delay ``tau``: ``z+ = F z + w``,
-    ``E[w w'] = Wz``, period cost ``z' Qz z + c`` (all for ``z = [x; xc; u]``)."""
-    n, m, nc, p = loop.n, loop.m, loop.nc, loop.p
+    ``E[w w'] = Wz``, period cost ``z' Qz z + c`` (all for ``z = [x; xc; u]``).
+
+    ``jumps`` are ``(s, J)``: at ``s`` seconds into the period the plant state becomes ``J x`` (a reference
+    step carried as a plant state); a jump at ``s = 0`` comes before the sample. ``sample=False`` is a stretch without a sample (before the first one). An
+    actuation after ``length``, or a jump at or after it, does not happen in this stretch.
+    """
+    n, m, nc = loop.n, loop.m, loop.nc
     nz = n + nc + m
     nv = nz + m  # v = [x; xc; u_held; u_new]
     ix, ic, ih, iu = slice(0, n), slice(n, n + nc), slice(n + nc, nz), slice(nz, nv)
     S = np.zeros((nv, nz))
     S[ix, ix] = np.eye(n)
-    S[ic, ix] = loop.Bc @ loop.C
-    S[ic, ic] = loop.Ac
     S[ih, ih] = np.eye(m)
-    S[iu, ix] = loop.Dc @ loop.C
-    S[iu, ic] = loop.Cc
     G = np.zeros((nv, loop.p))
-    G[ic, :] = loop.Bc
-    G[iu, :] = loop.Dc
+    if sample:
+        S[ic, ix] = loop.Bc @ loop.C
+        S[ic, ic] = loop.Ac
+        S[iu, ix] = loop.Dc @ loop.C
+        S[iu, ic] = loop.Cc
+        G[ic, :] = loop.Bc
+        G[iu, :] = loop.Dc
+    else:
+        S[ic, ic] = np.eye(nc)
+        S[iu, ih] = np.eye(m)
     Sel = np.zeros((n + m, nv))  # xi = [x; u_held]
     Sel[:n, ix] = np.eye(n)
     Sel[n:, ih] = np.eye(m)
+    xi = np.r_[0:n, n + nc : nz]
 
     def lift(s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
         Phi, W, Q, j = segment_matrices(loop.A, loop.B, loop.Q1, loop.Q2, loop.R1, s)
         T = np.eye(nv)
-        T[np.ix_(np.r_[0:n, n + nc : nz], np.r_[0:n, n + nc : nz])] = Phi
+        T[np.ix_(xi, xi)] = Phi
         return T, Sel.T @ W @ Sel, Sel.T @ Q @ Sel, j
 
-    T1, W1, Q1v, j1 = lift(tau)
-    T2, W2, Q2v, j2 = lift(length - tau)
-    Sw = np.eye(nv)
-    Sw[ih, ih] = 0.0
-    Sw[ih, iu] = np.eye(m)
-    M = Sw @ T1
-    Qv = Q1v + M.T @ Q2v @ M  # cost of both segments in terms of v at the sample
-    F_v = T2 @ M
+    switch = np.eye(nv)
+    switch[ih, ih] = 0.0
+    switch[ih, iu] = np.eye(m)
+    events: list[tuple[float, np.ndarray]] = []
+    if tau <= length:
+        events.append((tau, switch))
+    pre = np.eye(nz)  # a jump at the very start comes before the sample (the sample sees the new reference)
+    for s_j, J in jumps:
+        if s_j == 0.0:
+            Jz = np.eye(nz)
+            Jz[ix, ix] = J
+            pre = Jz @ pre
+        elif 0.0 < s_j < length:
+            E = np.eye(nv)
+            E[ix, ix] = J
+            events.append((s_j, E))
+    events.sort(key=lambda e: e[0])
+    M = np.eye(nv)  # v now = M v(sample) + noise of covariance Wacc
+    Wacc = np.zeros((nv, nv))
+    Qacc = np.zeros((nv, nv))  # cost so far = v' Qacc v + c, v at the sample (noise-free part)
+    c = 0.0
+    t = 0.0
+    for te, E in [*events, (length, None)]:
+        if te > t:
+            T, Wseg, Qseg, j = lift(te - t)
+            Qacc += M.T @ Qseg @ M
+            c += float(np.sum(Qseg * Wacc)) + j
+            M = T @ M
+            Wacc = T @ Wacc @ T.T + Wseg
+            t = te
+        if E is not None:
+            M = E @ M
+            Wacc = E @ Wacc @ E.T
     Drop = np.zeros((nz, nv))
     Drop[:, :nz] = np.eye(nz)
-    F = Drop @ F_v @ S
     noise_v = G @ loop.R2 @ G.T
-    Wz = Drop @ (F_v @ noise_v @ F_v.T + T2 @ Sw @ W1 @ Sw.T @ T2.T + W2) @ Drop.T
-    Qz = S.T @ Qv @ S
-    c = float(np.trace(Qv @ noise_v) + np.trace(Q2v @ Sw @ W1 @ Sw.T)) + j1 + j2
+    S = S @ pre
+    F = Drop @ M @ S
+    Wz = Drop @ (M @ noise_v @ M.T + Wacc) @ Drop.T
+    Qz = S.T @ Qacc @ S
+    c += float(np.sum(Qacc * noise_v))
     return F, 0.5 * (Wz + Wz.T), 0.5 * (Qz + Qz.T), c
+
+
+def _timing(
+    delay: TimingDistribution | Sequence[TimingDistribution] | float | None,
+    offset: TimingDistribution | None,
+    h: float,
+) -> tuple[np.ndarray, np.ndarray, list[TimingDistribution]]:
+    """Offsets, their probabilities and the delay distribution given each offset, checked against ``h``."""
+    if offset is None:
+        offset = TimingDistribution.constant(0.0)
+    o, po = np.array(offset.values), np.array(offset.weights)
+    if delay is None:
+        delay = TimingDistribution.constant(0.0)
+    elif isinstance(delay, (int, float)):
+        delay = TimingDistribution.constant(float(delay))
+    if isinstance(delay, TimingDistribution):
+        delays = [delay] * len(o)
+    else:
+        delays = list(delay)
+        if len(delays) != len(o) or not all(isinstance(d, TimingDistribution) for d in delays):
+            raise ConfigError(f"give one delay distribution per offset value ({len(o)}), got {len(delays)}")
+    for a, d in enumerate(delays):
+        if min(d.values) < 0:
+            raise ConfigError(f"delays must be >= 0 s, got {min(d.values)}")
+        room = h + o.min() - o[a]
+        if max(d.values) > room * (1 + 1e-12):
+            raise ConfigError(
+                f"a delay of {max(d.values):.6g} s after a sample at offset {o[a]:.6g} s reaches past the earliest "
+                f"next sample ({room:.6g} s later; period {h:.6g} s): this computation needs every output to reach "
+                "the plant before the next sample; shorten the delay or the jitter, or lengthen the period")
+    return o, po, delays
 
 
 def lqg_cost(
     loop: SampledLoop,
-    delay: TimingDistribution | float | None = None,
+    delay: TimingDistribution | Sequence[TimingDistribution] | float | None = None,
     offset: TimingDistribution | None = None,
 ) -> LQGCost:
     """Stationary expected cost per second of ``loop`` under the delay and sampling-offset distributions.
@@ -312,7 +386,8 @@ def lqg_cost(
         Plant, controller, period, cost and noise.
     delay
         Input-output delay ``tau`` from the (actual) sampling instant to the actuation; a number is a constant
-        delay; default 0.
+        delay; default 0. A list holds one distribution per offset value: the delay given that offset (timing
+        measured in a schedule, where a late start often comes with a short execution window).
     offset
         Sampling offset from the nominal grid ``k h``, drawn independently each period (sampling jitter);
         default none.
@@ -324,24 +399,11 @@ def lqg_cost(
     Raises
     ------
     ConfigError
-        A delay or offset outside ``[0, shortest interval]``: this computation needs the output of a sample to
-        reach the plant before the next sample (``max delay + max offset - min offset <= h``).
+        A delay that could reach past the next sample: this computation needs the output of a sample to reach the
+        plant before the next sample (``offset + delay <= h + min offset`` for every pair).
     """
-    if delay is None:
-        delay = TimingDistribution.constant(0.0)
-    elif not isinstance(delay, TimingDistribution):
-        delay = TimingDistribution.constant(float(delay))
-    if offset is None:
-        offset = TimingDistribution.constant(0.0)
     h = loop.period_s
-    o, po = np.array(offset.values), np.array(offset.weights)
-    if min(delay.values) < 0:
-        raise ConfigError(f"delays must be >= 0 s, got {min(delay.values)}")
-    shortest = h - (o.max() - o.min())
-    if max(delay.values) > shortest * (1 + 1e-12):
-        raise ConfigError(
-            f"the longest delay {max(delay.values):.6g} s exceeds the shortest sampling interval {shortest:.6g} s "
-            f"(period {h:.6g} s minus the offset spread): shorten the delay or the jitter, or lengthen the period")
+    o, po, delays = _timing(delay, offset, h)
     nz = loop.n + loop.nc + loop.m
     na = len(o)
     K = nz * nz
@@ -354,7 +416,7 @@ def lqg_cost(
     for a in range(na):
         for b in range(na):
             length = h + o[b] - o[a]
-            for tau, pt in zip(delay.values, delay.weights):
+            for tau, pt in zip(delays[a].values, delays[a].weights):
                 key = (round(length, 15), round(min(tau, length), 15))
                 if key not in cache:
                     cache[key] = _period_maps(loop, length, min(tau, length))
@@ -374,21 +436,107 @@ def lqg_cost(
     return LQGCost(float(period_cost / h), float(period_cost), rho, 0.5 * (P + P.T))
 
 
-def pid_controller(
-    K: float, Ti: float | None, Td: float, N: float, h: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(Ac, Bc, Cc, Dc)`` of netsim's discrete PID (:class:`netsim.control.pid.PID`) regulating ``y`` to ``r = 0``.
+def transient_cost(
+    loop: SampledLoop,
+    duration_s: float,
+    x0: Any,
+    delay: TimingDistribution | Sequence[TimingDistribution] | float | None = None,
+    offset: TimingDistribution | None = None,
+    jumps: Sequence[tuple[float, Any]] = (),
+    xc0: Any = None,
+    u0: Any = None,
+) -> float:
+    """Expected cost ``E int_0^T (x' Q1 x + u' Q2 u) dt`` of ``loop`` started at ``x0`` (finite horizon).
 
-    ``D = ad D - bd (y - y_prev)`` with ``ad = Td / (Td + N h)``, ``bd = K N ad``; ``u = -K y + I + D``;
-    then ``I += -K h / Ti y`` (``Ti=None``: no integral). States ``[I; D; y_prev]``, input ``y``. The set-point
-    weight ``b`` multiplies ``r`` only, so it does not enter a regulation loop.
+    The same period maps as :func:`lqg_cost`, iterated from ``E[z z'] = z0 z0'`` instead of solved for the
+    stationary point: the response to an initial state or to reference steps, with noise if the loop has any.
+    A reference is carried as a plant state with no dynamics (``A`` row zero), its steps as ``jumps``.
+
+    Parameters
+    ----------
+    loop
+        Plant, controller, period, cost (and noise).
+    duration_s
+        Horizon ``T`` (s).
+    x0, xc0, u0
+        Initial plant state, controller state (default zeros) and held input (default zeros).
+    delay, offset
+        As in :func:`lqg_cost`; sample ``k`` is taken at ``k h + o_k`` (the first at ``o_0``, ``u0`` held before).
+    jumps
+        ``(t, J)``: at time ``t`` (s) the plant state becomes ``J x``.
+
+    Returns
+    -------
+    float
+        The expected cost over ``[0, duration_s]``.
+    """
+    h = loop.period_s
+    o, po, delays = _timing(delay, offset, h)
+    if o.min() < 0:
+        raise ConfigError(f"sampling offsets must be >= 0 s in a transient, got {o.min()}")
+    J = [(float(t), _mat(Jm, "jump", (loop.n, loop.n))) for t, Jm in jumps]
+    z0 = np.concatenate([
+        np.asarray(x0, dtype=float).reshape(-1),
+        np.zeros(loop.nc) if xc0 is None else np.asarray(xc0, dtype=float).reshape(-1),
+        np.zeros(loop.m) if u0 is None else np.asarray(u0, dtype=float).reshape(-1),
+    ])
+    if z0.shape[0] != loop.n + loop.nc + loop.m:
+        raise ConfigError(f"x0, xc0, u0 must have {loop.n}, {loop.nc} and {loop.m} entries")
+    T = float(duration_s)
+    cache: dict[tuple[float, float], tuple[np.ndarray, np.ndarray, np.ndarray, float]] = {}
+
+    def maps(start: float, length: float, tau: float, sample: bool = True) -> tuple[Any, ...]:
+        inside = [(t - start, Jm) for t, Jm in J if start <= t < start + length]
+        if inside or start + length > T or not sample:
+            return _period_maps(loop, min(length, T - start), tau, inside, sample)
+        key = (round(length, 15), round(tau, 15))
+        if key not in cache:
+            cache[key] = _period_maps(loop, length, tau)
+        return cache[key]
+
+    cost = 0.0
+    P: list[np.ndarray] = []
+    Z0 = np.outer(z0, z0)
+    for a in range(len(o)):
+        F, W, Q, c = maps(0.0, o[a], 0.0, sample=False)
+        cost += po[a] * (float(np.sum(Q * Z0)) + c)
+        P.append(po[a] * (F @ Z0 @ F.T + W))
+    k = 0
+    while k * h + o.min() < T:
+        nxt = [np.zeros_like(P[0]) for _ in o]
+        for a in range(len(o)):
+            start = k * h + o[a]
+            if start >= T:
+                continue
+            for b in range(len(o)):
+                length = h + o[b] - o[a]
+                for tau, pt in zip(delays[a].values, delays[a].weights):
+                    F, W, Q, c = maps(start, length, tau)
+                    w = po[b] * pt
+                    cost += w * (float(np.sum(Q * P[a])) + po[a] * c)
+                    if start + length < T:
+                        nxt[b] += w * (F @ P[a] @ F.T + po[a] * W)
+        P = nxt
+        k += 1
+    return float(cost)
+
+
+def pid_controller(
+    K: float, Ti: float | None, Td: float, N: float, h: float, b: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(Ac, Bc, Cc, Dc)`` of netsim's discrete PID (:class:`netsim.control.pid.PID`).
+
+    ``D = ad D - bd (y - y_prev)`` with ``ad = Td / (Td + N h)``, ``bd = K N ad``; ``u = K (b r - y) + I + D``;
+    then ``I += K h / Ti (r - y)`` (``Ti=None``: no integral). States ``[I; D; y_prev]``. With ``b=None`` the
+    input is ``y`` alone (regulation to ``r = 0``); with a set-point weight ``b`` it is ``[r; y]``.
     """
     ad = Td / (Td + N * h) if Td > 0 else 0.0
     bd = K * N * ad
     ki = 0.0 if Ti is None or Ti == 0 else K * h / Ti
-    # states s = [I, D_prev, y_prev]; D_k = ad D_prev - bd (y_k - y_prev)
-    Cc = np.array([[1.0, ad, bd]])
-    Dc = np.array([[-K - bd]])
     Ac = np.array([[1.0, 0.0, 0.0], [0.0, ad, bd], [0.0, 0.0, 0.0]])
-    Bc = np.array([[-ki], [-bd], [1.0]])
-    return Ac, Bc, Cc, Dc
+    Cc = np.array([[1.0, ad, bd]])
+    By = np.array([[-ki], [-bd], [1.0]])
+    Dy = np.array([[-K - bd]])
+    if b is None:
+        return Ac, By, Cc, Dy
+    return Ac, np.hstack([np.array([[ki], [0.0], [0.0]]), By]), Cc, np.hstack([np.array([[K * b]]), Dy])

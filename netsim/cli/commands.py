@@ -135,6 +135,51 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return count_statuses([status]).exit_code()
 
 
+def _cmd_analyze(args: argparse.Namespace) -> int:
+    from netsim.scenario import ScenarioError, load_scenario
+
+    overrides = _overrides(args.overrides)
+    if args.out is not None:
+        from netsim.results import check_out_dir
+
+        check_out_dir(args.out)
+    if args.seed is not None:
+        overrides["seed"] = args.seed
+    try:
+        scenario = load_scenario(args.file, overrides or None)
+    except ScenarioError as exc:
+        _print_problems(exc.problems, sys.stderr)
+        n = len(exc.errors)
+        _err(f"{args.file}: {n} problem{'s' if n != 1 else ''}; nothing was run")
+        return EXIT_INVALID
+    from netsim.cli.analyze import analyze_run
+    from netsim.runner import run
+    from netsim.safe_write import write_atomic
+
+    result = run(scenario, out=args.out)
+    meta = getattr(result, "meta", {}) or {}
+    status = str(meta.get("status", "ok"))
+    table = analyze_run(scenario, result)
+    print(f"{scenario.name}: run {status}; analysis beside simulation "
+          "(task and message times in ms, loop costs as ISE):")
+    cells = [[str(v) if isinstance(v, str) else f"{v:.4g}" for v in row] for row in table.itertuples(index=False)]
+    widths = [max([len(c)] + [len(r[i]) for r in cells]) for i, c in enumerate(table.columns)]
+    for row in [list(table.columns), *cells]:
+        print("  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip())
+    out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")
+    if out_dir:
+        from pathlib import Path
+
+        write_atomic(Path(out_dir) / "analysis.csv", table.to_csv(index=False))
+        print(f"run folder: {out_dir} (analysis.csv)")
+    bad = int((table["verdict"] == "EXCEEDS").sum())
+    if bad:
+        _err(f"{bad} simulated value{'s' if bad != 1 else ''} above the analytic bound: a bug in the simulator "
+             "or in the analysis")
+        return 1
+    return 0
+
+
 def _plot_window(text: str | None) -> tuple[float, float] | None:
     """``--plot-window``: ``T1`` or ``T0:T1`` with time units (``50 ms``, ``1 s:1.2 s``) -> seconds."""
     if text is None:

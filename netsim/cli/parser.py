@@ -6,6 +6,7 @@ import argparse
 
 from netsim.cli.commands import (
     LIST_KINDS,
+    _cmd_analyze,
     _cmd_batch,
     _cmd_docs,
     _cmd_list,
@@ -43,6 +44,19 @@ examples:
 
 --set values are YAML: "1 Mbit/s" stays text, 0.5 is a number, [1, 0] a list, null removes a value.
 The scenario is validated first; nothing runs when it has problems (exit code 2).
+"""
+
+_ANALYZE_EPILOG = """\
+examples:
+  netsim analyze scenarios/three_servos_dm.yaml       RTA bound vs worst response per task, ISE per loop
+  netsim analyze scenarios/dc_servo_can.yaml --out /tmp/can
+  netsim analyze scenarios/dc_servo_can.yaml --set nodes.interference.tasks[0].params.share=0.5
+
+Runs the scenario (writing its run folder), then prints per task the response-time bound beside the worst
+simulated response, per CAN message the CAN analysis bound beside the worst simulated latency, and per PID
+loop on an LTI plant the expected ISE (netsim.analysis.lqg, fed the run's measured timing) beside the run's.
+The same table is written as analysis.csv in the run folder. Exit code 1 when a simulated value exceeds its
+bound (a bug in the simulator or in the analysis).
 """
 
 _VALIDATE_EPILOG = """\
@@ -155,6 +169,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-progress", action="store_true",
                    help="no progress bar (there is none either when stderr is not a terminal)")
     p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("analyze", parents=[common, trust], help="run a scenario and set analysis beside simulation",
+                       epilog=_ANALYZE_EPILOG, formatter_class=_Formatter,
+                       description="Run one scenario and compare its response times, CAN latencies and loop "
+                                   "costs with what analysis predicts.")
+    p.add_argument("file", metavar="FILE", help="scenario YAML file")
+    p.add_argument("--out", metavar="DIR", help="run folder (default: reports/<scenario>/<run-id>/)")
+    p.add_argument("--seed", type=int, metavar="N", help="override the scenario seed")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
+                   help="override a value (repeatable)")
+    p.set_defaults(func=_cmd_analyze)
 
     p = sub.add_parser("batch", parents=[common, trust], help="run many scenarios in parallel, write summary.csv",
                        epilog=_BATCH_EPILOG,

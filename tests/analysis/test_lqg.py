@@ -9,7 +9,14 @@ from scipy.integrate import quad
 from scipy.linalg import expm, solve_discrete_are, solve_discrete_lyapunov
 
 import netsim
-from netsim.analysis.lqg import SampledLoop, TimingDistribution, lqg_cost, pid_controller, segment_matrices
+from netsim.analysis.lqg import (
+    SampledLoop,
+    TimingDistribution,
+    lqg_cost,
+    pid_controller,
+    segment_matrices,
+    transient_cost,
+)
 from netsim.errors import ConfigError
 
 A = np.array([[0.0, 1.0], [0.0, -1.0]])
@@ -129,7 +136,7 @@ def test_unstable_loop_costs_infinity_and_bad_timing_is_refused() -> None:
     loop = SampledLoop(A=A, B=B, C=np.eye(2), Dc=[[-400.0, -40.0]], period_s=0.1, Q1=Q1, Q2=Q2, R1=R1)
     r = lqg_cost(loop, delay=0.05)
     assert r.cost == float("inf") and r.spectral_radius > 1
-    with pytest.raises(ConfigError, match="exceeds the shortest sampling interval"):
+    with pytest.raises(ConfigError, match="reaches past the earliest next sample"):
         lqg_cost(loop, delay=0.09, offset=TimingDistribution((0.0, 0.02), (1, 1)))
     with pytest.raises(ConfigError, match="Dc must be 1 x 2"):
         SampledLoop(A=A, B=B, C=np.eye(2), Dc=[[1.0]], period_s=0.1, Q1=Q1, Q2=Q2)
@@ -173,3 +180,49 @@ def test_monte_carlo_in_netsim_converges_to_the_analytic_cost() -> None:
     analytic = lqg_cost(loop, delay=TimingDistribution((0.01, 0.05, 0.09), (1, 1, 1))).cost
     assert abs(mean - analytic) < half, (mean, half, analytic)
     assert abs(mean - lqg_cost(loop).cost) > half
+
+
+def _servo_pid_ise_by_fine_simulation(T: float, h: float, delay: float) -> float:
+    """ISE of r - y for TrueTime's servo 1000/(s(s+1)) under netsim's PID (K 0.96, Ti 0.12, Td 0.049, N 10,
+    b 0.5), square reference +-1 of period 1 s, sampled every h, output after `delay`: exact ZOH steps of 10 us
+    and the trapezoidal rule (an independent time-stepping computation)."""
+    from netsim.control.pid import PID
+
+    dt = 1e-5
+    Ad = expm(np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 1000.0], [0.0, 0.0, 0.0]]) * dt)
+    pid = PID(0.96, 0.12, 0.049, 10.0, 0.5, h)
+    per, dl = int(round(h / dt)), int(round(delay / dt))
+    x, u, pending, ise = np.zeros(2), 0.0, 0.0, 0.0
+    r = lambda t: 1.0 if (t % 1.0) < 0.5 - 1e-12 else -1.0  # noqa: E731
+    for i in range(int(round(T / dt))):
+        t = i * dt
+        if i % per == 0:
+            pending = pid.step(r(t), x[0])
+        if i % per == dl:
+            u = pending
+        e0 = r(t) - x[0]
+        x = (Ad @ np.r_[x, u])[:2]
+        e1 = r(t) - x[0]  # r is constant on [t, t + dt): its jumps are at multiples of dt
+        ise += 0.5 * (e0 * e0 + e1 * e1) * dt
+    return ise
+
+
+def test_transient_cost_of_a_pid_step_response_with_reference_jumps() -> None:
+    h, delay, T = 0.004, 0.002, 0.7
+    Aa = np.zeros((3, 3))
+    Aa[:2, :2] = A
+    Ba = np.array([[0.0], [1000.0], [0.0]])
+    e = np.array([[1.0, 0.0, -1.0]])  # r - y with the reference as the third state
+    Ac, Bc, Cc, Dc = pid_controller(0.96, 0.12, 0.049, 10.0, h, b=0.5)
+    loop = SampledLoop(A=Aa, B=Ba, C=[[0, 0, 1.0], [1.0, 0, 0]], Ac=Ac, Bc=Bc, Cc=Cc, Dc=Dc, period_s=h,
+                       Q1=e.T @ e, Q2=[[0.0]])
+    flip = np.diag([1.0, 1.0, -1.0])
+    analytic = transient_cost(loop, T, [0.0, 0.0, 1.0], delay=delay, jumps=[(0.5, flip)])
+    assert analytic == pytest.approx(_servo_pid_ise_by_fine_simulation(T, h, delay), rel=1e-6)
+    # one offset value with its own delay list is the plain delay
+    assert transient_cost(loop, T, [0.0, 0.0, 1.0], delay=[TimingDistribution.constant(delay)],
+                          jumps=[(0.5, flip)]) == pytest.approx(analytic, rel=1e-12)
+    # a late sample with a long delay would act after the next sample: refused, naming what to change
+    with pytest.raises(ConfigError, match="reaches past the earliest next sample"):
+        transient_cost(loop, T, [0.0, 0.0, 1.0], offset=TimingDistribution((0.0, 0.002), (1, 1)),
+                       delay=[TimingDistribution.constant(0.003), TimingDistribution.constant(0.003)])

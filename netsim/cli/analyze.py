@@ -1,0 +1,410 @@
+"""``netsim analyze``: what analysis predicts beside what a run measured.
+
+For one scenario and its run, one row per checked item:
+
+``task``
+    The fixed-priority response-time bound (:mod:`netsim.analysis.rta`; policies ``fp``, ``rm``, ``dm``) or the
+    non-preemptive one (``np_fp``, the CAN recurrence of :mod:`netsim.analysis.can` with one-tick arbitration)
+    vs the worst simulated response (release to finish). Execution times count at their largest value (the
+    ``wcet`` field, else the upper end of the ``execution`` distribution, plus a sampler's ``after_send``), with
+    two context switches per job. A task released by messages or by program code has no period: it is taken
+    as sporadic with the shortest gap between its releases in the run (said in the note).
+``node``
+    Under ``edf``/``np_edf``: the processor-demand test (schedulable or not) vs the deadline misses of the run.
+``message``
+    Per CAN message stream (network, sender, priority): the worst-case response time (Davis et al.) plus the
+    interface delays vs the worst simulated latency (queued to delivered). The period is the sending task's
+    (its queuing jitter: its response bound minus its execution), or for an event-driven sender the shortest
+    gap between its messages in the run; the transmission time is the frame's on the bus.
+``loop``
+    A PID loop (``periodic_controller``, or a ``sampler`` / ``controller`` / ``actuator`` chain) on an LTI
+    plant with a square-wave reference: the expected ISE of ``r - y`` over the run from
+    :func:`netsim.analysis.lqg.transient_cost`, fed the sampling offsets and input-output delays the run
+    measured (taken as independent from period to period), vs the run's ``<y>.ISE``.
+
+A simulated value above its bound is flagged ``EXCEEDS``: a bug in the simulator or in the analysis.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from netsim.analysis.can import CanMessage, can_analysis
+from netsim.analysis.rta import RTATask, edf_schedulable, response_times, utilization
+
+__all__ = ["COLUMNS", "analyze_run"]
+
+COLUMNS = ["kind", "name", "analysis", "simulated", "unit", "verdict", "note"]
+NS = 1e-9
+
+
+def _row(kind: str, name: str, analysis: Any, simulated: Any, unit: str, verdict: str, note: str = "") -> dict:
+    return {"kind": kind, "name": name, "analysis": analysis, "simulated": simulated, "unit": unit,
+            "verdict": verdict, "note": note}
+
+
+def _wcet_ns(task: Any) -> int | None:
+    """Largest execution time of a scenario task (ns), ``None`` when unbounded or unknown."""
+    if getattr(task, "wcet", None) is not None:
+        base = int(task.wcet)
+    else:
+        ex = task.execution
+        if ex is None:
+            base = 0
+        elif isinstance(ex, int):
+            base = int(ex)
+        elif getattr(ex, "dist", "") == "constant":
+            base = int(ex.value)
+        elif getattr(ex, "dist", "") == "uniform":
+            base = int(ex.high)
+        elif getattr(ex, "dist", "") == "empirical":
+            base = int(max(ex.values))
+        elif getattr(ex, "dist", "") == "normal" and getattr(ex, "max", None) is not None:
+            base = int(ex.max)
+        else:
+            return None
+    after = task.params.get("after_send") if getattr(task, "program", "") == "sampler" else None
+    if after:
+        from netsim.timebase import parse_time
+
+        base += int(parse_time(after)) if isinstance(after, str) else int(after)
+    return base
+
+
+def _jobs_of(jobs: pd.DataFrame, node: str, task: str) -> pd.DataFrame:
+    return jobs[(jobs["node"] == node) & (jobs["task"] == task)]
+
+
+def _min_gap_ns(times_s: pd.Series) -> int | None:
+    t = np.sort(times_s.dropna().to_numpy(dtype=float))
+    if t.size < 2:
+        return None
+    gap = float(np.min(np.diff(t)))
+    return int(round(gap / NS)) if gap > 0 else None
+
+
+def _task_rows(scenario: Any, jobs: pd.DataFrame) -> tuple[list[dict], dict[tuple[str, str], tuple[int, int]]]:
+    """Rows for tasks and EDF nodes; also ``(node, task) -> (response bound, wcet)`` for the message jitter."""
+    rows: list[dict] = []
+    bounds: dict[tuple[str, str], tuple[int, int]] = {}
+    for node_name, node in scenario.nodes.items():
+        policy = node.policy
+        cs = int(node.context_switch)
+        items: list[RTATask] = []
+        notes: dict[str, str] = {}
+        skipped: list[tuple[str, str]] = []
+        for h in node.handlers:
+            trig = h.trigger
+            period = None
+            for kind in ("periodic_load", "timer"):
+                spec = getattr(trig, kind, None) if trig is not None else None
+                if spec is not None and getattr(spec, "period", None):
+                    period = int(spec.period)
+            if period is None:
+                period = _min_gap_ns(_jobs_of(jobs, node_name, h.name)["release_s"])
+                notes[h.name] = "handler: sporadic, T = shortest gap in the run"
+            c = _wcet_ns(h)
+            if period is None or c is None:
+                continue
+            items.append(RTATask(h.name, c + int(h.latency or 0), period, priority=-1_000_000))
+        for t in node.tasks:
+            c = _wcet_ns(t)
+            if c is None:
+                skipped.append((t.name, "execution time unbounded (normal without max)"))
+                continue
+            period = int(t.period) if t.release_kind == "periodic" and t.period else None
+            if period is None:
+                period = _min_gap_ns(_jobs_of(jobs, node_name, t.name)["release_s"])
+                notes[t.name] = f"{t.release_kind}: sporadic, T = shortest gap in the run"
+                if period is None:
+                    skipped.append((t.name, "fewer than two releases in the run: no period to analyse"))
+                    continue
+            deadline = int(t.deadline) if t.deadline else period
+            if policy == "fp" or policy == "np_fp":
+                prio = float(t.priority if t.priority is not None else 0)
+            elif policy == "rm":
+                prio = float(period)
+            else:
+                prio = float(deadline)
+            items.append(RTATask(t.name, c + 2 * cs, period, deadline=deadline, priority=prio))
+        task_names = {t.name for t in node.tasks}
+        if policy in ("edf", "np_edf"):
+            tasks = [it for it in items if it.name in task_names]
+            ok = edf_schedulable(tasks) if policy == "edf" else None
+            misses = int(sum(((jobs["node"] == node_name) & (jobs["outcome"].isin(["missed", "killed"]))).tolist()))
+            u = utilization(items)
+            if ok is None:
+                rows.append(_row("node", node_name, "n/a", misses, "misses", "n/a", "non-preemptive EDF: no test"))
+            else:
+                verdict = "EXCEEDS" if ok and misses else "ok"
+                rows.append(_row("node", node_name, "schedulable" if ok else "not schedulable", misses, "misses",
+                                 verdict, f"EDF demand test, U = {u:.3g}"))
+            for t in node.tasks:
+                sim = _jobs_of(jobs, node_name, t.name)["response_s"].max()
+                rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _ms(sim), "ms", "n/a",
+                                 "EDF: no per-task bound"))
+            continue
+        if policy == "np_fp":
+            msgs = [CanMessage(it.name, int(it.priority), it.period, max(it.wcet, 1), deadline_ns=it.relative_deadline)
+                    for it in items]
+            rts = {r.name: r.response_ns for r in can_analysis(msgs, tau_ns=1)}
+            how = "non-preemptive FP RTA"
+        else:
+            rts = response_times(items)
+            how = f"{policy.upper()} RTA"
+        for it in items:
+            if it.name not in task_names:
+                continue
+            bound = rts.get(it.name)
+            js = _jobs_of(jobs, node_name, it.name)
+            sim = js["response_s"].max()
+            unfinished = int((js["response_s"].isna() & (js["outcome"] != "pending")).sum())
+            note = notes.get(it.name, how)
+            if unfinished:
+                note += f"; {unfinished} jobs unfinished"
+            if bound is None:
+                rows.append(_row("task", f"{node_name}.{it.name}", "unbounded", _ms(sim), "ms", "ok",
+                                 note + "; load at its level >= 1"))
+                continue
+            bounds[(node_name, it.name)] = (bound, it.wcet)
+            exceeds = (not math.isnan(sim) and sim > bound * NS + 1e-12) or (
+                unfinished and _unfinished_past(js, bound))
+            rows.append(_row("task", f"{node_name}.{it.name}", bound * NS * 1e3, _ms(sim), "ms",
+                             "EXCEEDS" if exceeds else "ok", note))
+        for name, why in skipped:
+            rows.append(_row("task", f"{node_name}.{name}", "n/a", _ms(_jobs_of(jobs, node_name, name)["response_s"]
+                                                                       .max()), "ms", "n/a", why))
+    return rows, bounds
+
+
+def _unfinished_past(js: pd.DataFrame, bound_ns: int) -> bool:
+    """An unfinished job released more than the bound before the last finish seen (the run went on past it)."""
+    end = js["finish_s"].max()
+    rel = js.loc[js["response_s"].isna() & (js["outcome"] != "pending"), "release_s"]
+    return bool(not math.isnan(end) and (rel + bound_ns * NS < end - 1e-12).any())
+
+
+def _ms(x: float) -> float:
+    return float("nan") if x is None or (isinstance(x, float) and math.isnan(x)) else float(x) * 1e3
+
+
+def _message_rows(scenario: Any, sim: Any, jobs: pd.DataFrame, messages: pd.DataFrame,
+                  bounds: dict[tuple[str, str], tuple[int, int]]) -> list[dict]:
+    rows: list[dict] = []
+    for net_name, net in scenario.networks.items():
+        if net.type != "can":
+            continue
+        params = sim.networks[net_name].params
+        ms = messages[messages["network"] == net_name]
+        if ms.empty:
+            continue
+        # one stream per (sender, priority); one row per sent message (a broadcast's copies share a msg_id)
+        firsts = ms.sort_values("sent_s").drop_duplicates("msg_id")
+        streams = []
+        for (sender, prio), group in firsts.groupby(["sender", "priority"], sort=True):
+            tx = (group["tx_end_s"] - group["tx_start_s"]).max()
+            tx_ns = int(round(tx / NS)) if not math.isnan(tx) else None
+            period, jitter, note = None, 0, ""
+            senders = [t for t in scenario.nodes[sender].tasks
+                       if t.params.get("network") == net_name and int(t.params.get("priority", 0)) == int(prio)]
+            if len(senders) == 1 and senders[0].release_kind == "periodic" and senders[0].period:
+                period = int(senders[0].period)
+                b = bounds.get((sender, senders[0].name))
+                if b is None:
+                    note = "J = 0 (sender has no bound)"
+                else:
+                    jitter = b[0] - b[1]
+                    note = f"T = {senders[0].name} period, J = R - C"
+            else:
+                period = _min_gap_ns(group["sent_s"])
+                note = "event-driven: T = shortest gap in the run"
+            if period is None or tx_ns is None:
+                continue
+            streams.append((f"{sender}/p{int(prio)}", sender, int(prio), period, tx_ns, jitter, note, group))
+        results = {r.name: r for r in can_analysis(
+            [CanMessage(n, p, T, c, jitter_ns=j) for n, _, p, T, c, j, _, _ in streams], tau_ns=1)}
+        for name, sender, _, _, _, _, note, group in streams:
+            delays = ms[ms["msg_id"].isin(group["msg_id"]) & ~ms["dropped"]]
+            pre = int(params.node_delays[sender].pre_delay) if sender in params.node_delays else int(params.pre_delay)
+            post = max([int(params.node_delays[r].post_delay) if r in params.node_delays else int(params.post_delay)
+                        for r in delays["receiver"].unique()] or [int(params.post_delay)])
+            worst = delays["delay_s"].max()
+            r = results[name].response_ns
+            if r is None:
+                rows.append(_row("message", f"{net_name}.{name}", "unbounded", _ms(worst), "ms", "ok",
+                                 note + "; bus load at its level >= 1"))
+                continue
+            bound = (r + pre + post) * NS
+            exceeds = not math.isnan(worst) and worst > bound + 1e-12
+            rows.append(_row("message", f"{net_name}.{name}", bound * 1e3, _ms(worst), "ms",
+                             "EXCEEDS" if exceeds else "ok", "CAN RTA; " + note))
+    return rows
+
+
+# --------------------------------------------------------------------------------------------- control loops
+def _subsystem(A: np.ndarray, B: np.ndarray, C: np.ndarray, i_in: int, i_out: int) -> np.ndarray | None:
+    """States of the part of the plant that input ``i_in`` drives, if no other input reaches it and output
+    ``i_out`` reads only it; else None."""
+    n = A.shape[0]
+    reach = set(np.flatnonzero(B[:, i_in]).tolist())
+    frontier = list(reach)
+    while frontier:
+        j = frontier.pop()
+        for i in np.flatnonzero(A[:, j]).tolist():
+            if i not in reach:
+                reach.add(i)
+                frontier.append(i)
+    idx = np.array(sorted(reach), dtype=int)
+    others = np.setdiff1d(np.arange(n), idx)
+    if idx.size == 0:
+        return None
+    if others.size and (np.any(A[np.ix_(idx, others)] != 0) or np.any(C[i_out, others] != 0)):
+        return None
+    if B.shape[1] > 1 and np.any(np.delete(B, i_in, axis=1)[idx, :] != 0):
+        return None
+    return idx
+
+
+def _loop_rows(scenario: Any, sim: Any, jobs: pd.DataFrame, result: Any) -> list[dict]:
+    from netsim.analysis.lqg import SampledLoop, TimingDistribution, pid_controller, transient_cost
+
+    plant = sim.plant
+    if plant is None or not all(hasattr(plant, k) for k in ("A", "B", "C")) or getattr(plant, "D", None) is None:
+        return []
+    A, B, C = np.asarray(plant.A, float), np.asarray(plant.B, float), np.asarray(plant.C, float)
+    if np.any(np.asarray(plant.D) != 0) or np.any(np.asarray(getattr(plant, "Qc", 0)) != 0):
+        return []
+    raw = getattr(result, "metrics", None)
+    metrics = {} if raw is None else dict(raw)
+    t_end = float(result.signals["time_s"].max()) if len(result.signals) else 0.0
+    rows: list[dict] = []
+    for chain in _pid_chains(scenario):
+        sample_node, sample_task, ctrl, act_node, act_task, adc, dac = chain
+        name = f"{ctrl[0]}.{ctrl[1].name}"
+        p = ctrl[1].params
+        y_name = plant.output_names[plant.output_index(scenario.io[adc].output)]
+        metric = metrics.get(f"{y_name}.ISE")
+        ref = p.get("reference")
+        if metric is None or ref is None:
+            continue
+
+        def na(why: str) -> None:
+            rows.append(_row("loop", name, "n/a", float(metric), "ISE", "n/a", why))
+
+        sig = sim.signals.get(ref)
+        if type(sig).__name__ != "Square" or getattr(sig, "bias", 1.0) != 0.0:
+            na("the analysis handles a square-wave reference with bias 0")
+            continue
+        io_in, io_out = scenario.io[dac], scenario.io[adc]
+        if io_in.type != "dac" or io_out.type != "adc" or io_out.noise_std or io_out.quant_step or \
+                io_in.saturation or io_out.saturation:
+            na("the analysis needs a plain ADC and DAC (no noise, quantisation or saturation)")
+            continue
+        i_in, i_out = plant.input_index(io_in.input), plant.output_index(io_out.output)
+        idx = _subsystem(A, B, C, i_in, i_out)
+        if idx is None:
+            na("the loop's input and output do not isolate a part of the plant")
+            continue
+        from netsim.timebase import parse_time, to_seconds
+
+        timed = scenario.nodes[sample_node].task(sample_task) if sample_node is not None else ctrl[1]
+        if timed.release_kind != "periodic" or not timed.period:
+            na("the sampling task is not periodic")
+            continue
+        h = to_seconds(timed.period)
+        h_given = p.get("h")
+        h_ctrl = h if h_given is None else to_seconds(parse_time(h_given) if isinstance(h_given, str) else int(h_given))
+        sj = _jobs_of(jobs, sample_node or ctrl[0], sample_task or ctrl[1].name).sort_values("release_s")
+        aj = _jobs_of(jobs, act_node or ctrl[0], act_task or ctrl[1].name).sort_values("release_s")
+        sj = sj.dropna(subset=["start_s"])
+        aj = aj.dropna(subset=["finish_s"])
+        k = min(len(sj), len(aj))
+        if k == 0:
+            na("no finished jobs")
+            continue
+        offsets = (sj["start_s"].to_numpy()[:k] - sj["release_s"].to_numpy()[:k])
+        delays = aj["finish_s"].to_numpy()[:k] - sj["start_s"].to_numpy()[:k]
+        if np.any(delays < 0) or (sample_node is not None and len(sj) - len(aj) > 1):
+            na("samples and actuations do not pair one to one")
+            continue
+        res = 10e-6
+        off = TimingDistribution.empirical(offsets, resolution_s=res)
+        keys = np.round(offsets / res)
+        dly = [TimingDistribution.empirical(delays[keys == round(v / res)], resolution_s=res) for v in off.values]
+        worst = float(np.max(offsets + delays))
+        if worst > h + min(off.values):
+            na(f"output {worst * 1e3:.3g} ms after the nominal sample, past the next one (h = {h * 1e3:.3g} ms)")
+            continue
+        Asub, Bsub, Csub = A[np.ix_(idx, idx)], B[idx, i_in : i_in + 1], C[i_out : i_out + 1, idx]
+        ns = idx.size
+        Aa = np.zeros((ns + 1, ns + 1))
+        Aa[:ns, :ns] = Asub
+        Ba = np.vstack([Bsub, [[0.0]]])
+        Cm = np.zeros((2, ns + 1))
+        Cm[0, ns] = 1.0
+        Cm[1, :ns] = Csub
+        e = np.hstack([Csub, [[-1.0]]])
+        Ac, Bc, Cc, Dc = pid_controller(float(p.get("K", 1.0)), p.get("Ti"), float(p.get("Td", 0.0)),
+                                        float(p.get("N", 10.0)), h_ctrl, b=float(p.get("b", 1.0)))
+        loop = SampledLoop(A=Aa, B=Ba, C=Cm, Ac=Ac, Bc=Bc, Cc=Cc, Dc=Dc, period_s=h, Q1=e.T @ e, Q2=[[0.0]])
+        x0 = np.zeros(ns + 1)
+        if plant.x0 is not None:
+            x0[:ns] = np.asarray(plant.x0, float)[idx]
+        x0[ns] = sig(0)
+        flip = np.eye(ns + 1)
+        flip[ns, ns] = -1.0
+        jumps = [(bp * NS, flip) for bp in sig.breakpoints(0, int(t_end / NS))]
+        y0 = float((Csub @ x0[:ns])[0])
+        cost = transient_cost(loop, t_end, x0, delay=dly, offset=off, jumps=jumps, xc0=[0.0, 0.0, y0])
+        rel = (float(metric) - cost) / cost if cost else float("nan")
+        rows.append(_row("loop", name, cost, float(metric), "ISE", f"{rel * 100:+.1f} %",
+                         f"E[ISE] of {ref}-{y_name}, 0-{t_end:.3g} s, {sum(len(d.values) for d in dly)} (offset, delay) "
+                         "pairs of the run"))
+    return rows
+
+
+def _pid_chains(scenario: Any) -> list[tuple[Any, ...]]:
+    """PID loops: ``(sample node, sample task, (ctrl node, ctrl task), act node, act task, adc, dac)``; the
+    sampling and actuating tasks are None when one ``periodic_controller`` does all three."""
+    out = []
+    for node_name, node in scenario.nodes.items():
+        for t in node.tasks:
+            if t.program == "periodic_controller":
+                out.append((None, None, (node_name, t), None, None, t.params.get("channel"),
+                            t.params.get("output_channel")))
+            elif t.program == "controller" and t.params.get("network") and t.release_kind == "on_message":
+                net = t.params["network"]
+                samplers = [(n, s) for n, nd in scenario.nodes.items() for s in nd.tasks
+                            if s.program == "sampler" and s.params.get("network") == net
+                            and s.params.get("to") == node_name and s.release_kind == "periodic"]
+                acts = [(n, a) for n, nd in scenario.nodes.items() for a in nd.tasks
+                        if a.program == "actuator" and a.params.get("network") == net and n == t.params.get("to")]
+                if len(samplers) == 1 and len(acts) == 1:
+                    (sn, s), (an, a) = samplers[0], acts[0]
+                    out.append((sn, s.name, (node_name, t), an, a.name, s.params.get("channel"),
+                                a.params.get("channel")))
+    return out
+
+
+def analyze_run(scenario: Any, result: Any) -> pd.DataFrame:
+    """The comparison table of ``scenario`` and its run ``result`` (columns :data:`COLUMNS`).
+
+    Parameters
+    ----------
+    scenario
+        The validated :class:`~netsim.scenario.Scenario` that was run.
+    result
+        Its :class:`~netsim.results.RunResult`.
+    """
+    from netsim.scenario import build
+
+    sim = build(scenario)
+    jobs = result.jobs
+    rows, bounds = _task_rows(scenario, jobs)
+    rows += _message_rows(scenario, sim, jobs, result.messages, bounds)
+    rows += _loop_rows(scenario, sim, jobs, result)
+    return pd.DataFrame(rows, columns=COLUMNS)
