@@ -234,6 +234,16 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
             T.add("5 network", f"front {fp}, loss {lo}", "coverage y", d["unicycle.cover_y_all"].mean(), "", "")
             T.add("5 network", f"front {fp}, loss {lo}", "RMS y front part [m]", d["unicycle.rmse_y_front"].mean(), "", "")
         L.append("")
+    zb = F["zigbee"]
+    L += ["802.15.4 radio (`unicycle_zigbee.yaml`, one run, nodes 0.1 m apart): mean message delay "
+          f"{_f(zb['net.radio.mean_delay_s'] * 1e3)} ms (max {_f(zb['net.radio.max_delay_s'] * 1e3)} ms, CSMA/CA "
+          f"backoffs and {int(zb['net.radio.retransmissions'])} retransmissions); {int(zb['control.ekf.filter.late'])} "
+          f"of {int(zb['control.ekf.filter.fused_front'] + zb['control.ekf.filter.fused_side'])} fused samples "
+          f"arrived after their sample's filter job and were fused at their sample time; {int(zb['net.radio.dropped'])} "
+          f"frames lost; coverage x / y / theta {_pct(zb['unicycle.cover_x_all'])} / {_pct(zb['unicycle.cover_y_all'])} "
+          f"/ {_pct(zb['unicycle.cover_theta_all'])} (one run: compare with the CAN sweep's spread).", ""]
+    T.add("5 network", "802.15.4 radio, one run", "late samples fused at their sample time",
+          zb["control.ekf.filter.late"], "", "")
     dl = F.get("delay")
     dm = F["delay_margin"]
     L += [f"Command delay. On the linear error model with u = -K e' and the true error fed back, the loop loses "
@@ -261,8 +271,9 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
           "test_unicycle_scenario.py checks both, and that a uniformly 0-35 ms late sensor stream ends in the same "
           "estimate as an on-time one).", "",
           "## Not done (time)", "",
-          "- The 802.15.4 radio variant and Gilbert-Elliott burst loss (the scenario takes them with --set on "
-          "networks.can); the Q/R study over the network; the speed benchmark (200 runs against a numpy loop).", ""]
+          "- Gilbert-Elliott burst loss (the scenarios take it with --set networks.can.loss=...), Monte-Carlo runs "
+          "on the radio, the Q/R study over the network. The speed benchmark is opt-in: "
+          "`pytest -m benchmark -s tests/models/unicycle/test_unicycle_bench.py`.", ""]
     text = "\n".join(L)
     (out / "README.md").write_text(text, encoding="utf-8")
     return text

@@ -148,6 +148,7 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     base = netsim.run(_SCEN / "unicycle_ekf.yaml")
     lqr = netsim.run(_SCEN / "unicycle_lqr.yaml")
     facts["base"], facts["lqr_run"] = base.metrics, lqr.metrics
+    facts["zigbee"] = netsim.run(_SCEN / "unicycle_zigbee.yaml").metrics
     # ---------------------------------------------------------------- Monte-Carlo (numpy loop)
     t = np.arange(int(round(10 / 0.01)) + 1) * 0.01
     qr_runs: dict[str, list[dict]] = {}
