@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import netsim  # noqa: F401  (pins BLAS before numpy work)
-from models.unicycle.design import LQR_Q, LQR_R, PHASES, Trajectory, cart_frame_error, error_model, lqr_gain, make_ekf
+from models.unicycle.design import LQR_Q, LQR_R, PHASES, Trajectory, cart_frame_error, error_model, lqr_gain
 from models.unicycle.model import P0, Q_REPORT, R_REPORT, TS, XI0_HAT, arc
 from models.unicycle.reference import simulate
 
@@ -54,11 +54,17 @@ def test_derived_error_model_matches_the_nonlinear_error_dynamics():
 
 
 def test_initial_band_widths_are_sqrt_diag_P0():
+    from models.unicycle.design import Phase
+
+    # sensors off at the first sample: the band at sample 0 is the prior's, sqrt(diag(P0)) (eq 21)
+    o = simulate(3, phases=(Phase(1.0, 0.03, 0.0, False, False), Phase(1.0, 0.03, 0.0, True, True)))
+    assert np.array_equal(np.sqrt(np.diagonal(o["P"][0])), np.sqrt(np.diag(P0)))
+    # sigma x = 3.2 cm, sigma theta = 5 degrees: the report's reading of its P0
+    assert np.sqrt(P0[0, 0]) == pytest.approx(0.0316, abs=1e-4)
+    assert math.degrees(np.sqrt(P0[2, 2])) == pytest.approx(5.0, abs=0.01)
+    # with both sensors on at sample 0 the first corrections can only narrow the bands
     o = simulate(3, phases=PHASES)
-    ekf = make_ekf()
-    assert np.allclose(np.sqrt(np.diag(ekf.P)), np.sqrt(np.diag(P0)))
-    # at sample 0 the first measurements have been fused: the bands can only have narrowed
-    assert np.all(np.sqrt(np.diag(o["P"][0])) <= np.sqrt(np.diag(P0)) + 1e-15)
+    assert np.all(np.sqrt(np.diagonal(o["P"][0])) < np.sqrt(np.diag(P0)))
 
 
 def test_det_P_grows_monotonically_in_the_blackout():
