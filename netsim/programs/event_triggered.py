@@ -37,7 +37,7 @@ from __future__ import annotations
 import logging
 from typing import Any, Generator, Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from netsim.control.cascade import CascadeActions
 from netsim.control.controller_trigger import ControllerTrigger
@@ -261,6 +261,13 @@ class PlayoutActuator:
         record_as: str | None = "u"
         record_past_end: str | None = Field("u_past_end", description="tick mode: signal set to 1 for a period "
                                             "played past the end of an h >= 1 packet (0 otherwise)")
+
+        @model_validator(mode="after")
+        def _receive_needs_a_network(self) -> "PlayoutActuator.Params":
+            # checked here so that validate refuses it, not only build (issue 14 B: validate said valid, run failed)
+            if self.mode == "receive" and not self.network:
+                raise ValueError("mode 'receive' needs 'network': add the network its packets arrive on")
+            return self
 
     def __init__(self, ctx: Any, params: "PlayoutActuator.Params") -> None:
         self.ctx = ctx

@@ -242,3 +242,11 @@ def test_load_scenario_raises_with_every_problem(base):
         load_scenario(raw)
     assert [p.path for p in info.value.problems] == ["seed", "nodes.sensor.tasks[0].period"]
     assert "scenario has 2 problems" in str(info.value)
+
+
+def test_a_receiving_playout_actuator_without_network_is_refused_at_validate():
+    """Found by the fuzz figures: validate said valid, run failed at build ('needs `network`')."""
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "hdd_case3.yaml"
+    problems = [p for p in check_scenario(path, {"nodes.actuator.handlers[0].params.network": None}) if p.is_error]
+    assert [(p.path, p.message) for p in problems] == [
+        ("nodes.actuator.handlers[0].params", "mode 'receive' needs 'network': add the network its packets arrive on")]
