@@ -21,26 +21,26 @@ What is checked
 Time fields beyond :data:`netsim.timebase.MAX_TIME` are refused where they are parsed (:mod:`netsim.units`).
 
 Integers written with more digits than Python converts from text (``sys.get_int_max_str_digits()``, 4300 by
-default) cannot be read exactly: the YAML constructor of :func:`round_trip_constructor` reads them as a placeholder
-of the same sign with 4300 digits, far beyond the number limit, so they are refused here with their path and
-line like any other too-large number (before: a message naming only the file). ``seed`` is an identifier, not a
+default) cannot be read exactly: the loader reads them as :func:`long_integer_placeholder` (the sign, and 4300
+digits), far beyond the number limit, so they are refused here with their path and line like any other
+too-large number (before: a message naming only the file). ``seed`` is an identifier, not a
 quantity: it is exempt from the number limit but must stay below :data:`SEED_LIMIT`.
 """
 
 from __future__ import annotations
 
 import math
-import sys
 from typing import Any, Callable, Final, Iterator
 
 from netsim.scenario.paths import PathPart, format_path
 from netsim.scenario.problems import WARNING, Problem
+from netsim.scenario.safe_yaml import long_integer_placeholder  # what the loader reads for a 5000-digit integer
 from netsim.scenario.schema import MAX_NAME_LENGTH
 from netsim.timebase import TimeParseError, parse_time
 from netsim.units import NUMBER_LIMIT
 
 __all__ = ["NAME_MAX", "EVENTS_WARN", "SEED_LIMIT", "LineOf", "limit_problems", "expected_events",
-           "round_trip_constructor", "long_integer_placeholder"]
+           "long_integer_placeholder"]
 
 #: Longest name (node, task, handler, network, signal, io channel; the schema limits the scenario's own name to
 #: the same), in characters.
@@ -242,54 +242,3 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[P
                                             "those periods if that was not meant", severity=WARNING))
     return problems
 
-
-def round_trip_constructor() -> type:
-    """ruamel.yaml's round-trip constructor, reading integers with too many digits as a refusable placeholder.
-
-    Python converts at most ``sys.get_int_max_str_digits()`` digits of text to an integer and raises
-    ``ValueError`` beyond (a guard against slow conversions); ruamel would pass that error up with no line.
-    This constructor reads such an integer as :func:`long_integer_placeholder`, which :func:`limit_problems`
-    refuses at its path. Use it as ``YAML(typ="rt").Constructor = round_trip_constructor()``.
-
-    Returns
-    -------
-    type
-        A subclass of ``ruamel.yaml.constructor.RoundTripConstructor``.
-    """
-    global _CONSTRUCTOR
-    if _CONSTRUCTOR is None:
-        from ruamel.yaml.constructor import RoundTripConstructor
-
-        class _BoundedIntConstructor(RoundTripConstructor):
-            def construct_bounded_int(self, node: Any) -> Any:
-                try:
-                    return RoundTripConstructor.construct_yaml_int(self, node)
-                except ValueError:
-                    text = str(node.value).replace("_", "").strip()
-                    digits = sum(ch.isdigit() for ch in text)
-                    if digits <= _max_str_digits():
-                        raise
-                    return long_integer_placeholder(text.startswith("-"))
-
-        _BoundedIntConstructor.add_constructor("tag:yaml.org,2002:int",
-                                               _BoundedIntConstructor.construct_bounded_int)
-        _CONSTRUCTOR = _BoundedIntConstructor
-    return _CONSTRUCTOR
-
-
-_CONSTRUCTOR: type | None = None
-
-
-def long_integer_placeholder(negative: bool) -> int:
-    """What a YAML constructor returns for an integer with more digits than Python reads from text.
-
-    ``-/+ 10 ** (limit - 1)``: the written sign, and the most digits Python turns back into text (so a later
-    message can show it), far beyond :data:`netsim.units.NUMBER_LIMIT`, so :func:`limit_problems` refuses it
-    at its YAML path and line ("an integer of over 4000 digits ...; write a smaller value").
-    """
-    return (-1 if negative else 1) * 10 ** (_max_str_digits() - 1)
-
-
-def _max_str_digits() -> int:
-    limit = sys.get_int_max_str_digits()
-    return limit if limit > 0 else 4300  # 0: no limit was set (then ValueError never comes here)
