@@ -125,6 +125,7 @@ and call entries interleave by the same table.
 from __future__ import annotations
 
 import hashlib
+from array import array
 from dataclasses import dataclass, field
 from heapq import heappop, heappush
 from typing import Any, Callable, Final, Iterator, NamedTuple
@@ -336,13 +337,29 @@ def stream_seed(seed: int, name: str) -> np.random.SeedSequence:
     return np.random.SeedSequence(entropy=int(seed), spawn_key=key)
 
 
+class Samples(array):
+    """A typed array of samples (``array('q')`` times, ``array('d')`` values) that compares equal to a list of
+    the same numbers, as the lists it replaces did."""
+
+    __slots__ = ()
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, list):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+        return bool(array.__eq__(self, other))  # type: ignore[operator]
+
+    __hash__ = None  # type: ignore[assignment]
+
+
 @dataclass
 class Recorder:
     """Time series recorded during a run, one list pair per signal name.
 
     ``record(name, t_ns, value)`` appends a sample; the results layer turns the samples into the wide
     ``signals.csv`` table (time first, one column per signal). Values are floats; a vector value is
-    recorded as ``name[0]``, ``name[1]`` ....
+    recorded as ``name[0]``, ``name[1]`` .... Samples are kept in typed arrays (``array('q')`` times,
+    ``array('d')`` values: 16 bytes per sample against about 60 in lists of Python objects, issue 19's flat
+    memory); they take ``append``, indexing and ``numpy.asarray`` as lists do.
     """
 
     enabled: set[str] | None = None  # None records everything
@@ -370,8 +387,8 @@ class Recorder:
     def _append(self, name: str, t_ns: int, value: float) -> None:
         ts = self.times.get(name)
         if ts is None:
-            ts = self.times[name] = []
-            self.values[name] = []
+            ts = self.times[name] = Samples("q")
+            self.values[name] = Samples("d")
         ts.append(int(t_ns))
         self.values[name].append(value)
 
