@@ -112,3 +112,19 @@ def test_trajectory_ends_where_the_arcs_say():
     tr = Trajectory()
     R = 0.02 / (math.pi / 4)
     assert np.allclose(tr.poses[-1], XI0_HAT + [0.12 + R, R + 0.06, math.pi / 2], atol=1e-12)
+
+
+def test_qr_ordering_is_measured_rougher_with_5Q_smoother_with_5R():
+    # the report's section 3.2.5: more Q -> more noise in the estimates, more R -> smoother. Measured with common
+    # random numbers (the same 8 seeds, the truth's noise unchanged) as the RMS second difference of y_hat in the
+    # straight part, where the reference's is zero
+    def rough(fq, fr):
+        vals = []
+        for s in range(8):
+            o = simulate(300 + s, Q_filter=fq * Q_REPORT, R_filter=fr * R_REPORT)
+            vals.append(np.diff(o["xhat"][:400, 1], n=2))
+        return float(np.sqrt(np.mean(np.square(vals))))
+
+    base, more_q, more_r = rough(1, 1), rough(5, 1), rough(1, 5)
+    assert more_q > base > more_r
+    assert more_r < 0.7 * base  # 5R lets much less noise through (measured: about 0.4x)
