@@ -114,6 +114,7 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
         For a missing or unreadable file, a file refused by :mod:`netsim.scenario.safe_yaml` (size, nesting,
         aliases, tags, duplicate keys) or a YAML syntax error, with its line.
     """
+    from netsim.scenario.messages import path_at_line
     from netsim.scenario.safe_yaml import YamlRefused, load_file
 
     name = os.fspath(path)
@@ -121,8 +122,9 @@ def read_yaml(path: str | os.PathLike[str]) -> tuple[Any, LineIndex]:
         data, text = load_file(name)
     except FileNotFoundError:
         raise ScenarioError([Problem("", f"file not found: {name}", None, name)]) from None
-    except YamlRefused as exc:
-        raise ScenarioError([Problem("", exc.message, exc.line, name)]) from None
+    except YamlRefused as exc:  # placed by line; the key or item on that line gives the path (a duplicate key)
+        where = path_at_line(name, exc.line) if exc.line is not None and not exc.syntax else ""
+        raise ScenarioError([Problem(where, exc.message, exc.line, name)]) from None
     return data, LineIndex(text)
 
 

@@ -18,7 +18,7 @@ from netsim.scenario.paths import PathPart, did_you_mean, format_path
 from netsim.scenario.problems import Problem, shorten
 from netsim.scenario.schema import EXEC_DISTS, IO_TYPES, TAG_MARK
 
-__all__ = ["problems_from_validation_error", "show_value", "shorten", "shorten_problem"]
+__all__ = ["problems_from_validation_error", "show_value", "shorten", "shorten_problem", "path_at_line"]
 
 
 def shorten_problem(problem: Problem) -> Problem:
@@ -242,3 +242,48 @@ def problems_from_validation_error(
         parts, message = _message(dict(err), model)
         problems.append(Problem(format_path([*prefix, *parts]), message, severity=severity))
     return problems
+
+
+def path_at_line(name: str, line: int) -> str:
+    """The YAML path of the first key or list item that starts on ``line`` of the file ``name``; "" if none.
+
+    For refusals the YAML reader can place only by line (a duplicate key, a forbidden tag, a recursive alias):
+    the file is read again within :mod:`netsim.scenario.yaml_limits`' bounds and composed into nodes, never
+    built, and every node is visited once (an alias is not followed twice), so an alias bomb costs no more
+    than its text. A text that does not even compose has no path.
+    """
+    from yaml.nodes import MappingNode, ScalarNode, SequenceNode
+
+    from netsim.scenario.safe_yaml import ScenarioLoader
+    from netsim.scenario.yaml_limits import read_text
+
+    try:
+        loader = ScenarioLoader(read_text(name))
+        try:
+            root = loader.get_single_node()
+        finally:
+            loader.dispose()
+    except Exception:  # noqa: BLE001 - whatever stops the composer, the problem keeps its line and no path
+        return ""
+    stack: list[tuple[Any, tuple[PathPart, ...]]] = [(root, ())]
+    seen: set[int] = set()
+    while stack:  # depth first, in document order
+        node, parts = stack.pop()
+        if node is None or id(node) in seen:
+            continue
+        seen.add(id(node))
+        children: list[tuple[Any, tuple[PathPart, ...]]] = []
+        if isinstance(node, MappingNode):
+            for key, value in node.value:
+                at = (*parts, key.value if isinstance(key, ScalarNode) else "?")
+                if key.start_mark.line + 1 == line:
+                    return format_path(list(at))
+                children.append((value, at))
+        elif isinstance(node, SequenceNode):
+            for i, item in enumerate(node.value):
+                at = (*parts, i)
+                if item.start_mark.line + 1 == line:
+                    return format_path(list(at))
+                children.append((item, at))
+        stack.extend(reversed(children))
+    return ""

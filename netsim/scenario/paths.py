@@ -217,7 +217,8 @@ def set_path(d: Any, path: str | Sequence[PathPart], value: Any) -> None:
             if hint:
                 raise ConfigError(f"no key '{part}' in '{where}'{hint}", text)
             if isinstance(parts[i + 1], int):
-                raise ConfigError(f"'{format_path([*done, part])}' does not exist, so it has no item [{parts[i + 1]}]", text)
+                raise ConfigError(f"'{format_path([*done, part])}' does not exist, so it has no item [{parts[i + 1]}]; "
+                                  "fix the path", text)
             node[part] = {}
         node = _step(node, part, done, text)
         done.append(part)

@@ -133,6 +133,17 @@ def test_duplicate_node_keys_are_refused_with_their_line(tmp_path):
     path.write_text("name: d\nduration: 1 s\nnodes:\n  a: {tasks: []}\n  a: {tasks: []}\n")
     (p,) = check_scenario(path)
     assert p.line == 5 and "duplicate key" in p.message
+    assert p.path == "nodes.a"  # the second key (before: no path, the reader places refusals by line only)
+
+
+def test_a_refusal_the_reader_places_by_line_gets_the_path_of_that_line(tmp_path):
+    from netsim.scenario.messages import path_at_line
+
+    path = tmp_path / "tag.yaml"
+    path.write_text("name: t\nduration: 1 s\nnodes:\n  a:\n    tasks:\n      - !!python/object:os.system x\n")
+    (p,) = check_scenario(path)
+    assert (p.path, p.line) == ("nodes.a.tasks[0]", 6) and "is not allowed" in p.message
+    assert path_at_line(str(path), 4) == "nodes.a" and path_at_line(str(path), 99) == ""
 
 
 def test_duplicate_task_names_name_the_first_definition(base):
