@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Iterable
 
 __all__ = ["write_atomic", "make_unique_dir"]
 
 _FLAGS = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_BINARY", 0)
 
 
-def write_atomic(path: str | Path, data: str | bytes, encoding: str = "utf-8") -> Path:
+def write_atomic(path: str | Path, data: str | bytes | Iterable[str], encoding: str = "utf-8") -> Path:
     """Write ``data`` to ``path`` atomically (temporary file in the same folder, then rename).
 
     Parameters
@@ -27,7 +28,8 @@ def write_atomic(path: str | Path, data: str | bytes, encoding: str = "utf-8") -
     path
         Final file path; its folder must exist.
     data
-        Text (encoded with ``encoding``, line ends written as given) or bytes.
+        Text (encoded with ``encoding``, line ends written as given) or bytes; or an iterable of text chunks,
+        written one by one (a long table never has to be held as one string).
 
     Returns
     -------
@@ -35,7 +37,7 @@ def write_atomic(path: str | Path, data: str | bytes, encoding: str = "utf-8") -
         ``path``.
     """
     final = Path(path)
-    payload = data.encode(encoding) if isinstance(data, str) else data
+    chunks: Iterable[str | bytes] = [data] if isinstance(data, (str, bytes)) else data
     tmp = final.with_name(f".{final.name}.{os.getpid()}.tmp")
     try:
         fd = os.open(tmp, _FLAGS, 0o644)
@@ -44,7 +46,8 @@ def write_atomic(path: str | Path, data: str | bytes, encoding: str = "utf-8") -
         fd = os.open(tmp, _FLAGS, 0o644)
     try:
         with os.fdopen(fd, "wb") as fh:
-            fh.write(payload)
+            for chunk in chunks:
+                fh.write(chunk.encode(encoding) if isinstance(chunk, str) else chunk)
         os.replace(tmp, final)  # no fsync: a killed process leaves the old file or the new one (not power loss)
     except BaseException:
         try:
