@@ -90,3 +90,35 @@ def test_default_output_leaves_the_resolved_scenario_unchanged() -> None:
     assert load_scenario(CAN).resolved_dict()["output"] == {"dir": None, "plot": False}
     changed = load_scenario(CAN, overrides={"output.schedule": False}).resolved_dict()["output"]
     assert changed == {"dir": None, "plot": False, "schedule": "off"}
+
+
+def test_signals_table_holds_values_as_pandas_reindex_ffill_does() -> None:
+    """The numpy signals table equals the pandas construction it replaced (an independent computation here)."""
+    import pandas as pd
+
+    from netsim.results import signals_table
+    from netsim.timebase import S
+
+    def by_pandas(times: dict, values: dict) -> pd.DataFrame:
+        cols = {}
+        for n in times:
+            s = pd.Series(np.asarray(values[n], dtype=float), index=np.asarray(times[n], dtype=np.int64))
+            s = s[~s.index.duplicated(keep="last")].sort_index(kind="stable")
+            cols[n] = s
+        union = np.unique(np.concatenate([c.index.to_numpy() for c in cols.values()]))
+        frame = pd.DataFrame({n: c.reindex(union).ffill() for n, c in cols.items()})
+        frame.insert(0, "time_s", union / S)
+        return frame.reset_index(drop=True)
+
+    rng = np.random.default_rng(1)
+    for _ in range(200):  # unsorted and repeated instants, NaN samples (held over), signals starting late
+        times, values = {}, {}
+        for n in "abc":
+            k = int(rng.integers(1, 30))
+            t = rng.integers(0, 50, k)
+            t = np.sort(t) if rng.random() < 0.5 else t
+            v = rng.normal(size=k)
+            v[rng.random(k) < 0.3] = np.nan
+            times[n], values[n] = list(t), list(v)
+        got = signals_table(times, values)
+        assert got.equals(by_pandas(times, values)[list(got.columns)])

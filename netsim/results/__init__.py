@@ -168,18 +168,35 @@ def signals_table(
     ordered += sorted(n for n in names if n not in ordered)
     if not ordered:
         return pd.DataFrame({"time_s": pd.Series([], dtype=float)})
-    cols: dict[str, pd.Series] = {}
+    series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     for n in ordered:
-        s = pd.Series(np.asarray(values[n], dtype=float), index=np.asarray(times[n], dtype=np.int64))
-        if not s.index.is_unique:
-            s = s[~s.index.duplicated(keep="last")]
-        if not s.index.is_monotonic_increasing:
-            s = s.sort_index(kind="stable")
-        cols[n] = s
-    union = np.unique(np.concatenate([c.index.to_numpy() for c in cols.values()]))
-    frame = pd.DataFrame({n: c.reindex(union).ffill() for n, c in cols.items()})
-    frame.insert(0, "time_s", union / S)
-    return frame.reset_index(drop=True)
+        t = np.asarray(times[n], dtype=np.int64)
+        v = np.asarray(values[n], dtype=float)
+        if len(t) > 1 and not bool(np.all(t[1:] > t[:-1])):  # out of order or repeated instants (rare)
+            order = np.argsort(t, kind="stable")
+            t, v = t[order], v[order]
+            last = np.append(t[1:] != t[:-1], True)  # the last sample of each instant counts
+            t, v = t[last], v[last]
+        series[n] = (t, v)
+    union = np.unique(np.concatenate([t for t, _ in series.values()]))
+    data: dict[str, np.ndarray] = {"time_s": union / S}
+    for n, (t, v) in series.items():
+        data[n] = _held(t, v, union)
+    return pd.DataFrame(data, copy=False)
+
+
+def _held(t: np.ndarray, v: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Each signal's value held from its samples ``(t, v)`` (sorted, unique instants) at the instants ``at``: the
+    last sample at or before each instant, NaN before the first; a NaN sample holds the last value before it (what
+    ``reindex(at).ffill()`` gives, without building a pandas Series per signal)."""
+    k = np.searchsorted(t, at, side="right") - 1
+    out = np.where(k >= 0, v[np.clip(k, 0, None)], np.nan)
+    missing = np.isnan(out)
+    if missing.any():  # forward fill: each NaN takes the last non-NaN value before it
+        idx = np.where(missing, 0, np.arange(len(out)))
+        np.maximum.accumulate(idx, out=idx)
+        out = out[idx]  # a NaN with no value before it (idx 0 pointing at a NaN) stays NaN
+    return out
 
 
 def _ns_column(values: list[Any]) -> np.ndarray:
