@@ -523,6 +523,12 @@ class _Checker:
                     self.name_ref(v, self.signals, "signal", [*where, i])
             elif key == "to":
                 self.to_ref(node, value, values.get("network"), where)
+            elif isinstance(value, (dict, BaseModel)):  # nested parameters follow the same conventions
+                self.conventions(node, _values(value), where)
+            elif isinstance(value, list):  # and so do lists of them (measurements: [{network: can, ...}])
+                for i, item in enumerate(value):
+                    if isinstance(item, (dict, BaseModel)):
+                        self.conventions(node, _values(item), [*where, i])
 
     def name_ref(self, value: Any, known: list[str], what: str, at: list[PathPart]) -> None:
         if isinstance(value, str) and value not in known:

@@ -250,3 +250,12 @@ def test_a_receiving_playout_actuator_without_network_is_refused_at_validate():
     problems = [p for p in check_scenario(path, {"nodes.actuator.handlers[0].params.network": None}) if p.is_error]
     assert [(p.path, p.message) for p in problems] == [
         ("nodes.actuator.handlers[0].params", "mode 'receive' needs 'network': add the network its packets arrive on")]
+
+
+def test_a_network_named_inside_a_list_of_program_parameters_is_checked():
+    """state_feedback's measurements: [{network: ...}]: a ghost network was accepted by validate and run (found by
+    the fuzz figures); nested parameters follow the same naming conventions as top-level ones."""
+    path = Path(__file__).resolve().parents[2] / "scenarios" / "unicycle_ekf.yaml"
+    at = "nodes.ekf.tasks[0].params.measurements[1].network"
+    problems = [p for p in check_scenario(path, {at: "ghost_ref"}) if p.is_error]
+    assert [(p.path, p.message.split(" (")[0]) for p in problems] == [(at, "unknown network 'ghost_ref'")]
