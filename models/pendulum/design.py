@@ -23,7 +23,7 @@ from models.pendulum.model import SENSOR_STD, TS, Linear, PendulumParams, discre
 
 __all__ = ["POLES", "Q_LQR", "R_LQR", "FD_CUTOFF_HZ", "MPC_HORIZON", "Designs", "designs", "estimator_dynamics",
            "hold_still_std", "ESTIMATORS", "kalman_entry", "linear_motion", "motion_errors",
-           "loop_gain", "delay_margin"]
+           "loop_gain", "delay_margin", "delay_spectral_radius"]
 
 #: The slides' observer poles.
 POLES = (0.55 + 0.20j, 0.55 - 0.20j, 0.72, 0.82)
@@ -224,3 +224,50 @@ def delay_margin(name: str, d: Designs, n: int = 20000) -> dict[str, float]:
         if pm / wc < best["margin_s"]:
             best = {"wc": wc, "pm_deg": math.degrees(pm), "margin_s": pm / wc}
     return best
+
+
+def _estimator_ss(name: str, d: Designs, cutoff_hz: float = FD_CUTOFF_HZ) -> tuple[np.ndarray, ...]:
+    """The estimator as ``s[k] = Fe s[k-1] + Ge y[k] + Be u[k-1]``, ``x_hat[k] = He s[k] + Je y[k]``."""
+    A, B, C = d.lin.Ad, d.lin.Bd, d.lin.C
+    I = np.eye(4)
+    if name in ("luenberger", "kalman"):
+        L = d.L_cur if name == "luenberger" else d.K_kal
+        return (I - L @ C) @ A, L, (I - L @ C) @ B, I, np.zeros((4, 2))
+    if name == "luenberger_printed":
+        return A - d.L_pred @ C, d.L_pred, B, I, np.zeros((4, 2))
+    if name in ("fd_raw", "fd_lowpass"):
+        h = d.lin.h
+        a = 0.0 if name == "fd_raw" else math.exp(-h * 2.0 * math.pi * cutoff_hz)
+        F1 = np.array([[a, -(1.0 - a) / h], [0.0, 0.0]])  # per angle: [v_f, previous position]
+        G1 = np.array([[(1.0 - a) / h], [1.0]])
+        He = np.zeros((4, 4))
+        He[1, 0] = He[3, 2] = 1.0
+        Je = np.array([[1.0, 0.0], [0.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
+        return np.kron(np.eye(2), F1), np.kron(np.eye(2), G1), np.zeros((4, 1)), He, Je
+    raise ValueError(f"unknown estimator {name!r}")
+
+
+def delay_spectral_radius(name: str, d: Designs, steps: int) -> float:
+    """Spectral radius of the linear discrete loop (estimator ``name`` + LQR) when the input reaches the plant
+    ``steps`` whole samples late (``u_applied[k] = u[k - steps]``): below 1 the loop is stable.
+
+    An exact check of :func:`delay_margin` at whole-sample delays (no frequency-response approximation).
+    """
+    A, B, C, K = d.lin.Ad, d.lin.Bd, d.lin.C, d.K_lqr
+    Fe, Ge, Be, He, Je = _estimator_ss(name, d)
+    ne = Fe.shape[0]
+    D = max(int(steps), 1)
+    n = 4 + ne + D  # z[k] = [x[k], s[k-1], u[k-1], ..., u[k-D]]
+    S = np.zeros((ne, n))
+    S[:, :4], S[:, 4:4 + ne], S[:, 4 + ne:5 + ne] = Ge @ C, Fe, Be
+    U = -K @ He @ S
+    U[:, :4] += -(K @ Je @ C)
+    UA = U if steps == 0 else np.eye(n)[4 + ne + steps - 1:4 + ne + steps]
+    M = np.zeros((n, n))
+    M[:4, :4] = A
+    M[:4] += B @ UA
+    M[4:4 + ne] = S
+    M[4 + ne:5 + ne] = U
+    for i in range(1, D):
+        M[4 + ne + i, 4 + ne + i - 1] = 1.0
+    return float(np.max(np.abs(np.linalg.eigvals(M))))

@@ -75,9 +75,11 @@ LOSS_ESTIMATORS = ("fd_lowpass", "luenberger", "kalman")
 MPC_TIMINGS: dict[str, dict[str, Any]] = {
     "h20_0.1ms": {"horizon": 20, "per_iteration": "0.1 ms"},
     "h20_1ms": {"horizon": 20, "per_iteration": "1 ms"},
-    "h20_2ms": {"horizon": 20, "per_iteration": "2 ms"},
-    "h5_2ms": {"horizon": 5, "per_iteration": "2 ms"},
+    "h20_3ms": {"horizon": 20, "per_iteration": "3 ms"},
+    "h5_3ms": {"horizon": 5, "per_iteration": "3 ms"},
 }
+#: Initial tilt of the small-signal delay sweep (rad): the loop never reaches the 3 V limit.
+SMALL_TILT = 0.02
 
 
 # ------------------------------------------------------------------------------------------------ one run
@@ -116,6 +118,7 @@ def _measures(res: Any, case: dict[str, Any]) -> dict[str, float]:
     out["saturated_share"] = float(np.mean(np.abs(u) >= U_LIMIT - 1e-9))
     out["rms_theta"] = float(np.sqrt(np.mean(theta**2)))
     out["rms_alpha"] = float(np.sqrt(np.mean(alpha**2)))
+    out["rms_alpha_after_1s"] = float(np.sqrt(np.mean(alpha[late] ** 2)))
     cost = 5.0 * theta**2 + 20.0 * alpha**2 + u**2
     out["lqg_cost_per_step"] = float(np.mean(cost))
     out["lqg_cost_after_1s"] = float(np.mean(cost[late]))
@@ -181,13 +184,19 @@ def timing_cases() -> list[dict[str, Any]]:
             out.append({"kind": "delay", "scenario": "pendulum_network.yaml", "estimator": e, "seed": 1,
                         "act_delay_ms": dl, "overrides": {f"{NET}.estimator": ESTIMATORS[e],
                                                           "networks.act.delay.value": f"{dl} ms"}})
+    for e in DELAY_ESTIMATORS:
+        for dl in DELAYS_MS:
+            out.append({"kind": "delay_small", "scenario": "pendulum_network.yaml", "estimator": e, "seed": 1,
+                        "act_delay_ms": dl, "overrides": {f"{NET}.estimator": ESTIMATORS[e],
+                                                          "networks.act.delay.value": f"{dl} ms",
+                                                          "plant.x0": [0.0, 0.0, SMALL_TILT, 0.0]}})
     for e in LOSS_ESTIMATORS:
         for label, loss in LOSSES.items():
             out.append({"kind": "loss", "scenario": "pendulum_network.yaml", "estimator": e, "seed": 1,
                         "loss": label, "overrides": {f"{NET}.estimator": ESTIMATORS[e], "networks.sense.loss": loss}})
     for label, t in MPC_TIMINGS.items():
-        out.append({"kind": "mpc_timing", "scenario": "pendulum_mpc.yaml", "estimator": "kalman", "seed": 1,
-                    "timing": label, "overrides": {f"{RIP}.estimator": ESTIMATORS["kalman"],
+        out.append({"kind": "mpc_timing", "scenario": "pendulum_mpc.yaml", "estimator": "luenberger", "seed": 1,
+                    "timing": label, "overrides": {f"{RIP}.estimator": ESTIMATORS["luenberger"],
                                                    f"{RIP}.law.horizon": t["horizon"],
                                                    f"{RIP}.solve_time.per_iteration": t["per_iteration"]}})
     for e in ("fd_lowpass", "luenberger", "kalman"):
@@ -252,22 +261,30 @@ def hold_still_table(runs: pd.DataFrame) -> pd.DataFrame:
 
 def delay_table(runs: pd.DataFrame) -> pd.DataFrame:
     """Per estimator: the largest total delay with a stable loop, the first failing one, the prediction."""
-    from models.pendulum.design import delay_margin, designs
+    from models.pendulum.design import delay_margin, delay_spectral_radius, designs
 
     d = designs()
     base_ms = 1.1  # 0.5 ms offset + 0.5 ms execution + 0.1 ms actuator, pendulum_network.yaml
-    rows = []
-    dl = runs[runs.kind == "delay"]
-    for e, g in dl.groupby("estimator", sort=False):
+    def bracket(g: pd.DataFrame) -> tuple[float, float]:
         g = g.sort_values("act_delay_ms")
         fails = g[g.stable < 0.5]
         first_fail = float(fails.act_delay_ms.iloc[0]) if len(fails) else math.nan
         ok = g[(g.stable > 0.5) & ((g.act_delay_ms < first_fail) if len(fails) else True)]
         last_ok = float(ok.act_delay_ms.max()) if len(ok) else math.nan
+        return last_ok + base_ms, first_fail + base_ms
+
+    rows = []
+    small = runs[runs.kind == "delay_small"]
+    for e, g in runs[runs.kind == "delay"].groupby("estimator", sort=False):
+        ok, fail = bracket(g)
+        ok_s, fail_s = bracket(small[small.estimator == e])
         pred = delay_margin(e, d)
-        rows.append({"estimator": e, "stable_up_to_ms": last_ok + base_ms, "fails_at_ms": first_fail + base_ms,
-                     "predicted_margin_ms": 1e3 * pred["margin_s"], "crossover_rad_s": pred["wc"],
-                     "phase_margin_deg": pred["pm_deg"]})
+        steps = 0
+        while steps < 40 and delay_spectral_radius(e, d, steps + 1) < 1.0:
+            steps += 1
+        rows.append({"estimator": e, "linear_stable_up_to_ms": 1e3 * steps * d.lin.h, "stable_up_to_ms": ok, "fails_at_ms": fail, "small_stable_up_to_ms": ok_s,
+                     "small_fails_at_ms": fail_s, "predicted_margin_ms": 1e3 * pred["margin_s"],
+                     "crossover_rad_s": pred["wc"], "phase_margin_deg": pred["pm_deg"]})
     return pd.DataFrame(rows)
 
 
@@ -315,14 +332,26 @@ TEXT: dict[str, str] = {
               "total sample-to-actuation delay of {dl_lu_ok} ms with the Luenberger observer (fails at {dl_lu_fail} "
               "ms; the linear prediction, phase margin over crossover frequency, is {dl_lu_pred} ms) and "
               "{dl_kal_ok} ms with Kalman (fails at {dl_kal_fail}, predicted {dl_kal_pred}); raw FD {dl_fd_ok} ms "
-              "(predicted {dl_fd_pred}). The sweep's grid is coarse: the margin lies between the two numbers."),
-    "loss": ("Measurement loss (prediction-only steps): with half the measurements lost (Bernoulli) the Kalman loop "
-             "keeps RMS alpha at {loss_kal_b5} rad against {loss_kal_0} rad without loss, the Luenberger loop "
-             "{loss_lu_b5}, low-pass FD {loss_fd_b5} (FD holds its last estimate on a lost sample)."),
-    "mpc_timing": ("MPC solve time as execution time: at {mpt_fast} ms per solver iteration the worst response is "
+              "(predicted {dl_fd_pred}). The sweep's grid is coarse: the margin lies between the two numbers. From "
+              "the large tilt the loop saturates, which the linear prediction does not know; from a tilt of "
+              "{small_tilt} rad (never at the limit) the loop holds up to {dls_lu_ok} ms with Luenberger (fails at "
+              "{dls_lu_fail}), {dls_kal_ok} ms with Kalman (fails at {dls_kal_fail}) and {dls_fd_ok} ms with raw FD "
+              "(fails at {dls_fd_fail}). The exact linear discrete loop with whole-sample delays is stable up to "
+              "{dlx_lu} ms (Luenberger), {dlx_kal} ms (Kalman) and {dlx_fd} ms (raw FD), which confirms the "
+              "predictions; where the simulation fails earlier, the nonlinear plant, the noise and the "
+              "criterion (|alpha| below the threshold in the last second) are what the linear model lacks."),
+    "loss": ("Measurement loss (prediction-only steps; RMS alpha after the first second): with half the "
+             "measurements lost (Bernoulli) the Kalman loop has {loss_kal_b5} rad against {loss_kal_0} rad without "
+             "loss, the Luenberger loop {loss_lu_b5} against {loss_lu_0}, low-pass FD {loss_fd_b5} against "
+             "{loss_fd_0} (FD holds its last estimate on a lost sample); with Gilbert-Elliott bursts (mean burst "
+             "{ge_burst} samples, {ge_loss} % lost) Kalman {loss_kal_ge}, Luenberger {loss_lu_ge}, low-pass FD "
+             "{loss_fd_ge}."),
+    "mpc_timing": ("MPC solve time as execution time (Luenberger + MPC): at {mpt_fast} ms per solver iteration the "
+                   "worst response is "
                    "{mpt_fast_resp} ms; at {mpt_slow} ms per iteration it is {mpt_slow_resp} ms with "
                    "{mpt_slow_miss} deadline misses, and a horizon of {mpt_short_h} samples at the same cost per "
-                   "iteration brings it to {mpt_short_resp} ms with {mpt_short_miss} misses."),
+                   "iteration brings it to {mpt_short_resp} ms with {mpt_short_miss} misses (RMS alpha after the "
+                   "first second {mpt_fast_rms}, {mpt_slow_rms} and {mpt_short_rms} rad)."),
     "quantised": ("Encoder quantisation as the noise instead of Gaussian noise of the same variance: u std "
                   "{q_kal} V against {q_kal_ref} V with Kalman, {q_lu} against {q_lu_ref} with Luenberger, "
                   "{q_fd} against {q_fd_ref} with low-pass FD."),
@@ -422,27 +451,45 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
         add(f"dl_{tag}_pred", dt.loc[e, "predicted_margin_ms"], f"delay:{e}")
         if tag != "fd":
             add(f"dl_{tag}_fail", dt.loc[e, "fails_at_ms"], f"delay:{e}")
+        add(f"dlx_{tag}", dt.loc[e, "linear_stable_up_to_ms"], f"delay:{e} (design.delay_spectral_radius)")
+        add(f"dls_{tag}_ok", dt.loc[e, "small_stable_up_to_ms"], f"delay_small:{e}")
+        add(f"dls_{tag}_fail", dt.loc[e, "small_fails_at_ms"], f"delay_small:{e}")
+    add("small_tilt", SMALL_TILT, "report: SMALL_TILT")
     ls = runs[runs.kind == "loss"].set_index(["estimator", "loss"])
     d0 = runs[(runs.kind == "delay") & (runs.act_delay_ms == 0)].set_index("estimator")
-    add("loss_kal_b5", ls.loc[("kalman", "bernoulli_0.5"), "rms_alpha"], "loss:kalman")
-    add("loss_kal_0", d0.loc["kalman", "rms_alpha"], "delay:kalman 0 ms")
-    add("loss_lu_b5", ls.loc[("luenberger", "bernoulli_0.5"), "rms_alpha"], "loss:luenberger")
-    add("loss_fd_b5", ls.loc[("fd_lowpass", "bernoulli_0.5"), "rms_alpha"], "loss:fd_lowpass")
+    for tag, e in (("kal", "kalman"), ("lu", "luenberger"), ("fd", "fd_lowpass")):
+        add(f"loss_{tag}_b5", ls.loc[(e, "bernoulli_0.5"), "rms_alpha_after_1s"], f"loss:{e}")
+        add(f"loss_{tag}_0", d0.loc[e, "rms_alpha_after_1s"], f"delay:{e} 0 ms")
+        add(f"loss_{tag}_ge", ls.loc[(e, "gilbert_elliott"), "rms_alpha_after_1s"], f"loss:{e}")
+    ge = LOSSES["gilbert_elliott"]
+    add("ge_burst", 1.0 / ge["p_bad_to_good"], "report: LOSSES (1 / p_bad_to_good)")
+    add("ge_loss", 100 * ge["p_good_to_bad"] / (ge["p_good_to_bad"] + ge["p_bad_to_good"]),
+        "report: LOSSES (stationary share of the bad state)")
     mt = runs[runs.kind == "mpc_timing"].set_index("timing")
-    add("mpt_fast", 0.1, "report: MPC_TIMINGS")
+    add("mpt_fast", _ms(MPC_TIMINGS["h20_0.1ms"]["per_iteration"]), "report: MPC_TIMINGS")
     add("mpt_fast_resp", 1e3 * mt.loc["h20_0.1ms", "max_response_s"], "mpc_timing")
-    add("mpt_slow", 2.0, "report: MPC_TIMINGS")
-    add("mpt_slow_resp", 1e3 * mt.loc["h20_2ms", "max_response_s"], "mpc_timing")
-    add("mpt_slow_miss", mt.loc["h20_2ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h20_2ms", "deadline_misses"])))
-    add("mpt_short_h", 5, "report: MPC_TIMINGS", "5")
-    add("mpt_short_resp", 1e3 * mt.loc["h5_2ms", "max_response_s"], "mpc_timing")
-    add("mpt_short_miss", mt.loc["h5_2ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h5_2ms", "deadline_misses"])))
+    add("mpt_slow", _ms(MPC_TIMINGS["h20_3ms"]["per_iteration"]), "report: MPC_TIMINGS")
+    add("mpt_slow_resp", 1e3 * mt.loc["h20_3ms", "max_response_s"], "mpc_timing")
+    add("mpt_slow_miss", mt.loc["h20_3ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h20_3ms", "deadline_misses"])))
+    add("mpt_short_h", MPC_TIMINGS["h5_3ms"]["horizon"], "report: MPC_TIMINGS", str(MPC_TIMINGS["h5_3ms"]["horizon"]))
+    add("mpt_short_resp", 1e3 * mt.loc["h5_3ms", "max_response_s"], "mpc_timing")
+    add("mpt_short_miss", mt.loc["h5_3ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h5_3ms", "deadline_misses"])))
+    for key, lab in (("mpt_fast_rms", "h20_0.1ms"), ("mpt_slow_rms", "h20_3ms"), ("mpt_short_rms", "h5_3ms")):
+        add(key, mt.loc[lab, "rms_alpha_after_1s"], f"mpc_timing:{lab}")
     qz = runs[runs.kind == "quantised"].set_index("estimator")
     qr = runs[runs.kind == "quantised_ref"].set_index("estimator")
     for tag, e in (("kal", "kalman"), ("lu", "luenberger"), ("fd", "fd_lowpass")):
         add(f"q_{tag}", qz.loc[e, "u_std"], f"quantised:{e}")
         add(f"q_{tag}_ref", qr.loc[e, "u_std"], f"quantised_ref:{e}")
     return pd.DataFrame(q, columns=["key", "value", "text", "source"])
+
+
+def _ms(text: str) -> float:
+    """``"3 ms"`` -> 3.0."""
+    value, unit = text.split()
+    if unit != "ms":
+        raise ValueError(f"expected a time in ms, got {text!r}")
+    return float(value)
 
 
 def _md_table(df: pd.DataFrame) -> list[str]:
@@ -470,6 +517,8 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
     L += ["## Closed loop from a small tilt (estimator x controller, mean over seeds; table.csv)", "",
           render("closed_loop", texts), "", render("mpc", texts), ""]
     L += _md_table(tables["table"][TABLE_COLUMNS]) + [""]
+    if (out / "closed_loop_lqr.png").exists():
+        L += ["![alpha and u under LQR, seed 1](closed_loop_lqr.png)", ""]
     L += ["## What only a timing simulator shows", "", "- " + render("delay", texts), "",]
     L += _md_table(tables["delay"]) + [""]
     L += ["- " + render("loss", texts), "", "- " + render("mpc_timing", texts), "", "- " + render("quantised", texts),
@@ -525,7 +574,6 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     table.to_csv(out / "table.csv", index=False)
     for name in ("hold_still", "delay", "forms", "runs", "quoted", "loss", "mpc_timing", "quantised"):
         tables[name].to_csv(out / f"{name}.csv", index=False)
-    write_readme(out, quoted, tables)
     if plots:
         from netsim.runner import run
 
@@ -534,4 +582,5 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
             r = run(str(SCEN / "pendulum_lqr.yaml"), write=False, seed=1, overrides={f"{RIP}.estimator": ESTIMATORS[e]})
             sig[e] = r.to_pandas().ffill()
         _figures(out, sig)
+    write_readme(out, quoted, tables)
     return tables
