@@ -1,0 +1,96 @@
+"""The pendulum study's measures as a registered metric (``metrics: [{type: pendulum}]``), for runs and sweeps.
+
+Computed from the recorded signals ``theta``, ``alpha`` (the plant's true angles on its record grid), ``u`` (the
+applied voltage) and, when recorded, ``x_hat[1]``, ``x_hat[3]`` (the velocity estimates), over the control
+samples ``t_k = k period``:
+
+``pendulum.u_std``
+    std of ``u`` for ``t >= settle`` (the chatter once balanced);
+``pendulum.saturated_share``
+    share of samples with ``|u| >= u_limit``;
+``pendulum.rms_theta``, ``pendulum.rms_alpha``, ``pendulum.rms_alpha_after_settle``
+    RMS of the true angles (whole run; ``alpha`` also from ``settle`` on);
+``pendulum.lqg_cost_per_step``, ``pendulum.lqg_cost_after_settle``
+    mean of ``q_theta theta^2 + q_alpha alpha^2 + r u^2`` (the LQR's weights: they weight the angles only, so
+    the true angles give the cost exactly);
+``pendulum.stable``
+    1 when ``|alpha| < stable_alpha`` over the last second, else 0;
+``pendulum.theta_dot_est_std``, ``pendulum.alpha_dot_est_std``
+    std of the velocity estimates from ``settle`` on (in a hold-still run: the estimator's noise).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from pydantic import Field
+
+from netsim.registry import register
+from netsim.units import StrictModel
+
+__all__ = ["PendulumMetricParams", "pendulum_measures", "pendulum_metric"]
+
+
+class PendulumMetricParams(StrictModel):
+    """Parameters of the ``pendulum`` metric (defaults: the study's choices)."""
+
+    period: float = Field(0.005, gt=0, description="control period (s)")
+    settle: float = Field(1.0, ge=0, description="start of the 'balanced' part of the run (s)")
+    u_limit: float = Field(3.0, gt=0, description="actuator limit (V)")
+    stable_alpha: float = Field(0.05, gt=0, description="|alpha| bound over the last second for 'stable' (rad)")
+    q_theta: float = Field(5.0, ge=0, description="LQR weight on theta")
+    q_alpha: float = Field(20.0, ge=0, description="LQR weight on alpha")
+    r: float = Field(1.0, gt=0, description="LQR weight on u")
+
+
+def _at(s: pd.DataFrame, col: str, t: np.ndarray) -> np.ndarray:
+    """Held value of ``col`` at the times ``t`` (the last value recorded at or before each)."""
+    series = s[col].dropna()
+    idx = np.searchsorted(series.index.to_numpy(float), t + 1e-12, side="right") - 1
+    vals = series.to_numpy(float)
+    return np.where(idx >= 0, vals[np.clip(idx, 0, None)], np.nan)
+
+
+def pendulum_measures(signals: pd.DataFrame, ok: bool, p: PendulumMetricParams | None = None) -> dict[str, float]:
+    """The measures of the module docstring from a signals table (``time_s`` column or index)."""
+    p = PendulumMetricParams() if p is None else p
+    s = signals.set_index("time_s") if "time_s" in signals.columns else signals
+    s = s.sort_index()
+    t_end = float(s.index.max())
+    h = p.period
+    tk = np.arange(0.0, t_end - h + 1e-9, h)
+    theta, alpha = _at(s, "theta", tk), _at(s, "alpha", tk)
+    u = np.nan_to_num(_at(s, "u", tk + h - 1e-9), nan=0.0)  # the input applied over each sample
+    late = tk >= p.settle
+    cost = p.q_theta * theta**2 + p.q_alpha * alpha**2 + p.r * u**2
+    last = tk >= t_end - 1.0
+    finite = bool(np.all(np.isfinite(alpha)))
+    max_last = float(np.max(np.abs(alpha[last]))) if finite else float("inf")
+    out = {
+        "u_std": float(np.std(u[late])),
+        "saturated_share": float(np.mean(np.abs(u) >= p.u_limit - 1e-9)),
+        "rms_theta": float(np.sqrt(np.mean(theta**2))),
+        "rms_alpha": float(np.sqrt(np.mean(alpha**2))),
+        "rms_alpha_after_settle": float(np.sqrt(np.mean(alpha[late] ** 2))),
+        "lqg_cost_per_step": float(np.mean(cost)),
+        "lqg_cost_after_settle": float(np.mean(cost[late])),
+        "max_alpha_last_s": max_last,
+        "stable": float(ok and finite and max_last < p.stable_alpha),
+    }
+    for i, name in ((1, "theta_dot_est_std"), (3, "alpha_dot_est_std")):
+        col = f"x_hat[{i}]"
+        if col in s.columns:
+            out[name] = float(np.std(_at(s, col, tk)[late]))
+    return out
+
+
+@register("metric", "pendulum", "pendulum study: u chatter, saturation, RMS angles, LQG cost, stability, estimate noise")
+def pendulum_metric(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
+    """``pendulum.<measure>`` for a run (see the module docstring)."""
+    from netsim.metrics.runtime import validate_params
+
+    p = validate_params(PendulumMetricParams, params, "pendulum")
+    ok = str(getattr(result, "status", "ok")).startswith("ok")
+    return {f"pendulum.{k}": v for k, v in pendulum_measures(result.signals, ok, p).items()}
