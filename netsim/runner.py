@@ -52,6 +52,7 @@ import pandas as pd  # noqa: E402
 from netsim.errors import DivergenceError  # noqa: E402
 from netsim.results import (  # noqa: E402
     JOB_SUMMARY_COLUMNS,
+    Lazy,
     MESSAGE_SUMMARY_COLUMNS,
     RunResult,
     check_out_dir,
@@ -159,8 +160,13 @@ def _collect(sim: Any, t_end_ns: int) -> RunResult:
     messages = pd.concat(msg_frames, ignore_index=True) if msg_frames else messages_table([])
     if not messages.empty:
         messages = messages.sort_values(["msg_id", "network", "receiver"], kind="stable").reset_index(drop=True)
-    sched_frames = [schedule_table(name, getattr(k, "schedule", [])) for name, k in sim.kernels.items()]
-    schedule = pd.concat(sched_frames, ignore_index=True) if sched_frames else schedule_table("", [])
+    traces_kept = [(name, getattr(k, "schedule", [])) for name, k in sim.kernels.items()]
+
+    def schedule_frame() -> pd.DataFrame:  # built when first read (the Gantt chart): most runs never do
+        frames = [schedule_table(name, intervals) for name, intervals in traces_kept]
+        return pd.concat(frames, ignore_index=True) if frames else schedule_table("", [])
+
+    schedule = Lazy(schedule_frame)
     traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
     return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
                      job_summary=summary_table(job_rows, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
@@ -458,8 +464,15 @@ def _shared(result: RunResult) -> RunResult:
     return RunResult(signals=result.signals.copy(deep=False), jobs=result.jobs.copy(deep=False),
                      messages=result.messages.copy(deep=False), metrics=result.metrics.copy(deep=False),
                      meta=dict(result.meta), scenario=result.scenario,
-                     schedule=result.schedule.copy(deep=False), traces=dict(result.traces),
+                     schedule=_lazy_view(result, "schedule"), traces=dict(result.traces),
                      job_summary=result.job_summary, message_summary=result.message_summary)
+
+
+def _lazy_view(result: RunResult, name: str) -> Any:
+    """A table of ``result`` for a view: its :class:`~netsim.results.Lazy` builder while unbuilt (nothing built
+    for a baseline that no metric reads that table of), else a shallow copy."""
+    value = object.__getattribute__(result, name)
+    return value if isinstance(value, Lazy) else value.copy(deep=False)
 
 
 def _baseline(base_sc: Any) -> RunResult:

@@ -50,6 +50,7 @@ from netsim.timebase import S
 
 __all__ = [
     "RunResult",
+    "Lazy",
     "JOB_COLUMNS",
     "MESSAGE_COLUMNS",
     "SCHEDULE_COLUMNS",
@@ -309,9 +310,30 @@ def _json_default(obj: Any) -> Any:
     return str(obj)
 
 
+class Lazy:
+    """A table built on first access: a :class:`RunResult` field holding one calls ``build()`` when read, and
+    keeps the table (issue 19: DataFrames only when asked for; the schedule trace, read only by the Gantt
+    chart, is never built in most runs)."""
+
+    __slots__ = ("build",)
+
+    def __init__(self, build: Any) -> None:
+        self.build = build
+
+
 @dataclass
 class RunResult:
-    """Tables, metrics and metadata of one run (see the module docstring for the columns)."""
+    """Tables, metrics and metadata of one run (see the module docstring for the columns).
+
+    A table field may hold a :class:`Lazy`: it is built when first read.
+    """
+
+    def __getattribute__(self, name: str) -> Any:
+        value = object.__getattribute__(self, name)
+        if type(value) is Lazy:
+            value = value.build()
+            object.__setattr__(self, name, value)
+        return value
 
     signals: pd.DataFrame = field(default_factory=lambda: pd.DataFrame({"time_s": pd.Series([], dtype=float)}))
     jobs: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=JOB_COLUMNS))

@@ -88,12 +88,19 @@ def _float_chunks(frame: pd.DataFrame, names: list[str]) -> Iterator[str]:
         return "" if v != v else repr(v)
 
     cells = [_time_text if t else value for t in timed]
+    first_only = timed[0] and not any(timed[1:])  # the signals table: time_s first, then values
     for a in range(0, len(frame), CHUNK_ROWS):
-        rows = np.column_stack([c[a:a + CHUNK_ROWS] for c in columns]).tolist()
-        if not any(timed):
-            lines = [",".join(["" if v != v else repr(v) for v in row]) for row in rows]
+        block = np.column_stack([c[a:a + CHUNK_ROWS] for c in columns])
+        if first_only and not np.isnan(block).any():  # the common case, formatted with map(repr) per row
+            t = block[:, 0]
+            whole = (t == np.floor(t)) & (np.abs(t) < 1e15)
+            heads = ["%d" % v if w else repr(v) for v, w in zip(t.tolist(), whole.tolist())]
+            lines = [h + "," + ",".join(map(repr, row)) if row else h
+                     for h, row in zip(heads, block[:, 1:].tolist())]
+        elif not any(timed):
+            lines = [",".join(["" if v != v else repr(v) for v in row]) for row in block.tolist()]
         else:
-            lines = [",".join([f(v) for f, v in zip(cells, row)]) for row in rows]
+            lines = [",".join([f(v) for f, v in zip(cells, row)]) for row in block.tolist()]
         yield "\n".join(lines) + "\n"
 
 
