@@ -114,7 +114,13 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
                  f"{_f(b[f'sd_{s}_end_front'])} |")
         T.add("2 blackout", "(Q, R)", f"sigma {s} end of turn / start", b[f"sd_{s}_end_turn"] / b[f"sd_{s}_end_straight"],
               "bands widen monotonically in the turn", "Q is tiny: the widening is small")
-    L += ["", f"- det P grows at every sample of the blackout in {_pct(b['blackout_monotone'])} of the runs "
+    sd0 = np.sqrt([1e-3, 1e-3, 7.6e-3])
+    L += ["", f"- Before the turn (both sensors): the report says P 'decreases rapidly'. Over the 4 s sigma goes from "
+          f"sqrt(P0) = {_f(sd0[0])} / {_f(sd0[1])} / {_f(sd0[2])} to {_f(b['sd_x_end_straight'])} / "
+          f"{_f(b['sd_y_end_straight'])} / {_f(b['sd_theta_end_straight'])} (x / y / theta): y and x shrink by "
+          f"{_f(sd0[1] / b['sd_y_end_straight'], 2)}x and {_f(sd0[0] / b['sd_x_end_straight'], 2)}x, theta hardly "
+          "(the IR readings depend on theta only through the 7 cm offsets, against 14-30 cm of noise).",
+          f"- det P grows at every sample of the blackout in {_pct(b['blackout_monotone'])} of the runs "
           f"(P+ = A P A' + Q with det A = 1 and Q > 0 cannot shrink it); over the 2 s it grows by a factor "
           f"{_f(b['detP_ratio'])} (median). The report says the bands widen monotonically: confirmed, but with its Q "
           "the widening is a few per cent of sigma, invisible next to the initial uncertainty.",
@@ -130,6 +136,8 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
           f"{_f(F['base']['unicycle.recovery_y_s'])} s after the turn; sigma x: {_f(F['base']['unicycle.recovery_x_s'])}, "
           f"sigma theta: {_f(F['base']['unicycle.recovery_theta_s'])} (n/a: never within the run; they are not "
           "observable with the front sensor at theta = pi/2).", ""]
+    T.add("2 blackout", "(Q, R)", "sigma theta end of straight / sqrt(P0)", b["sd_theta_end_straight"] / sd0[2],
+          "P decreases rapidly with both sensors", "theta barely observable through the 7 cm offsets")
     T.add("2 blackout", "(Q, R)", "share of runs with det P increasing at every blackout sample", b["blackout_monotone"],
           "P grows by A P A' + Q", "")
     T.add("2 blackout", "(Q, R)", "det P end/start of turn (median)", b["detP_ratio"], "", "report gives no number")

@@ -10,7 +10,9 @@ call resumes them).
 
 from __future__ import annotations
 
+import hashlib
 import math
+import pickle
 import time
 from pathlib import Path
 from typing import Any
@@ -51,9 +53,9 @@ class _Table:
 
 
 def _sweep(name: str, out: Path, workers: int | None) -> pd.DataFrame:
-    import netsim
+    from netsim.sweep.run import run_sweep
 
-    res = netsim.sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers, progress=False)
+    res = run_sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers, progress=False)
     df = res.summary
     return df[df["status"] == "ok"].copy()
 
@@ -151,6 +153,38 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     facts["zigbee"] = netsim.run(_SCEN / "unicycle_zigbee.yaml").metrics
     # ---------------------------------------------------------------- Monte-Carlo (numpy loop)
     t = np.arange(int(round(10 / 0.01)) + 1) * 0.01
+    cache = out / "runs" / f"mc_{runs}_{_code_hash()}.pkl"
+    if cache.is_file():
+        with open(cache, "rb") as fh:
+            mc = pickle.load(fh)
+        facts.update(mc["facts"])
+        qr_runs = mc["qr_runs"]
+    else:
+        qr_runs = _monte_carlo(facts, runs, workers, t)
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        with open(cache, "wb") as fh:
+            pickle.dump({"facts": {k: facts[k] for k in ("qr", "zcover", "printed_side")}, "qr_runs": qr_runs}, fh)
+    # ---------------------------------------------------------------- netsim sweeps
+    facts["net"] = _sweep("unicycle_net_sweep", out, workers) if sweeps else None
+    facts["delay"] = _sweep("unicycle_lqr_delay", out, workers) if sweeps else None
+    if plots:
+        _plots(out, base, qr_runs, t)
+    facts["wall_s"] = time.perf_counter() - t0
+    text = write_readme(out, T, facts)
+    T.frame().to_csv(out / "table.csv", index=False)
+    return {"table": T.frame(), "readme": pd.DataFrame({"text": [text]})}
+
+
+def _code_hash() -> str:
+    """Hash of the study's numeric code: a cached Monte-Carlo result is reused only for the same code."""
+    h = hashlib.sha256()
+    for name in ("model.py", "design.py", "reference.py", "studies.py", "metrics.py"):
+        h.update((Path(__file__).parent / name).read_bytes())
+    return h.hexdigest()[:12]
+
+
+def _monte_carlo(facts: dict[str, Any], runs: int, workers: int | None, t: np.ndarray) -> dict[str, list[dict]]:
+    """The Q/R study, the measurement-band coverage and the printed side-offset study (numpy loop)."""
     qr_runs: dict[str, list[dict]] = {}
     facts["qr"] = {}
     for name, (fq, fr) in S.QR_SETTINGS.items():
@@ -172,12 +206,4 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
         zc.append(np.abs(r["z"][ok] - r["zhat"][ok]) <= 1.96 * r["zsd"][ok])
     facts["zcover"] = float(np.mean(np.concatenate(zc)))
     facts["printed_side"] = S.printed_side_study(min(runs, 100), workers)
-    # ---------------------------------------------------------------- netsim sweeps
-    facts["net"] = _sweep("unicycle_net_sweep", out, workers) if sweeps else None
-    facts["delay"] = _sweep("unicycle_lqr_delay", out, workers) if sweeps else None
-    if plots:
-        _plots(out, base, qr_runs, t)
-    facts["wall_s"] = time.perf_counter() - t0
-    text = write_readme(out, T, facts)
-    T.frame().to_csv(out / "table.csv", index=False)
-    return {"table": T.frame(), "readme": pd.DataFrame({"text": [text]})}
+    return qr_runs
