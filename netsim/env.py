@@ -2,6 +2,10 @@
 
 Time in the simpy environment is integer nanoseconds (see :mod:`netsim.timebase`).
 
+Why this module is long: it is the one place that knows simpy's internals, and its docstring is the run's
+one same-instant table with the reasons for its order; the loop, its scheduling calls and that table are
+read together, and split they would spread simpy's internals over several modules.
+
 Random streams
 --------------
 Every source of randomness asks for its own stream by name (``env.rng("network.can.loss")``). A stream is
@@ -32,6 +36,11 @@ Ways to schedule, cheapest first:
 - :meth:`EventLoop.call_at` ``(t, fn, *args, priority=...)`` and :meth:`EventLoop.call_later` return a
   :class:`Call` handle whose :meth:`Call.cancel` is O(1) (the entry stays in the heap and is skipped);
 - :meth:`EventLoop.event_at` is a simpy event (for a process to yield) processed at a chosen priority.
+
+Cheaper still is not to schedule: a call item whose last act would be to schedule its own continuation
+(a kernel's next CPU segment) asks :meth:`EventLoop.advance_if_next` whether that entry would be the next one
+processed anyway; if so the clock moves there and the item goes on at once, one push and one pop fewer,
+with the same order of everything (issue 19: nothing can happen before the continuation).
 
 ``sim.now`` is a plain attribute (simpy's is a property over ``_now``): read on every hot path, it costs a
 dictionary look-up, not a function call.
@@ -164,7 +173,9 @@ class Scheduler(NamedTuple):
     """What a hot path needs to push call entries inline (:meth:`EventLoop.scheduler`).
 
     ``push(heap, (t, priority, next(ids), (fn, arg)))`` schedules ``fn((fn, arg))`` at absolute time ``t``
-    (never before ``sim.now``); ``heap[0][0]`` is the time of the next entry (when ``heap`` is not empty).
+    (never before ``sim.now``); ``heap[0][0]`` and ``heap[0][1]`` are the time and priority of the next entry
+    (when ``heap`` is not empty). See :meth:`EventLoop.advance_if_next` for processing an entry without
+    pushing it.
     """
 
     push: Callable[[list, tuple], None]
@@ -210,10 +221,14 @@ class EventLoop(simpy.Environment):
     """
 
     now: int = 0  # shadows simpy's property: a plain instance attribute, set by the loop
+    #: The last instant (ns) the running :meth:`run_until` processes; -1 when it is not running (simpy's own
+    #: ``run``/``step``): :meth:`advance_if_next` moves the clock only inside netsim's loop.
+    horizon: int = -1
 
     def __init__(self, initial_time: int = 0) -> None:
         super().__init__(int(initial_time))
         self.now = int(initial_time)
+        self.horizon = -1
 
     # simpy's base class and simpy.rt name the clock _now; here it is an alias of the attribute ``now``
     @property
@@ -259,6 +274,25 @@ class EventLoop(simpy.Environment):
         self.schedule(ev, priority, delay)
         return ev
 
+    def advance_if_next(self, t: int, priority: int = NORMAL) -> bool:
+        """Move the clock to ``t`` if an entry ``(t, priority)`` scheduled now would be the next one processed.
+
+        For a call item that would schedule its own continuation as the very last thing it does: when nothing
+        else is due before that continuation (no entry before ``t``, none at ``t`` with a priority up to
+        ``priority``, and ``t`` within the running :meth:`run_until`), the caller sets the clock here and goes
+        on at once, which is what the loop would do after a push and a pop. Outside :meth:`run_until` it
+        returns False (simpy's ``step`` processes one entry per call). Returns whether the clock moved.
+        """
+        if t > self.horizon or t < self.now:
+            return False
+        queue = self._queue
+        if queue:
+            head = queue[0]
+            if head[0] < t or (head[0] == t and head[1] <= priority):
+                return False
+        self.now = t
+        return True
+
     def events_scheduled(self) -> int:
         """How many entries (events and call items) have been scheduled so far."""
         return int(repr(self._eid)[6:-1])  # itertools.count's repr is "count(n)"
@@ -296,22 +330,26 @@ class EventLoop(simpy.Environment):
         queue = self._queue
         until = int(t_end) + 1
         pop = heappop
-        while queue:
-            entry = queue[0]
-            if entry[0] >= until:
-                break
-            pop(queue)
-            self.now = entry[0]
-            item = entry[3]
-            if item.__class__ is tuple:  # a call item
-                item[0](item)
-                continue
-            # a simpy event: step(), inlined
-            callbacks, item.callbacks = item.callbacks, None
-            for callback in callbacks:
-                callback(item)
-            if not item._ok and not hasattr(item, "_defused"):
-                raise item._value
+        self.horizon = until - 1
+        try:
+            while queue:
+                entry = queue[0]
+                if entry[0] >= until:
+                    break
+                pop(queue)
+                self.now = entry[0]
+                item = entry[3]
+                if item.__class__ is tuple:  # a call item
+                    item[0](item)
+                    continue
+                # a simpy event: step(), inlined
+                callbacks, item.callbacks = item.callbacks, None
+                for callback in callbacks:
+                    callback(item)
+                if not item._ok and not hasattr(item, "_defused"):
+                    raise item._value
+        finally:
+            self.horizon = -1
 
 
 def schedule_call(sim: EventLoop, delay: int, priority: int, fn: Callable[[Any], None],

@@ -68,24 +68,27 @@ class Dispatcher:
         job._ev = None
         if self._seg_job is not job:
             return  # preempted, blocked or killed meanwhile: a new wake-up is armed when it runs again
-        now = self._sim.now
+        sim = self._sim
+        now = sim.now
         end = job._seg_end
         if now < end:  # the job was preempted and resumed: its segment ends later than first planned
             job._ev = ev = (self._on_segment_event, job)
             heappush(self._queue, (end, NORMAL, next(self._eid), ev))
             job._ev_time = end
             return
-        self._seg_job = None
-        if self._load is not None:
-            self._charge_load(job, now)
-        elif job._pre_left or job._budget is not None:
-            self._charge(job, now - job._seg_start)
-        else:  # the common case, inlined: an execute segment without budget ran to its end
-            elapsed = now - job._seg_start
-            job._remaining -= elapsed
-            job.cpu_time += elapsed
-            job._task.cpu += elapsed
-        if not job._pre_left:
+        while True:  # one segment end per turn; back-to-back segments that nothing can interrupt chain here
+            self._seg_job = None
+            if self._load is not None:
+                self._charge_load(job, now)
+            elif job._pre_left or job._budget is not None:
+                self._charge(job, now - job._seg_start)
+            else:  # the common case, inlined: an execute segment without budget ran to its end
+                elapsed = now - job._seg_start
+                job._remaining -= elapsed
+                job.cpu_time += elapsed
+                job._task.cpu += elapsed
+            if job._pre_left:
+                break
             if not job._remaining:
                 self._busy = True
                 try:
@@ -100,10 +103,22 @@ class Dispatcher:
             ready = self._ready
             # fast path: the job keeps the CPU for its next segment unless a ready job beats it (starting
             # a segment runs no code, so doing it before other events of this instant changes nothing)
-            if (remaining and (budget is None or budget >= remaining)
+            if not (remaining and (budget is None or budget >= remaining)
                     and (not ready or not ready[0][0] < job._rank)):
-                self._start_segment(job, remaining, now)
-                return
+                break
+            if self._load is None:
+                end = now + remaining
+                # the segment's end would be the loop's next entry (nothing due before it, nothing of this
+                # priority at it): go there now instead of pushing and popping it (issue 19)
+                if sim.advance_if_next(end, NORMAL):
+                    job._seg_start = now
+                    job._seg_end = end
+                    self._seg_job = job
+                    self.segments += 1
+                    now = end
+                    continue
+            self._start_segment(job, remaining, now)
+            return
         self._request_dispatch()
 
     def _on_deferred_dispatch(self, _ev: Any) -> None:

@@ -58,11 +58,12 @@ def _reference_loop(n=464):
 
 
 def _best(fn, reps):
+    """Best CPU time of ``reps`` calls (process time: on a shared machine wall time counts the others' work)."""
     best = float("inf")
     for _ in range(reps):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         fn()
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.process_time() - t0)
     return best
 
 
@@ -81,9 +82,16 @@ def test_bench_hdd_cases_and_tts_vs_numpy():
     def simulate():
         build(sc).run()
 
-    t_sim, t_run, t_np, t_ref = (float("inf"),) * 4
+    def event_loop() -> float:
+        s = build(sc)
+        t0 = time.process_time()
+        s.run()
+        return time.process_time() - t0
+
+    t_sim, t_run, t_np, t_ref, t_loop = (float("inf"),) * 5
     for _ in range(7):  # interleaved, best of each
         t_sim = min(t_sim, _best(simulate, 1))
+        t_loop = min(t_loop, event_loop())
         t_run = min(t_run, _best(lambda: run(SCEN / "hdd_case1.yaml", write=False), 1))
         t_np = min(t_np, _best(_numpy_tts_loop, 3))
         t_ref = min(t_ref, _best(_reference_loop, 3))
@@ -97,6 +105,8 @@ def test_bench_hdd_cases_and_tts_vs_numpy():
     print(f"  ratio simulation / numpy loop {t_sim / t_np:.1f}x, / simulate_loop {t_sim / t_ref:.1f}x; "
           f"ratio run() / numpy loop {t_run / t_np:.1f}x, / simulate_loop {t_run / t_ref:.1f}x "
           f"(ISE netsim {float(res1.metrics['et.ISE']):.6f} vs numpy {ise_np:.6f})")
+    print(f"  event loop only {t_loop * 1e3:.1f} ms ({t_loop / 464 * 1e6:.1f} us per control period): "
+          f"{t_loop / t_np:.1f}x the numpy loop (issue 19 targets: event loop <= 5x, run() <= 8x)")
     # the ratio compares like with like only if both loops computed the same closed loop: the TTS ISE of eq (23)
     # from netsim must equal the one of the plain loop written in this file
     assert float(res1.metrics["et.ISE"]) == pytest.approx(ise_np, rel=1e-9)

@@ -37,8 +37,10 @@ def _best(fn, repeat: int = 3) -> float:
 
 
 def test_bench_kernel_overhead_per_segment_vs_bare_simpy():
-    # One task executing n segments back to back (each a preemptible execute with its own simpy wake-up)
-    # against a bare simpy process yielding n timeouts; runs interleaved, best of 5 each.
+    # One task executing n segments back to back (each a preemptible execute) against a bare simpy process
+    # yielding n timeouts; runs interleaved, best of 5 each. Nothing else is scheduled, so each segment's end
+    # is the loop's next entry: the kernel goes there without a heap entry (EventLoop.advance_if_next, issue
+    # 19); before that, each segment cost one entry (x1.95 of a bare timeout on a loaded machine).
     n = 100_000
 
     def one_task() -> float:
@@ -63,7 +65,7 @@ def test_bench_kernel_overhead_per_segment_vs_bare_simpy():
         kern.append(one_task())
     ratio = min(kern) / min(bare)
     print(f"\nbare simpy: {min(bare) / n * 1e6:.2f} us/timeout; kernel, one task: {min(kern) / n * 1e6:.2f} "
-          f"us/segment; ratio x{ratio:.2f} (target <= 3)")
+          f"us/segment; ratio x{ratio:.2f} (target <= 3; issue 19: <= 2)")
     assert ratio <= 3.0
 
 
