@@ -50,19 +50,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import pandas as pd  # noqa: E402
 
 from netsim.errors import DivergenceError  # noqa: E402
-from netsim.results import (  # noqa: E402
-    JOB_SUMMARY_COLUMNS,
-    Lazy,
-    MESSAGE_SUMMARY_COLUMNS,
-    RunResult,
-    check_out_dir,
-    jobs_table,
-    messages_table,
-    schedule_table,
-    signals_table,
-    summary_table,
-)
-from netsim.results.traces import JobSummary, MessageSummary, attach_traces, trace_problems  # noqa: E402
+from netsim.results import Lazy, RunResult, check_out_dir  # noqa: E402
+from netsim.results.collect import collect  # noqa: E402
+from netsim.results.traces import attach_traces, trace_problems  # noqa: E402
 from netsim.timebase import S  # noqa: E402
 
 __all__ = [
@@ -142,38 +132,6 @@ def _mark_folder(exc: BaseException, folder: Path) -> None:
         pass
 
 
-def _collect(sim: Any, t_end_ns: int) -> RunResult:
-    """The tables of a (finished or aborted) simulation."""
-    rec = sim.env.recorder
-    signals = signals_table(rec.times, rec.values, order=sim.scenario.record)
-    output = sim.scenario.output
-    job_rows = [row for k in sim.kernels.values() if isinstance(k.job_records, JobSummary)
-                for row in k.job_records.rows()]
-    msg_rows = [row for n in sim.networks.values() if isinstance(n.records, MessageSummary) for row in n.records.rows()]
-    job_frames = [jobs_table(k.job_records, name) for name, k in sim.kernels.items()
-                  if not isinstance(k.job_records, JobSummary)]
-    jobs = pd.concat(job_frames, ignore_index=True) if job_frames else jobs_table([])
-    if not jobs.empty:
-        jobs = jobs.sort_values(["release_s", "node", "task", "job_id"], kind="stable").reset_index(drop=True)
-    msg_frames = [messages_table(net.records) for net in sim.networks.values()
-                  if not isinstance(net.records, MessageSummary)]
-    messages = pd.concat(msg_frames, ignore_index=True) if msg_frames else messages_table([])
-    if not messages.empty:
-        messages = messages.sort_values(["msg_id", "network", "receiver"], kind="stable").reset_index(drop=True)
-    traces_kept = [(name, getattr(k, "schedule", [])) for name, k in sim.kernels.items()]
-
-    def schedule_frame() -> pd.DataFrame:  # built when first read (the Gantt chart): most runs never do
-        frames = [schedule_table(name, intervals) for name, intervals in traces_kept]
-        return pd.concat(frames, ignore_index=True) if frames else schedule_table("", [])
-
-    schedule = Lazy(schedule_frame)
-    traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
-    return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
-                     job_summary=summary_table(job_rows, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
-                     message_summary=summary_table(msg_rows, MESSAGE_SUMMARY_COLUMNS)
-                     if output.messages == "summary" else None)
-
-
 def _event_count(env: Any) -> int | None:
     """Entries the event loop scheduled during the run (:meth:`netsim.env.EventLoop.events_scheduled`)."""
     counted = getattr(env.sim, "events_scheduled", None)
@@ -211,7 +169,7 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
         status, error = "error", f"{type(exc).__name__}: {exc}"
         failure = exc
     wall = time.perf_counter() - t0
-    result = _collect(sim, t_end)
+    result = collect(sim, t_end)
     if failure is None:
         from netsim.divergence import find_divergence
 

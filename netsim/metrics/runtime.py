@@ -30,16 +30,18 @@ from __future__ import annotations
 
 import logging
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
 from pydantic import Field, ValidationError
 
 from netsim.errors import ConfigError
 from netsim.registry import lookup, register
 from netsim.timebase import S
 from netsim.units import StrictModel, Time
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
 
 _log = logging.getLogger(__name__)
 
@@ -64,6 +66,8 @@ def job_outcome_counts(jobs: pd.DataFrame) -> dict[str, int]:
     Uses the ``outcome`` column when there is one; for tables written before it existed, derives it from
     ``deadline_met`` and ``killed`` with the same rule (an empty ``deadline_met`` is pending, not a miss).
     """
+    import pandas as pd  # here, not at import: `netsim validate` loads this module and needs no pandas
+
     from netsim.kernel.records import OUTCOMES, job_outcome
 
     if "outcome" in jobs:

@@ -16,9 +16,10 @@ are unchanged.
 from __future__ import annotations
 
 import math
-from typing import Any, Iterable, Iterator
+from collections.abc import Iterable, Iterator
+from typing import Any
 
-__all__ = ["QuantileSketch", "JobSummary", "MessageSummary", "attach_traces", "trace_problems", "QUANTILES", "TRACE_MODES"]
+__all__ = ["QUANTILES", "TRACE_MODES", "JobSummary", "MessageSummary", "QuantileSketch", "attach_traces", "trace_problems"]
 
 #: The percentiles a summary reports (``p50``, ``p95``, ``p99``).
 QUANTILES = (0.50, 0.95, 0.99)
@@ -42,7 +43,7 @@ class QuantileSketch:
         Relative accuracy ``a`` of a quantile estimate, in (0, 1).
     """
 
-    __slots__ = ("accuracy", "_log_gamma", "_gamma", "_buckets", "_zeros", "count", "low", "high")
+    __slots__ = ("_buckets", "_gamma", "_log_gamma", "_zeros", "accuracy", "count", "high", "low")
 
     def __init__(self, accuracy: float = 0.01) -> None:
         if not 0.0 < accuracy < 1.0:
@@ -61,10 +62,8 @@ class QuantileSketch:
         if value < 0:
             raise ValueError(f"QuantileSketch takes values >= 0, got {value!r}")
         self.count += 1
-        if value < self.low:
-            self.low = value
-        if value > self.high:
-            self.high = value
+        self.low = min(self.low, value)
+        self.high = max(self.high, value)
         if value == 0:
             self._zeros += 1
             return
@@ -97,7 +96,7 @@ class QuantileSketch:
 class _Stats:
     """Count, outcomes, sum, maximum and sketch of one task's response times or one network's delays (ns)."""
 
-    __slots__ = ("n", "n_values", "total", "high", "sketch", "counts")
+    __slots__ = ("counts", "high", "n", "n_values", "sketch", "total")
 
     def __init__(self) -> None:
         self.n = 0
@@ -110,8 +109,7 @@ class _Stats:
     def value(self, v: int) -> None:
         self.n_values += 1
         self.total += v
-        if v > self.high:
-            self.high = v
+        self.high = max(self.high, v)
         self.sketch.add(v)
 
     def row(self, prefix: str) -> dict[str, float]:
@@ -303,6 +301,7 @@ def trace_problems(scenario: Any) -> list[str]:
     A metric function that reads the rows of the jobs or messages table says so in a ``tables`` attribute
     (``latency.tables = ("jobs", "messages")``); it needs ``output.<table>: full``.
     """
+    from netsim.errors import ConfigError
     from netsim.registry import lookup
 
     output = scenario.output
@@ -310,8 +309,8 @@ def trace_problems(scenario: Any) -> list[str]:
     for i, spec in enumerate(scenario.metrics):
         try:
             fn = lookup("metric", spec.type)
-        except Exception:  # noqa: BLE001 - an unknown metric is reported by validation, not here
-            continue
+        except ConfigError:  # an unknown metric: validation reports it
+            fn = None
         for table in getattr(fn, "tables", ()):
             mode = getattr(output, table, "full")
             if mode != "full":

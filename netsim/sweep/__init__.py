@@ -14,9 +14,30 @@ the ``summary.csv`` columns in :mod:`netsim.sweep.summary`; the GPI surface and 
 
 from __future__ import annotations
 
-from netsim.sweep.executor import SchedulerLost, SchedulerUnreachable
-from netsim.sweep.run import SweepResult, run_sweep
-from netsim.sweep.spec import Point, Sweep, SweepSpec, derive_seed, expand_points, load_sweep
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # pragma: no cover
+    from netsim.sweep.executor import SchedulerLost, SchedulerUnreachable
+    from netsim.sweep.run import SweepResult, run_sweep
+    from netsim.sweep.spec import Point, Sweep, SweepSpec, derive_seed, expand_points, load_sweep
+
+#: Where each public name lives; imported on first use (PEP 562), so that ``netsim.sweep.check`` (which
+#: ``netsim run`` and ``netsim validate`` use to tell a sweep file) does not import numpy, pandas and the pool.
+_WHERE = {
+    "SchedulerLost": "executor", "SchedulerUnreachable": "executor", "SweepResult": "run", "run_sweep": "run",
+    "Point": "spec", "Sweep": "spec", "SweepSpec": "spec", "derive_seed": "spec", "expand_points": "spec",
+    "load_sweep": "spec",
+}
+
+
+def __getattr__(name: str) -> Any:
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module 'netsim.sweep' has no attribute '{name}'")
+    value = getattr(importlib.import_module(f"netsim.sweep.{where}"), name)
+    globals()[name] = value
+    return value
 
 __all__ = [
     "run_sweep",
