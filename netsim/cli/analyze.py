@@ -87,7 +87,7 @@ def _min_gap_ns(times_s: pd.Series) -> int | None:
     return int(round(gap / NS)) if gap > 0 else None
 
 
-def _task_rows(scenario: Any, jobs: pd.DataFrame) -> tuple[list[dict], dict[tuple[str, str], tuple[int, int]]]:
+def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict], dict[tuple[str, str], tuple[int, int]]]:
     """Rows for tasks and EDF nodes; also ``(node, task) -> (response bound, wcet)`` for the message jitter."""
     rows: list[dict] = []
     bounds: dict[tuple[str, str], tuple[int, int]] = {}
@@ -97,24 +97,37 @@ def _task_rows(scenario: Any, jobs: pd.DataFrame) -> tuple[list[dict], dict[tupl
         items: list[RTATask] = []
         notes: dict[str, str] = {}
         skipped: list[tuple[str, str]] = []
+        kernel = sim.kernels.get(node_name)
+        loads = dict(getattr(kernel, "loads", {}) or {})
+        for load in loads.values():  # periodic ISR loads, from the scenario or created by programs at build
+            items.append(RTATask(load.name, int(load.execution), int(load.period), priority=-1_000_000))
+        covered = set(loads) | {load.handler for load in loads.values() if load.handler}
+        blind: list[str] = []
         for h in node.handlers:
+            if h.name in covered:
+                continue
             trig = h.trigger
             period = None
-            for kind in ("periodic_load", "timer"):
-                spec = getattr(trig, kind, None) if trig is not None else None
-                if spec is not None and getattr(spec, "period", None):
-                    period = int(spec.period)
+            timer = getattr(trig, "timer", None) if trig is not None else None
+            if timer is not None and timer.period:
+                period = int(timer.period)
             if period is None:
                 period = _min_gap_ns(_jobs_of(jobs, node_name, h.name)["release_s"])
-                notes[h.name] = "handler: sporadic, T = shortest gap in the run"
             c = _wcet_ns(h)
             if period is None or c is None:
+                blind.append(h.name)
                 continue
             items.append(RTATask(h.name, c + int(h.latency or 0), period, priority=-1_000_000))
         for t in node.tasks:
             c = _wcet_ns(t)
+            if blind:
+                skipped.append((t.name, f"handler {', '.join(blind)}: no period or execution time to analyse"))
+                continue
             if c is None:
                 skipped.append((t.name, "execution time unbounded (normal without max)"))
+                continue
+            if t.params.get("solve_time"):
+                skipped.append((t.name, "execution includes the solver's time (solve_time): no bound known"))
                 continue
             period = int(t.period) if t.release_kind == "periodic" and t.period else None
             if period is None:
@@ -144,8 +157,8 @@ def _task_rows(scenario: Any, jobs: pd.DataFrame) -> tuple[list[dict], dict[tupl
                 rows.append(_row("node", node_name, "schedulable" if ok else "not schedulable", misses, "misses",
                                  verdict, f"EDF demand test, U = {u:.3g}"))
             for t in node.tasks:
-                sim = _jobs_of(jobs, node_name, t.name)["response_s"].max()
-                rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _ms(sim), "ms", "n/a",
+                worst = _jobs_of(jobs, node_name, t.name)["response_s"].max()
+                rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _ms(worst), "ms", "n/a",
                                  "EDF: no per-task bound"))
             continue
         if policy == "np_fp":
@@ -161,19 +174,19 @@ def _task_rows(scenario: Any, jobs: pd.DataFrame) -> tuple[list[dict], dict[tupl
                 continue
             bound = rts.get(it.name)
             js = _jobs_of(jobs, node_name, it.name)
-            sim = js["response_s"].max()
+            worst = js["response_s"].max()
             unfinished = int((js["response_s"].isna() & (js["outcome"] != "pending")).sum())
             note = notes.get(it.name, how)
             if unfinished:
                 note += f"; {unfinished} jobs unfinished"
             if bound is None:
-                rows.append(_row("task", f"{node_name}.{it.name}", "unbounded", _ms(sim), "ms", "ok",
+                rows.append(_row("task", f"{node_name}.{it.name}", "unbounded", _ms(worst), "ms", "ok",
                                  note + "; load at its level >= 1"))
                 continue
             bounds[(node_name, it.name)] = (bound, it.wcet)
-            exceeds = (not math.isnan(sim) and sim > bound * NS + 1e-12) or (
+            exceeds = (not math.isnan(worst) and worst > bound * NS + 1e-12) or (
                 unfinished and _unfinished_past(js, bound))
-            rows.append(_row("task", f"{node_name}.{it.name}", bound * NS * 1e3, _ms(sim), "ms",
+            rows.append(_row("task", f"{node_name}.{it.name}", bound * NS * 1e3, _ms(worst), "ms",
                              "EXCEEDS" if exceeds else "ok", note))
         for name, why in skipped:
             rows.append(_row("task", f"{node_name}.{name}", "n/a", _ms(_jobs_of(jobs, node_name, name)["response_s"]
@@ -229,9 +242,9 @@ def _message_rows(scenario: Any, sim: Any, jobs: pd.DataFrame, messages: pd.Data
             [CanMessage(n, p, T, c, jitter_ns=j) for n, _, p, T, c, j, _, _ in streams], tau_ns=1)}
         for name, sender, _, _, _, _, note, group in streams:
             delays = ms[ms["msg_id"].isin(group["msg_id"]) & ~ms["dropped"]]
-            pre = int(params.node_delays[sender].pre_delay) if sender in params.node_delays else int(params.pre_delay)
-            post = max([int(params.node_delays[r].post_delay) if r in params.node_delays else int(params.post_delay)
-                        for r in delays["receiver"].unique()] or [int(params.post_delay)])
+            pre = _interface_delay(params, sender, "pre_delay")
+            post = max([_interface_delay(params, r, "post_delay") for r in delays["receiver"].unique()]
+                       or [int(params.post_delay)])
             worst = delays["delay_s"].max()
             r = results[name].response_ns
             if r is None:
@@ -243,6 +256,12 @@ def _message_rows(scenario: Any, sim: Any, jobs: pd.DataFrame, messages: pd.Data
             rows.append(_row("message", f"{net_name}.{name}", bound * 1e3, _ms(worst), "ms",
                              "EXCEEDS" if exceeds else "ok", "CAN RTA; " + note))
     return rows
+
+
+def _interface_delay(params: Any, node: str, which: str) -> int:
+    """A node's ``pre_delay`` or ``post_delay`` on a network: its own override, else the network's."""
+    own = getattr(params.node_delays.get(node), which, None) if node in params.node_delays else None
+    return int(own) if own is not None else int(getattr(params, which))
 
 
 # --------------------------------------------------------------------------------------------- control loops
@@ -404,7 +423,7 @@ def analyze_run(scenario: Any, result: Any) -> pd.DataFrame:
 
     sim = build(scenario)
     jobs = result.jobs
-    rows, bounds = _task_rows(scenario, jobs)
+    rows, bounds = _task_rows(scenario, sim, jobs)
     rows += _message_rows(scenario, sim, jobs, result.messages, bounds)
     rows += _loop_rows(scenario, sim, jobs, result)
     return pd.DataFrame(rows, columns=COLUMNS)

@@ -138,6 +138,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from netsim.scenario import ScenarioError, load_scenario
 
+    if _is_sweep(args.file):
+        from netsim.errors import ConfigError
+
+        raise ConfigError(f"{args.file}: this is a sweep file; analyze its base scenario instead")
     overrides = _overrides(args.overrides)
     if args.out is not None:
         from netsim.results import check_out_dir
