@@ -262,6 +262,12 @@ def hdd_plant(params: HddPlantParams | None = None, **kwargs: object):
     return plant
 
 
+# The ports, declared: validation checks the io channels against them without building the plant (issue 19: a
+# sweep point is validated twice, scenario and baseline, and each built the plant for its port names).
+hdd_plant.input_names = ["u"]  # type: ignore[attr-defined]
+hdd_plant.output_names = ["y"]  # type: ignore[attr-defined]
+
+
 hdd_plant.Params = HddPlantParams  # type: ignore[attr-defined]
 
 
