@@ -127,12 +127,19 @@ class Dispatcher:
 
     # ================================================================= dispatcher
     def _request_dispatch(self) -> None:
-        """Dispatch now if nothing else is pending at this instant, else after the instant's events."""
+        """Dispatch now if a dispatch entry pushed now would be the loop's next entry, else push one.
+
+        Called last by the kernel's own callbacks (segment ends, releases, timers, sleeps, deadlines), so
+        dispatching at once is what the loop would do next when nothing due now comes before the
+        ``DISPATCH`` row: entries of the later rows of the instant (air, arbitration, deadline checks, the
+        plant's record samples) wait for the dispatch anyway (issue 19: a task released with a record sample
+        at the same instant needs no dispatch entry).
+        """
         if self._busy or self._dispatch_pending:
             return
         sim = self._sim
-        queue = self._queue  # the event loop's heap: dispatch at once if nothing else is due now
-        if not queue or queue[0][0] > sim.now:
+        queue = self._queue  # the event loop's heap: its head is the next entry (time, priority, ...)
+        if not queue or queue[0][0] > sim.now or queue[0][1] > DISPATCH:
             if not self._ready and self._running is None and self._load is None:
                 self._last_task_job = None  # what _dispatch does when nothing is ready: the CPU idles
                 return

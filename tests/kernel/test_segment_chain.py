@@ -109,3 +109,32 @@ def test_advance_if_next_moves_the_clock_only_when_nothing_comes_first():
     assert _probe(11, (10, RECORD)) == (False, 0)  # anything earlier runs first
     assert _probe(31, None) == (False, 0)  # beyond the end of the run (env.run(30))
     assert _probe(9, None, simpy_loop=True) == (False, 0)  # simpy's own loop: one entry per step
+
+
+def test_a_release_with_only_later_rows_due_dispatches_without_a_dispatch_entry():
+    # a 1 ms periodic task released together with a RECORD-row sample at every release: the sample runs after
+    # the dispatch anyway, so the release dispatches at once (issue 19); before, the pending sample made it
+    # push a DISPATCH entry. The sample at each release sees the job already on the CPU, as before.
+    env = SimEnv()
+    sim = env.sim
+    k = Kernel(env, "cpu")
+    seen: list[str | None] = []
+
+    def control(job: Any) -> Any:
+        yield job.execute(200 * US)
+
+    def sample(_item: tuple) -> None:
+        seen.append(k.running)
+        if sim.now < 9 * MS:
+            sim.call_at(sim.now + 1 * MS, sample, None, priority=RECORD)
+
+    k.create_task("control", control, period=1 * MS, priority=1)
+    sim.call_at(0, sample, None, priority=RECORD)
+    env.run(10 * MS - 1)
+    assert seen == ["control"] * 10
+    # response time 200 us: each job starts at its release and runs its one segment
+    assert [(r.release, r.start, r.finish) for r in k.job_records] == [
+        (i * MS, i * MS, i * MS + 200 * US) for i in range(10)]
+    # per period: the release, the segment's end and the sample (plus the start-up check), no DISPATCH entry
+    # (which would make it 4 per period)
+    assert env.sim.events_scheduled() <= 3 * 10 + 2
