@@ -100,8 +100,8 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
             c = [b0[f"unicycle.cover_{s}_all"].mean() for s in ("x", "y", "theta")]
             L += [f"The netsim scenario (`unicycle_ekf.yaml`: sensors on their own CAN nodes, fused at their sample "
                   f"times; {len(b0)} replicates of the sweep `unicycle_net_sweep.yaml`) gives coverage x "
-                  f"{_pct(c[0])}, y {_pct(c[1])}, theta {_pct(c[2])} (the 1.5 to 4 ms actuation delay is not in the "
-                  "filter's model).", ""]
+                  f"{_pct(c[0])}, y {_pct(c[1])}, theta {_pct(c[2])}; with 20 runs the Monte-Carlo tolerance is several "
+                  "points (section 5), and the 1.5 to 4 ms actuation delay is not in the filter's model.", ""]
             T.add("1 bands", f"netsim CAN, {len(b0)} replicates", "coverage x / y / theta",
                   " / ".join(_pct(v) for v in c), "", "sensor samples fused at their sample times")
     # ---------------------------------------------------------------- experiment 2
@@ -189,7 +189,7 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
           f"{_f(qq['rmse_y_straight'] * 1e3)} mm against {_f(b['rmse_y_straight'] * 1e3)} mm.",
           "- 'The baseline is the optimal balance': with the filter's Q and R equal to the truth's noise the "
           "baseline is the minimum-variance filter of the linearised problem; coverage per setting is in the last "
-          "column (a filter whose Q or R is 5x the truth's over-covers). The differences between the settings are "
+          "column. The differences between the settings are "
           "small because the sensors are weak (section 'Choices').", ""]
     T.add("3 Q/R", "(5Q, R) vs (Q, R)", "noisier in straight part", "yes" if noisier else "no", "yes", "")
     T.add("3 Q/R", "(5Q, R) vs (Q, R)", "faster after turn (y error 6-7 s)", "yes" if faster else "no", "yes", "")
@@ -229,18 +229,24 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
     # ---------------------------------------------------------------- networked
     L += ["## 5. What only a networked simulator shows", ""]
     if net is not None and len(net):
-        g = net.groupby(["front_period", "loss"])
+        net = net.assign(_fp=net["front_period"].astype(str).str.replace(" ms", "").astype(float))
+        g = net.sort_values(["_fp", "loss"]).groupby(["_fp", "loss"], sort=True)
+        se = [1.96 * d[f"unicycle.cover_{s}_all"].std(ddof=1) / math.sqrt(len(d)) for _, d in g
+              for s in ("x", "y", "theta")]
         L += ["Front IR rate x Bernoulli loss on the CAN bus (`unicycle_net_sweep.yaml`, replicates per point as "
               "shown; the side sensor stays at 25 Hz; loss hits measurements and wheel commands):", "",
+              f"Monte-Carlo tolerance of a coverage with 20 runs: +- {_pct(min(se))} to +- {_pct(max(se))} (1.96 "
+              "standard errors of the runs' coverages); differences between points inside that are noise.", "",
               "| front period | loss | runs | coverage x / y / theta | RMS y front part [mm] | sigma y end [mm] | "
               "fused front |", "|---|---|---|---|---|---|---|"]
         for (fp, lo), d in g:
-            L.append(f"| {fp} | {lo} | {len(d)} | {_pct(d['unicycle.cover_x_all'].mean())} / "
+            L.append(f"| {fp:g} ms | {lo} | {len(d)} | {_pct(d['unicycle.cover_x_all'].mean())} / "
                      f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} | "
                      f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | {_f(d['unicycle.sd_y_end_front'].mean() * 1e3)} | "
                      f"{_f(d['control.ekf.filter.fused_front'].mean())} |")
-            T.add("5 network", f"front {fp}, loss {lo}", "coverage y", d["unicycle.cover_y_all"].mean(), "", "")
-            T.add("5 network", f"front {fp}, loss {lo}", "RMS y front part [m]", d["unicycle.rmse_y_front"].mean(), "", "")
+            T.add("5 network", f"front {fp:g} ms, loss {lo}", "coverage y", d["unicycle.cover_y_all"].mean(), "", "")
+            T.add("5 network", f"front {fp:g} ms, loss {lo}", "RMS y front part [m]", d["unicycle.rmse_y_front"].mean(),
+                  "", "")
         L.append("")
     zb = F["zigbee"]
     L += ["802.15.4 radio (`unicycle_zigbee.yaml`, one run, nodes 0.1 m apart): mean message delay "
