@@ -23,7 +23,7 @@ def _analyze(name: str, **overrides: object) -> tuple[pd.DataFrame, object, obje
 
 
 def test_three_servos_dm_bounds_and_loop_costs() -> None:
-    table, _, _ = _analyze("three_servos_dm.yaml")
+    table, _, result = _analyze("three_servos_dm.yaml")
     # DM with C = 2 ms each, T = 4, 5, 6 ms: R3 = 2 ms; R2 = 2 + 2 = 4 ms (one pid3 job); pid1's level load
     # 2/4 + 2/5 + 2/6 = 1.23 >= 1: unbounded (by hand, the Joseph & Pandya recurrence)
     assert table.loc[("task", "cpu.pid3"), "analysis"] == pytest.approx(2.0)
@@ -38,6 +38,13 @@ def test_three_servos_dm_bounds_and_loop_costs() -> None:
     for loop in ("cpu.pid2", "cpu.pid3"):
         analytic, simulated = table.loc[("loop", loop), ["analysis", "simulated"]]
         assert simulated == pytest.approx(analytic, rel=0.03)
+    # pid3 runs first in every period (one constant 2 ms delay): the analysis is then exact, and equals the run's
+    # ISE by the trapezoidal rule on signals.csv (r held over each grid step; the run stopped at 1.48 s)
+    s = result.signals
+    t, r, y = s["time_s"].to_numpy(), s["r"].to_numpy(), s["y3"].to_numpy()
+    e0, e1 = r[:-1] - y[:-1], r[:-1] - y[1:]
+    trapezoid = float(((e0 * e0 + e1 * e1) / 2 * (t[1:] - t[:-1])).sum())
+    assert table.loc[("loop", "cpu.pid3"), "analysis"] == pytest.approx(trapezoid, rel=1e-4)
     assert table.loc[("loop", "cpu.pid1"), "analysis"] == "n/a"  # its jobs overrun: outside the analysis
 
 
@@ -80,3 +87,34 @@ def test_cli_prints_the_table_and_writes_analysis_csv(tmp_path: Path, capsys: py
     table = pd.read_csv(out / "analysis.csv")
     assert list(table.columns) == ["kind", "name", "analysis", "simulated", "unit", "verdict", "note"]
     assert set(table["kind"]) == {"task", "message", "loop"}
+
+
+def test_a_state_feedback_loop_cost_equals_the_runs_integral() -> None:
+    # A DC servo under LQR state feedback (estimator none: both states measured), u written 3 ms after each
+    # 10 ms sample, square reference. The analysis' expected ISE equals the run's ISE computed here by the
+    # trapezoidal rule from signals.csv (r held on each grid step) to 1e-5; the run's metric holds the error on
+    # its 1 ms grid, which adds about dt/2 * sum of e^2 at the steps (0.5 ms * 13 = 0.0065, 3 %).
+    sc = {"name": "sf", "seed": 1, "duration": "2 s",
+          "plant": {"type": "ss", "A": [[0, 1], [0, -1]], "B": [[0], [1000]], "C": [[1, 0], [0, 1]],
+                    "outputs": ["theta", "omega"], "inputs": ["u"], "record_grid": "1 ms"},
+          "io": {"th": {"type": "adc", "output": "theta"}, "om": {"type": "adc", "output": "omega"},
+                 "u": {"type": "dac", "input": "u"}},
+          "signals": {"r": {"type": "square", "amplitude": 1.0, "period": "1 s"}},
+          "nodes": {"cpu": {"policy": "fp", "tasks": [
+              {"name": "ctl", "program": "state_feedback", "period": "10 ms", "priority": 1, "execution": "3 ms",
+               "params": {"measurements": [{"channel": "th", "outputs": ["theta"]},
+                                           {"channel": "om", "outputs": ["omega"]}],
+                          "estimator": {"type": "none"}, "law": {"type": "lqr", "Q": [1, 0], "R": 1e-2},
+                          "reference": "r", "output_channel": "u"}}]}},
+          "record": ["r", "theta", "u"],
+          "metrics": [{"type": "control_error", "params": {"reference": "r", "output": "theta"}}]}
+    scenario = load_scenario(sc)
+    result = netsim.run(scenario)
+    table = analyze_run(scenario, result).set_index(["kind", "name"])
+    analytic, metric = table.loc[("loop", "cpu.ctl"), ["analysis", "simulated"]]
+    s = result.signals
+    t, r, y = s["time_s"].to_numpy(), s["r"].to_numpy(), s["theta"].to_numpy()
+    e0, e1 = r[:-1] - y[:-1], r[:-1] - y[1:]
+    trapezoid = float(((e0 * e0 + e1 * e1) / 2 * (t[1:] - t[:-1])).sum())
+    assert analytic == pytest.approx(trapezoid, rel=1e-5)
+    assert metric == pytest.approx(analytic + 0.0005 * 13, rel=0.01)
