@@ -60,3 +60,63 @@ def test_bench_cli_run_dc_servo_can_10s(tmp_path):
     if proc.returncode != 0:
         print(proc.stderr[-2000:])
     assert (tmp_path / "cli" / "signals.csv").exists()
+
+
+def _child_cpu(cmd: list[str]) -> float:
+    """CPU time (user + system) of one child process running ``cmd``."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+@pytest.mark.benchmark
+def test_bench_cli_start_up_against_numpy_scipy_import(tmp_path):
+    """Issue 19: `netsim run dc_servo_ideal` <= 1.6x and `netsim validate dc_servo_can` <= 1.0x the CPU of
+    `python -c "import numpy, scipy.linalg"`, whole processes, interleaved rounds (best and median printed)."""
+    import statistics
+
+    netsim_cmd = [sys.executable, "-m", "netsim"]
+    cmds = {
+        "reference": [sys.executable, "-c", "import numpy, scipy.linalg"],
+        "run": netsim_cmd + ["run", "scenarios/dc_servo_ideal.yaml", "--out", str(tmp_path / "run")],
+        "validate": netsim_cmd + ["validate", "scenarios/dc_servo_can.yaml"],
+    }
+    times: dict[str, list[float]] = {k: [] for k in cmds}
+    for _ in range(5):
+        for name, cmd in cmds.items():
+            times[name].append(_child_cpu(cmd))
+    ref_best, ref_med = min(times["reference"]), statistics.median(times["reference"])
+    for name, target in (("run", 1.6), ("validate", 1.0)):
+        best, med = min(times[name]), statistics.median(times[name])
+        print(f"\n[bench] netsim {name}: CPU best {best:.3f} s, median {med:.3f} s; reference best {ref_best:.3f} s "
+              f"-> ratio {best / ref_best:.2f}x best, {med / ref_med:.2f}x median (target <= {target}x)")
+    assert all(t > 0 for v in times.values() for t in v)
+
+
+_PEAK_RSS = """
+import resource, sys
+import netsim
+netsim.run("scenarios/dc_servo_can.yaml", out=sys.argv[2], overrides={
+    "duration": sys.argv[1], "output.jobs": "summary", "output.messages": "summary", "output.schedule": "off",
+    "metrics": [{"type": "control_error", "params": {"reference": "r", "output": "y"}}]})
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+"""
+
+
+@pytest.mark.benchmark
+def test_bench_summary_traces_memory_10s_vs_300s(tmp_path):
+    """Issue 19: dc_servo_can at 10 s vs 300 s simulated with summary traces, peak RSS (target <= +10 %).
+
+    The latency metric reads the message rows (it needs ``messages: full``), so it is left out here."""
+    peaks = {}
+    for duration in ("10 s", "300 s"):
+        proc = subprocess.run([sys.executable, "-c", _PEAK_RSS, duration, str(tmp_path / duration.replace(" ", ""))],
+                              cwd=ROOT, capture_output=True, text=True, check=True)
+        peaks[duration] = int(proc.stdout.split()[-1]) / 1024  # ru_maxrss is in KiB on Linux
+    growth = peaks["300 s"] / peaks["10 s"] - 1
+    print(f"\n[bench] dc_servo_can summary traces: peak RSS 10 s {peaks['10 s']:.0f} MiB, 300 s {peaks['300 s']:.0f} "
+          f"MiB -> {100 * growth:+.0f} % (target <= +10 %)")
+    assert peaks["300 s"] > 0
