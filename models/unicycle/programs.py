@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Generator
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import Field
@@ -126,8 +126,11 @@ class UnicycleEkf:
         start: list[float] = Field(default_factory=lambda: XI0_HAT.tolist(), min_length=3, max_length=3)
         phases: list[_Phase] = Field(default_factory=_default_phases, min_length=1)
         law: Literal["feedforward", "lqr", "lqr_ff"] = "feedforward"
-        lqr_Q: list[float] = Field(default_factory=lambda: [1e4, 1e4, 100.0], min_length=3, max_length=3)
-        lqr_R: list[float] = Field(default_factory=lambda: [400.0, 1.0], min_length=2, max_length=2)
+        # diagonals of Q (each >= 0) and R (each > 0): a negative weight made slycot raise at build (issue 14 B)
+        lqr_Q: list[Annotated[float, Field(ge=0)]] = Field(default_factory=lambda: [1e4, 1e4, 100.0], min_length=3,
+                                                           max_length=3)
+        lqr_R: list[Annotated[float, Field(gt=0)]] = Field(default_factory=lambda: [400.0, 1.0], min_length=2,
+                                                          max_length=2)
         a_sign: Literal["derived", "printed"] = "derived"
         wheel_radius: float = Field(WHEEL_RADIUS, gt=0)
         half_wheelbase: float = Field(HALF_WHEELBASE, gt=0)

@@ -391,7 +391,12 @@ def compute_metrics(result: Any, specs: list[Any], baseline: Any = None) -> dict
         if hasattr(spec, "model_dump"):
             spec = spec.model_dump()
         fn = lookup("metric", spec["type"])
-        values = fn(result, spec.get("params") or {}, baseline)
+        try:
+            values = fn(result, spec.get("params") or {}, baseline)
+        except KeyError as exc:  # a signal or column the run's tables do not hold: a message, not a traceback
+            missing = exc.args[0] if exc.args else exc
+            raise ConfigError(f"metric '{spec['type']}' reads a column this run did not record ({missing}); add "
+                              "the signals it reads to 'record:', or leave 'record:' out to record everything") from None
         out.update({str(k): float(v) for k, v in values.items()})
     return out
 

@@ -320,8 +320,8 @@ def _program(spec: Any, ctx: Any, path: str) -> Any:
         if isinstance(exc, ConfigError) and exc.path is None:
             raise BuildError(exc.message, path=path) from None
         raise
-    except (ValueError, TypeError, KeyError) as exc:
-        raise BuildError(f"cannot build program '{spec.program}': {exc}", path=path) from exc
+    except (ValueError, TypeError, KeyError, ArithmeticError) as exc:  # ArithmeticError: e.g. slycot's, in a design
+        raise BuildError(f"cannot build program '{spec.program}': {' '.join(str(exc).split())}", path=path) from exc
     if not callable(body):
         raise BuildError(f"program '{spec.program}' did not produce a callable body", path=path)
     return body

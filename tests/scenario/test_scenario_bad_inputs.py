@@ -259,3 +259,43 @@ def test_a_network_named_inside_a_list_of_program_parameters_is_checked():
     at = "nodes.ekf.tasks[0].params.measurements[1].network"
     problems = [p for p in check_scenario(path, {at: "ghost_ref"}) if p.is_error]
     assert [(p.path, p.message.split(" (")[0]) for p in problems] == [(at, "unknown network 'ghost_ref'")]
+
+
+# --------------------------------------------------------------- found by the fuzz figures in unicycle_lqr.yaml
+UNICYCLE_LQR = Path(__file__).resolve().parents[2] / "scenarios" / "unicycle_lqr.yaml"
+
+
+def test_negative_lqr_weights_are_refused_at_validate():
+    """Before: validate said valid and run ended in slycot's SlycotArithmeticError traceback."""
+    at = "nodes.ekf.tasks[0].params.lqr_Q[0]"
+    assert [(p.path, p.message) for p in _errors(UNICYCLE_LQR, overrides={at: -1.0})] == [
+        (at, "input should be greater than or equal to 0, got -1.0")]
+
+
+def test_a_metric_reading_a_signal_record_left_out_is_a_message_not_a_traceback(tmp_path):
+    """Before: KeyError: "['theta'] not in index" from the unicycle metric, as a traceback."""
+    from netsim.errors import ConfigError
+    from netsim.runner import run
+
+    record = [r for r in yaml.safe_load(UNICYCLE_LQR.read_text())["record"] if r != "theta"]
+    with pytest.raises(ConfigError, match=r"metric 'unicycle' reads a column this run did not record \(.*theta.*\); "
+                                          "add the signals it reads to 'record:'"):
+        run(UNICYCLE_LQR, overrides={"record": record, "duration": "30 ms"}, out=tmp_path / "run")
+
+
+def test_a_program_whose_design_raises_an_arithmetic_error_is_a_build_error():
+    """slycot raises SlycotArithmeticError (an ArithmeticError, not a ValueError): build names the program."""
+    from netsim.errors import BuildError
+    from netsim.registry import register
+    from netsim.runner import run
+
+    @register("program", "zzt_arithmetic_design", "test program whose design fails")
+    class _Failing:
+        def __init__(self, ctx, params):
+            raise ArithmeticError("The computed dimension of the solution does not\nequal N")
+
+    raw = {"name": "design", "duration": "10 ms", "nodes": {"cpu": {"tasks": [
+        {"name": "t", "program": "zzt_arithmetic_design", "period": "1 ms", "priority": 1}]}}}
+    with pytest.raises(BuildError, match="cannot build program 'zzt_arithmetic_design': The computed dimension of "
+                                         "the solution does not equal N"):
+        run(raw, write=False)
