@@ -257,11 +257,27 @@ def plain_copy(data: Any) -> Any:
     return _scalar(data)
 
 
+def _readable(value: int) -> int:
+    """``value``, or the YAML reader's placeholder when it has more digits than Python turns into text.
+
+    A 5000-digit integer from Python then gets the same message, at its path, as one read from a file; as it is,
+    a message that shows it would raise ``ValueError`` (issue 14 B).
+    """
+    if value.bit_length() < 14_000:  # fewer than 4215 digits: always readable
+        return value
+    from netsim.scenario.safe_yaml import long_integer_placeholder
+
+    placeholder = long_integer_placeholder(value < 0)
+    return placeholder if abs(value) > abs(placeholder) else value
+
+
 def _scalar(value: Any) -> Any:
     """``value`` as the plain type it is a subclass of (a ``numpy.float64`` becomes a ``float``)."""
     kind = type(value)
-    if value is None or kind in (str, int, float, bool):
+    if value is None or kind in (str, float, bool):
         return value
+    if kind is int:
+        return _readable(value)
     for plain in (bool, int, float, str):
         if isinstance(value, plain):
             return plain(value)

@@ -274,3 +274,13 @@ def test_a_task_without_period_and_release_warns_that_nothing_releases_it(base):
     assert "add e.g. 'period: 10 ms'" in _warnings(raw)["nodes.sensor.tasks[0]"]
     raw["nodes"]["sensor"]["tasks"][0]["release"] = "aperiodic"  # said on purpose: no warning
     assert "nodes.sensor.tasks[0]" not in _warnings(raw)
+
+
+def test_a_5000_digit_integer_from_python_gets_the_same_message_as_from_a_file(base):
+    """Before: ValueError (int to text beyond 4300 digits) from the io check's message, as a traceback."""
+    raw = base()
+    raw["io"]["y"]["output"] = 10**5000
+    raw["seed"] = -(10**5000)
+    errors = _errors(raw)
+    assert "over 4000 digits" in errors["io.y.output"] and "write a smaller value" in errors["io.y.output"]
+    assert "seed" in errors
