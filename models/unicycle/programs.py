@@ -245,22 +245,26 @@ class UnicycleEkf:
         yield job.send(self.p.network, self.p.to, [wl, wr], self.p.bits, priority=self.p.priority, tag=self.p.tag)
 
     def _record(self, k: int, x_hat: np.ndarray) -> None:
+        """Record the posterior, its bands and the predicted readings at the sample instant (floats: the recorder's
+        fast path; the same columns as vectors would give, ``xhat[0]`` ...)."""
         t = k * self.period
         P = self.ekf.P
         rec = self.ctx.record
-        rec("xhat", x_hat, t)
-        rec("sd", np.sqrt(np.diag(P)), t)
+        for i in range(3):
+            rec(f"xhat[{i}]", float(x_hat[i]), t)
+        for i in range(3):
+            rec(f"sd[{i}]", math.sqrt(float(P[i, i])), t)
         rec("detP", float(np.linalg.det(P)), t)
-        zh, zs = [], []
-        for off, wall, r in ((FRONT_OFFSET, WALL_FRONT, self.R[0]), (self.off_side, WALL_SIDE, self.R[1])):
-            H = measure_jacobian(x_hat, off, wall)
-            zh.append(measure(x_hat, off, wall))
-            zs.append(math.sqrt(float((H @ P @ H.T)[0, 0]) + r))
-        rec("zhat", np.array(zh), t)
-        rec("zsd", np.array(zs), t)
+        for i, (off, wall, r) in enumerate(((FRONT_OFFSET, WALL_FRONT, self.R[0]),
+                                            (self.off_side, WALL_SIDE, self.R[1]))):
+            H = measure_jacobian(x_hat, off, wall)[0]
+            rec(f"zhat[{i}]", measure(x_hat, off, wall), t)
+            rec(f"zsd[{i}]", math.sqrt(float(H @ P @ H) + r), t)
         ref, _ = self.traj.at(k)
-        rec("ref", ref, t)
-        rec("vw", self.u, t)
+        for i in range(3):
+            rec(f"ref[{i}]", float(ref[i]), t)
+        rec("vw[0]", float(self.u[0]), t)
+        rec("vw[1]", float(self.u[1]), t)
 
     def metrics(self) -> dict[str, float]:
         """The counters of the run (module docstring)."""
