@@ -128,7 +128,8 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     workers
         Processes for the Monte-Carlo runs and the sweeps (default: up to 4, one per CPU).
     sweeps
-        Also run (or resume) the netsim sweeps ``unicycle_net_sweep`` and ``unicycle_lqr_delay``.
+        Also run (or resume) the netsim sweeps ``unicycle_net_sweep``, ``unicycle_lqr_delay`` and
+        ``unicycle_burst_sweep``.
     """
     import netsim
 
@@ -167,6 +168,7 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     # ---------------------------------------------------------------- netsim sweeps
     facts["net"] = _sweep("unicycle_net_sweep", out, workers) if sweeps else None
     facts["delay"] = _sweep("unicycle_lqr_delay", out, workers) if sweeps else None
+    facts["burst"] = _sweep("unicycle_burst_sweep", out, workers) if sweeps else None
     if plots:
         _plots(out, base, qr_runs, t)
     facts["wall_s"] = time.perf_counter() - t0
