@@ -91,17 +91,40 @@ def _float_chunks(frame: pd.DataFrame, names: list[str]) -> Iterator[str]:
     first_only = timed[0] and not any(timed[1:])  # the signals table: time_s first, then values
     for a in range(0, len(frame), CHUNK_ROWS):
         block = np.column_stack([c[a:a + CHUNK_ROWS] for c in columns])
-        if first_only and not np.isnan(block).any():  # the common case, formatted with map(repr) per row
-            t = block[:, 0]
-            whole = (t == np.floor(t)) & (np.abs(t) < 1e15)
-            heads = ["%d" % v if w else repr(v) for v, w in zip(t.tolist(), whole.tolist())]
-            lines = [h + "," + ",".join(map(repr, row)) if row else h
-                     for h, row in zip(heads, block[:, 1:].tolist())]
+        t = block[:, 0]
+        if first_only and not np.isnan(t).any():  # the signals table: time_s first, then values
+            heads = _reprs(t.tolist())
+            whole = np.flatnonzero((t == np.floor(t)) & (np.abs(t) < 1e15))
+            for i in whole.tolist():  # whole seconds as integers (_time_text)
+                heads[i] = "%d" % t[i]
+            if block.shape[1] == 1:
+                lines = heads
+            else:
+                rest = _rows_text(block[:, 1:])
+                lines = [h + "," + r for h, r in zip(heads, rest)]
         elif not any(timed):
             lines = [",".join(["" if v != v else repr(v) for v in row]) for row in block.tolist()]
         else:
             lines = [",".join([f(v) for f, v in zip(cells, row)]) for row in block.tolist()]
         yield "\n".join(lines) + "\n"
+
+
+def _reprs(values: list[float]) -> list[str]:
+    """``repr`` of each float, formatted in one C call (``str`` of a list uses each float's ``repr``)."""
+    return str(values)[1:-1].split(", ") if values else []
+
+
+def _rows_text(block: np.ndarray) -> list[str]:
+    """Each row of a 2-D float array as CSV cells: ``repr`` of each value, NaN as an empty cell.
+
+    ``str`` of the nested list formats every value with ``repr`` in C; a float's ``repr`` holds only digits,
+    ``.``, ``e``, signs, ``inf`` and ``nan``, so the separators and ``nan`` can be rewritten as text."""
+    if block.shape[0] == 0:
+        return []
+    text = str(block.tolist())[2:-2].replace(", ", ",")
+    if "nan" in text:
+        text = text.replace("nan", "")
+    return text.split("],[")
 
 
 #: Column types of the jobs and messages tables (the columns :func:`jobs_table` and :func:`messages_table` make).
