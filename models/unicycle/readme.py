@@ -48,7 +48,11 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
           "pose drawn from N(xi0_hat, P0); IR noise = the report's R. So the filter's Q, R, P0 match the truth "
           "(the report's tuned values are used as the true noise, as nothing else is given).",
           "- LQR weights (Bryson): Q_lqr = diag(1e4, 1e4, 100) (1 cm, 1 cm, 0.1 rad), R_lqr = diag(400, 1) "
-          "(5 cm/s, 1 rad/s).", "",
+          "(5 cm/s, 1 rad/s).",
+          "- The sensors measure what eqs (4)-(9) say: the perpendicular distance of the sensor's position to its "
+          "wall, not a ray cast along the beam. (With theta0 = 0 the front sensor looks along +x, at the wall x = 0, "
+          "not at y = 0 as eq (8) assigns it; the report's model is consistent with the beams only at theta = pi/2, "
+          "i.e. after the turn. We keep the report's model and wall assignment throughout.)", "",
           "The report's R = diag(0.0198, 0.09) m^2 means IR noise of 14 cm and 30 cm standard deviation at wall "
           "distances of 7 to 30 cm. Taken literally (as here), the sensors carry little information and the filter "
           "runs close to dead reckoning; if the report's R were in cm^2 the noise would be 1.4 and 3 mm. We keep "
