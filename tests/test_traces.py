@@ -122,3 +122,14 @@ def test_signals_table_holds_values_as_pandas_reindex_ffill_does() -> None:
             times[n], values[n] = list(t), list(v)
         got = signals_table(times, values)
         assert got.equals(by_pandas(times, values)[list(got.columns)])
+
+
+def test_a_result_with_a_lazy_table_pickles_and_copies_with_the_table_built() -> None:
+    import copy
+    import pickle
+
+    result = netsim.run(CAN, write=False, overrides={**BASE, "duration": "0.05 s"})
+    assert type(object.__getattribute__(result, "schedule")).__name__ == "Lazy"  # not built yet
+    back = pickle.loads(pickle.dumps(result))
+    assert back.schedule.equals(result.schedule) and len(back.schedule) > 0
+    assert copy.deepcopy(result).signals.equals(result.signals)

@@ -113,6 +113,13 @@ class RunResult:
             object.__setattr__(self, name, value)
         return value
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled and copied with every table built (a :class:`Lazy` holds a closure, which does not pickle)."""
+        return {name: getattr(self, name) for name in object.__getattribute__(self, "__dict__")}
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        object.__getattribute__(self, "__dict__").update(state)
+
     signals: pd.DataFrame = field(default_factory=lambda: pd.DataFrame({"time_s": pd.Series([], dtype=float)}))
     jobs: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=JOB_COLUMNS))
     messages: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=MESSAGE_COLUMNS))
