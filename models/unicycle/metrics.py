@@ -102,3 +102,5 @@ def unicycle_metric(result: Any, params: Any, baseline: Any = None) -> dict[str,
 
 
 unicycle_metric.Params = UnicycleMetricParams  # type: ignore[attr-defined]
+#: the recorded signals the metric reads (``netsim validate`` checks that ``record:`` keeps them)
+unicycle_metric.reads_signals = ("x", "y", "theta", "xhat", "sd", "detP")  # type: ignore[attr-defined]

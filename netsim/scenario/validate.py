@@ -560,6 +560,7 @@ class _Checker:
             if plugin is not None:
                 values = _values(model) if model is not None else _d(raw)
                 self.metric_signals(str(metric.get("type")), values, ["metrics", i, "params"])
+                self.metric_reads(plugin, str(metric.get("type")), ["metrics", i, "type"])
                 for key, value in values.items():
                     if isinstance(key, str) and (key == "chain" or key.endswith("_chain")):
                         for j, ref in enumerate(_l(value)):
@@ -587,6 +588,20 @@ class _Checker:
                 listed = ", ".join(r for r in record if isinstance(r, str)) or "nothing"
                 self.error(where, f"metric '{metric}' reads signal '{name}', which 'record:' leaves out "
                                   f"(record: [{listed}]); add '{name}' to 'record:'")
+
+    def metric_reads(self, plugin: Any, metric: str, at: list[PathPart]) -> None:
+        """A metric that reads fixed signal names declares them (``reads_signals``); with a ``record:`` list, each
+        must be in it (a name ``xhat`` covers the columns ``xhat[0]``, ``xhat[1]``, ...)."""
+        record = self.raw.get("record")
+        reads = getattr(plugin, "reads_signals", ())
+        if not isinstance(record, list) or not reads:
+            return
+        kept = {r for r in record if isinstance(r, str)}
+        missing = [name for name in reads if name not in kept]
+        if missing:
+            listed = ", ".join(sorted(kept)) or "nothing"
+            self.error(at, f"metric '{metric}' reads the signals {', '.join(missing)}, which 'record:' leaves out "
+                           f"(record: [{listed}]); add them to 'record:'")
 
     def task_ref(self, ref: Any, at: list[PathPart]) -> None:
         """``ref`` is ``node.task`` naming an existing task or handler of that node."""

@@ -153,3 +153,18 @@ def test_interference_reaching_a_consumer_is_a_warning_with_its_path(tmp_path, c
     fixed = _write(tmp_path, "quiet.yaml", text.replace("network: can, to: all}", "network: can, to: i}"))
     assert main(["validate", str(fixed)]) == 0
     assert "warning" not in capsys.readouterr().out
+
+
+def test_a_metric_reading_a_signal_that_record_leaves_out_is_refused_by_validate_as_run_would(tmp_path, capsys):
+    # found by the fuzz figures (issue 14 B): unicycle_lqr without 'theta' in record: validated, then the run
+    # failed in its metric; the metric now declares the signals it reads (reads_signals) and validate checks them
+    root = Path(__file__).resolve().parents[2]
+    text = (root / "scenarios" / "unicycle_lqr.yaml").read_text(encoding="utf-8")
+    assert "record: [x, y, theta," in text
+    path = tmp_path / "unicycle_lqr.yaml"
+    path.write_text(text.replace("record: [x, y, theta,", "record: [x, y,"), encoding="utf-8")
+    assert main(["validate", str(path)]) == 1
+    err = capsys.readouterr()
+    out = err.out + err.err
+    assert "metrics[0].type: metric 'unicycle' reads the signals theta" in out and "add them to 'record:'" in out
+    assert main(["run", str(path), "--out", str(tmp_path / "run")]) == 2   # run refuses it too, before running
