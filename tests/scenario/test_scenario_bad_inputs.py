@@ -273,13 +273,13 @@ def test_negative_lqr_weights_are_refused_at_validate():
 
 
 def test_a_metric_reading_a_signal_record_left_out_is_a_message_not_a_traceback(tmp_path):
-    """Before: KeyError: "['theta'] not in index" from the unicycle metric, as a traceback."""
+    """Before: KeyError: "['theta'] not in index" from the unicycle metric, as a traceback; now the metric declares
+    the signals it reads and the run is refused while loading, before it runs."""
     from netsim.errors import ConfigError
     from netsim.runner import run
 
     record = [r for r in yaml.safe_load(UNICYCLE_LQR.read_text())["record"] if r != "theta"]
-    with pytest.raises(ConfigError, match=r"metric 'unicycle' reads a column this run did not record \(.*theta.*\); "
-                                          "add the signals it reads to 'record:'"):
+    with pytest.raises(ConfigError, match=r"metric 'unicycle' reads the signals theta, which 'record:' leaves out"):
         run(UNICYCLE_LQR, overrides={"record": record, "duration": "30 ms"}, out=tmp_path / "run")
 
 
