@@ -96,36 +96,18 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
 
 
 def _measures(res: Any, case: dict[str, Any]) -> dict[str, float]:
-    s = res.to_pandas().sort_index().ffill()
-    ts = 0.005
-    t_end = float(s.index.max())
-    tk = np.arange(0.0, t_end - ts + 1e-9, ts)
-    # the value of each column at the sample instants (the estimate recorded at the release) and the input
-    # applied over the sample (the held value just before the next sample)
-    at = s.reindex(s.index.union(tk)).ffill().loc[tk]
-    u = s["u"].reindex(s.index.union(tk + ts - 1e-9)).ffill().loc[tk + ts - 1e-9].to_numpy(float)
-    theta, alpha = at["theta"].to_numpy(float), at["alpha"].to_numpy(float)
-    out: dict[str, float] = {}
-    m = res.metrics
+    from models.pendulum.metrics import pendulum_measures
+
+    ok = str(res.status).startswith("ok")
+    pm = pendulum_measures(res.signals, ok)
     if case["kind"] == "hold_still":
-        keep = tk >= CHATTER_FROM_S
-        out["theta_dot_noise"] = float(np.std(at["x_hat[1]"].to_numpy(float)[keep]))
-        out["alpha_dot_noise"] = float(np.std(at["x_hat[3]"].to_numpy(float)[keep]))
-        return out
-    u = np.nan_to_num(u, nan=0.0)
-    late = tk >= CHATTER_FROM_S
-    out["u_std"] = float(np.std(u[late]))
-    out["saturated_share"] = float(np.mean(np.abs(u) >= U_LIMIT - 1e-9))
-    out["rms_theta"] = float(np.sqrt(np.mean(theta**2)))
-    out["rms_alpha"] = float(np.sqrt(np.mean(alpha**2)))
-    out["rms_alpha_after_1s"] = float(np.sqrt(np.mean(alpha[late] ** 2)))
-    cost = 5.0 * theta**2 + 20.0 * alpha**2 + u**2
-    out["lqg_cost_per_step"] = float(np.mean(cost))
-    out["lqg_cost_after_1s"] = float(np.mean(cost[late]))
-    last = tk >= t_end - 1.0
-    ok = str(res.status).startswith("ok") and bool(np.all(np.isfinite(alpha)))
-    out["max_alpha_last_s"] = float(np.max(np.abs(alpha[last]))) if ok else math.inf
-    out["stable"] = float(ok and out["max_alpha_last_s"] < STABLE_ALPHA)
+        return {"theta_dot_noise": pm["theta_dot_est_std"], "alpha_dot_noise": pm["alpha_dot_est_std"]}
+    out: dict[str, float] = {k: pm[k] for k in ("u_std", "saturated_share", "rms_theta", "rms_alpha",
+                                                "lqg_cost_per_step", "max_alpha_last_s", "stable")}
+    out["rms_alpha_after_1s"] = pm["rms_alpha_after_settle"]
+    out["lqg_cost_after_1s"] = pm["lqg_cost_after_settle"]
+    out["alpha_dot_est_std"] = pm.get("alpha_dot_est_std", math.nan)
+    m = res.metrics
     for key in ("deadline_misses", "max_response_s"):
         for node in ("rip", "controller"):
             name = f"task.{node}.control.{key}"
@@ -137,7 +119,12 @@ def _measures(res: Any, case: dict[str, Any]) -> dict[str, float]:
             if name in m:
                 out[key] = float(m[name])
     if case["kind"] == "mpc_vs_lqr":
-        out.update(_mpc_vs_lqr(at, u))
+        s = res.to_pandas().sort_index().ffill()
+        ts = 0.005
+        tk = np.arange(0.0, float(s.index.max()) - ts + 1e-9, ts)
+        at = s.reindex(s.index.union(tk)).ffill().loc[tk]
+        u = s["u"].reindex(s.index.union(tk + ts - 1e-9)).ffill().loc[tk + ts - 1e-9].to_numpy(float)
+        out.update(_mpc_vs_lqr(at, np.nan_to_num(u, nan=0.0)))
     return out
 
 
@@ -205,6 +192,63 @@ def timing_cases() -> list[dict[str, Any]]:
         out.append({"kind": "quantised_ref", "scenario": "pendulum_lqr.yaml", "estimator": e, "seed": 1,
                     "overrides": {f"{RIP}.estimator": ESTIMATORS[e]}})
     return out
+
+
+#: The slides' "try Qn, Rn" and "try several pole sets" (the points of scenarios/pendulum_kalman_sweep.yaml and
+#: scenarios/pendulum_poles_sweep.yaml, run here on the report's seeds).
+QN_SCALES = (0.01, 1.0, 100.0, 10000.0)
+POLE_SETS: dict[str, list[Any]] = {
+    "fast": ["0.3+0.15j", "0.3-0.15j", 0.4, 0.5],
+    "slides": ["0.55+0.2j", "0.55-0.2j", 0.72, 0.82],
+    "slow": ["0.75+0.15j", "0.75-0.15j", 0.85, 0.9],
+    "slower": ["0.85+0.1j", "0.85-0.1j", 0.92, 0.95],
+}
+
+
+def sweep_cases(seeds: tuple[int, ...] = SEEDS) -> list[dict[str, Any]]:
+    """Kalman Qn scales and Luenberger pole sets under LQR from the tilt, one run per seed."""
+    out = []
+    for sc in QN_SCALES:
+        for seed in seeds:
+            out.append({"kind": "qn_sweep", "scenario": "pendulum_lqr.yaml", "estimator": "kalman", "seed": seed,
+                        "scale_Q": sc, "overrides": {f"{RIP}.estimator": {"type": "pendulum_kalman", "scale_Q": sc}}})
+    for label, poles in POLE_SETS.items():
+        for seed in seeds:
+            out.append({"kind": "pole_sweep", "scenario": "pendulum_lqr.yaml", "estimator": "luenberger",
+                        "seed": seed, "pole_set": label,
+                        "overrides": {f"{RIP}.estimator": {"type": "luenberger", "form": "current", "poles": poles}}})
+    return out
+
+
+def sweep_table(runs: pd.DataFrame) -> pd.DataFrame:
+    """Per Qn scale and pole set: the estimate noise (Lyapunov, held still), u chatter, LQG costs (mean over seeds)."""
+    from scipy.linalg import solve_discrete_lyapunov
+
+    from models.pendulum.design import designs
+    from models.pendulum.model import process_noise_cov
+    from netsim.control import KalmanFilter
+    from netsim.control.luenberger import observer_gain
+
+    d = designs()
+    A, B, C = d.lin.Ad, d.lin.Bd, d.lin.C
+    rows = []
+    for key, label, g in [("qn_sweep", f"Qn x {sc:g}", runs[(runs.kind == "qn_sweep") & (runs.scale_Q == sc)])
+                          for sc in QN_SCALES] + [("pole_sweep", f"poles {lab}", runs[(runs.kind == "pole_sweep")
+                                                                                      & (runs.pole_set == lab)])
+                                                  for lab in POLE_SETS]:
+        if key == "qn_sweep":
+            sc = float(label.split()[-1])
+            L = KalmanFilter(A, B, C, d.Qn * sc, d.Rn, steady_state=True).K_ss
+        else:
+            poles = [complex(str(p)) for p in POLE_SETS[label.split()[-1]]]
+            L = observer_gain(A, C, poles, "current")
+        F = (np.eye(4) - L @ C) @ A
+        P = solve_discrete_lyapunov(F, L @ d.Rn @ L.T)
+        rows.append({"setting": label, "error_radius": float(np.max(np.abs(np.linalg.eigvals(F)))),
+                     "alpha_dot_noise_lyap": float(np.sqrt(P[3, 3])), "u_std": float(g.u_std.mean()),
+                     "lqg_cost_per_step": float(g.lqg_cost_per_step.mean()),
+                     "lqg_cost_after_1s": float(g.lqg_cost_after_1s.mean()), "stable_share": float(g.stable.mean())})
+    return pd.DataFrame(rows)
 
 
 def run_all(cases: list[dict[str, Any]], workers: int | None = None) -> pd.DataFrame:
@@ -352,6 +396,16 @@ TEXT: dict[str, str] = {
                    "{mpt_slow_miss} deadline misses, and a horizon of {mpt_short_h} samples at the same cost per "
                    "iteration brings it to {mpt_short_resp} ms with {mpt_short_miss} misses (RMS alpha after the "
                    "first second {mpt_fast_rms}, {mpt_slow_rms} and {mpt_short_rms} rad)."),
+    "sweeps": ("The slides' 'try Qn, Rn' and 'try several pole sets' (sweeps.csv; the points of "
+               "`pendulum_kalman_sweep.yaml` and `pendulum_poles_sweep.yaml`): scaling Qn from {sw_q_lo} to "
+               "{sw_q_hi} times the study's moves the Kalman error radius from {sw_qlo_rho} to {sw_qhi_rho} and the "
+               "held-still alpha_dot noise from {sw_qlo_noise} to {sw_qhi_noise} rad/s; the LQG cost per step goes "
+               "from {sw_qlo_cost} to {sw_qhi_cost} over the whole run (the transient from the tilt) and from "
+               "{sw_qlo_cost1} to {sw_qhi_cost1} after the first second (the noise). Luenberger poles from the "
+               "fast set to the slowest: error radius {sw_pf_rho} to {sw_ps_rho}, noise {sw_pf_noise} to "
+               "{sw_ps_noise} rad/s, cost {sw_pf_cost} to {sw_ps_cost} (after the first second {sw_pf_cost1} to "
+               "{sw_ps_cost1}). Faster estimation passes more sensor noise, as the slides say; the costs show "
+               "what that trade does to this loop."),
     "quantised": ("Encoder quantisation as the noise instead of Gaussian noise of the same variance: u std "
                   "{q_kal} V against {q_kal_ref} V with Kalman, {q_lu} against {q_lu_ref} with Luenberger, "
                   "{q_fd} against {q_fd_ref} with low-pass FD."),
@@ -376,7 +430,8 @@ def fmt(x: float, digits: int = 3) -> str:
     return f"{x:.{digits - 1}e}"
 
 
-def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.DataFrame) -> pd.DataFrame:
+def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.DataFrame,
+          sw: pd.DataFrame) -> pd.DataFrame:
     """Every number the prose quotes: ``key, value, text, source``."""
     from models.pendulum.design import POLES, designs, motion_errors
     from models.pendulum.model import TS
@@ -476,6 +531,15 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     add("mpt_short_miss", mt.loc["h5_3ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h5_3ms", "deadline_misses"])))
     for key, lab in (("mpt_fast_rms", "h20_0.1ms"), ("mpt_slow_rms", "h20_3ms"), ("mpt_short_rms", "h5_3ms")):
         add(key, mt.loc[lab, "rms_alpha_after_1s"], f"mpc_timing:{lab}")
+    st = sw.set_index("setting")
+    add("sw_q_lo", QN_SCALES[0], "report: QN_SCALES")
+    add("sw_q_hi", QN_SCALES[-1], "report: QN_SCALES")
+    for tag, lab in (("qlo", f"Qn x {QN_SCALES[0]:g}"), ("qhi", f"Qn x {QN_SCALES[-1]:g}"), ("pf", "poles fast"),
+                     ("ps", "poles slower")):
+        add(f"sw_{tag}_noise", st.loc[lab, "alpha_dot_noise_lyap"], f"sweeps:{lab}")
+        add(f"sw_{tag}_rho", st.loc[lab, "error_radius"], f"sweeps:{lab}")
+        add(f"sw_{tag}_cost", st.loc[lab, "lqg_cost_per_step"], f"sweeps:{lab}")
+        add(f"sw_{tag}_cost1", st.loc[lab, "lqg_cost_after_1s"], f"sweeps:{lab}")
     qz = runs[runs.kind == "quantised"].set_index("estimator")
     qr = runs[runs.kind == "quantised_ref"].set_index("estimator")
     for tag, e in (("kal", "kalman"), ("lu", "luenberger"), ("fd", "fd_lowpass")):
@@ -519,6 +583,9 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
     L += _md_table(tables["table"][TABLE_COLUMNS]) + [""]
     if (out / "closed_loop_lqr.png").exists():
         L += ["![alpha and u under LQR, seed 1](closed_loop_lqr.png)", ""]
+    if "sweeps" in tables:
+        L += ["## Pole sets and Qn (the slides' tuning advice)", "", render("sweeps", texts), ""]
+        L += _md_table(tables["sweeps"]) + [""]
     L += ["## What only a timing simulator shows", "", "- " + render("delay", texts), "",]
     L += _md_table(tables["delay"]) + [""]
     L += ["- " + render("loss", texts), "", "- " + render("mpc_timing", texts), "", "- " + render("quantised", texts),
@@ -527,8 +594,7 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
           "(noise levels, costs) are this model's, not the lab's. The orderings are what carries over.",
           "- The printed Luenberger update is inconsistent with its stated error dynamics (above); we use the "
           "current form, which uses the newest measurement as the printed one intends.",
-          "- Not done: the pole-set and Qn/Rn sweeps with `netsim sweep` (the `pendulum_kalman` estimator takes "
-          "`scale_Q`, `scale_R` for them) and the speed benchmark.", ""]
+          "- Not done: the speed benchmark, and Rn sweeps (`pendulum_kalman` takes `scale_R`).", ""]
     (out / "README.md").write_text("\n".join(L))
 
 
@@ -557,7 +623,7 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     """Run the study and write ``reports/pendulum`` (or ``out_dir``); returns the tables by name."""
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "pendulum"
     out.mkdir(parents=True, exist_ok=True)
-    cases = hold_still_cases() + closed_loop_cases(seeds) + timing_cases()
+    cases = hold_still_cases() + closed_loop_cases(seeds) + timing_cases() + sweep_cases(seeds)
     runs = run_all(cases, workers)
     table = make_table(runs)
     hs = hold_still_table(runs)
@@ -567,12 +633,13 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     me = motion_errors(designs())
     forms = pd.DataFrame([{"form": k, "theta_err": v[0], "theta_dot_err": v[1], "alpha_err": v[2],
                            "alpha_dot_err": v[3]} for k, v in me.items()])
-    quoted = quote(runs, table, hs, dl)
-    tables = {"table": table, "hold_still": hs, "delay": dl, "forms": forms, "runs": runs, "quoted": quoted,
+    sw = sweep_table(runs)
+    quoted = quote(runs, table, hs, dl, sw)
+    tables = {"table": table, "hold_still": hs, "delay": dl, "forms": forms, "runs": runs, "quoted": quoted, "sweeps": sw,
               "loss": runs[runs.kind == "loss"], "mpc_timing": runs[runs.kind == "mpc_timing"],
               "quantised": runs[runs.kind.isin(["quantised", "quantised_ref"])]}
     table.to_csv(out / "table.csv", index=False)
-    for name in ("hold_still", "delay", "forms", "runs", "quoted", "loss", "mpc_timing", "quantised"):
+    for name in ("hold_still", "delay", "forms", "runs", "quoted", "loss", "mpc_timing", "quantised", "sweeps"):
         tables[name].to_csv(out / f"{name}.csv", index=False)
     if plots:
         from netsim.runner import run
