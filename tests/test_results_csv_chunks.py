@@ -26,8 +26,18 @@ def test_chunked_signals_text_equals_the_per_value_rule(monkeypatch) -> None:
         data = {"time_s": t}
         for j in range(k):
             v = rng.normal(size=n) * 10.0 ** rng.integers(-300, 300)
+            if rng.random() < 0.5:  # held values: runs of repeats, as in the signals table
+                v = np.resize(np.repeat(v[: max(1, n // 4)], 4), n)
             for value, share in ((np.nan, 0.2), (np.inf, 0.05), (-np.inf, 0.05), (-0.0, 0.05)):
                 v[rng.random(n) < share] = value
             data[f"c{j}"] = v
         frame = pd.DataFrame(data)
         assert "".join(files._float_csv(frame)) == _per_value(frame)
+
+
+def test_held_cells_that_compare_equal_but_print_differently() -> None:
+    # 0.0 == -0.0 but their texts differ; NaN != NaN but both are empty cells; inf repeats
+    values = [0.0, -0.0, -0.0, 0.0, np.nan, np.nan, 1.0, np.inf, np.inf, -np.inf]
+    frame = pd.DataFrame({"time_s": np.arange(len(values)) * 0.5, "x": values})
+    assert "".join(files._float_csv(frame)) == _per_value(frame)
+    assert "".join(files._float_csv(frame)).splitlines()[1:5] == ["0,0.0", "0.5,-0.0", "1,-0.0", "1.5,0.0"]

@@ -117,14 +117,22 @@ def _reprs(values: list[float]) -> list[str]:
 def _rows_text(block: np.ndarray) -> list[str]:
     """Each row of a 2-D float array as CSV cells: ``repr`` of each value, NaN as an empty cell.
 
-    ``str`` of the nested list formats every value with ``repr`` in C; a float's ``repr`` holds only digits,
-    ``.``, ``e``, signs, ``inf`` and ``nan``, so the separators and ``nan`` can be rewritten as text."""
-    if block.shape[0] == 0:
+    The signals table holds each signal between its samples, so most cells repeat the cell above: each column's
+    text is made only where its bits change (the same bits give the same ``repr``, and ``-0.0`` and ``0.0``
+    differ in bits), formatted in one C call (:func:`_reprs`), then spread down the column."""
+    n, k = block.shape
+    if n == 0:
         return []
-    text = str(block.tolist())[2:-2].replace(", ", ",")
-    if "nan" in text:
-        text = text.replace("nan", "")
-    return text.split("],[")
+    cells = np.empty((n, k), dtype=object)
+    change = np.empty(n, dtype=bool)
+    for j in range(k):
+        column = np.ascontiguousarray(block[:, j])
+        bits = column.view(np.int64)
+        change[0] = True
+        np.not_equal(bits[1:], bits[:-1], out=change[1:])
+        texts = ["" if t == "nan" else t for t in _reprs(column[change].tolist())]
+        cells[:, j] = np.asarray(texts, dtype=object)[np.cumsum(change) - 1]
+    return [",".join(row) for row in cells.tolist()]
 
 
 #: Column types of the jobs and messages tables (the columns :func:`jobs_table` and :func:`messages_table` make).
