@@ -406,6 +406,25 @@ TEXT: dict[str, str] = {
                "{sw_ps_noise} rad/s, cost {sw_pf_cost} to {sw_ps_cost} (after the first second {sw_pf_cost1} to "
                "{sw_ps_cost1}). Faster estimation passes more sensor noise, as the slides say; the costs show "
                "what that trade does to this loop."),
+    "claims": ("| the slides say | we got | verdict |\n|---|---|---|\n"
+               "| rank of the observability matrix is full with y = [theta, alpha] | rank {rank} of {n_states} | holds |\n"
+               "| the printed Luenberger update has the error dynamics e[k] = (A - L C) e[k-1] | in motion, noise-free, "
+               "it keeps {printed_err_ad} rad/s of alpha_dot error; the predictor and current forms {pred_err_ad} and "
+               "{cur_err_ad} | does not hold for the printed form (it compares y[k] with C x[k-1]); holds for both "
+               "consistent forms |\n"
+               "| finite differences amplify noise; observers give smoother velocities | held still, alpha_dot noise "
+               "{hs_fd_raw} (raw FD), {hs_fd_lp} (low-pass), {hs_lu} (Luenberger), {hs_kal} (Kalman) rad/s | holds |\n"
+               "| noisy velocity estimates cause oscillatory PWM commands | u std once balanced {chat_fd_raw} V (raw "
+               "FD) against {chat_lu} V (Luenberger) and {chat_kal} V (Kalman) | holds |\n"
+               "| poles that are too fast amplify measurement noise | alpha_dot noise {sw_pf_noise} rad/s (fast set) "
+               "against {sw_ps_noise} (slowest set) | holds |\n"
+               "| larger Qn: faster response to the measurement (less smooth) | alpha_dot noise {sw_qlo_noise} to "
+               "{sw_qhi_noise} rad/s from the smallest to the largest Qn; error radius only {sw_qlo_rho} to "
+               "{sw_qhi_rho} | holds for the noise; the speed barely moves, because the slowest error mode is "
+               "one the voltage disturbance hardly excites |\n"
+               "| the Kalman observer balances prediction and measurement optimally | lowest LQG cost after the first "
+               "second: {best_lqg1}; over the whole run from the tilt: {best_lqg} | holds once the initial error has "
+               "gone; from a zero initial estimate the slow Kalman filter loses the transient |"),
     "quantised": ("Encoder quantisation as the noise instead of Gaussian noise of the same variance: u std "
                   "{q_kal} V against {q_kal_ref} V with Kalman, {q_lu} against {q_lu_ref} with Luenberger, "
                   "{q_fd} against {q_fd_ref} with low-pass FD."),
@@ -570,6 +589,7 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
     L = ["# The rotary inverted pendulum (seed 002): finite differences, Luenberger and Kalman under LQR and MPC",
          "", "Regenerate with `netsim report pendulum` (every number below comes from the runs; `quoted.csv` names "
          "the source of each number in the prose, `runs.csv` holds every run).", "",
+         "## The slides' claims", "", render("claims", texts), "",
          "## Model and choices", "", render("model", texts), "",
          "Every other choice (Ts, sensor noise from the encoder resolution, the input disturbance, Q/R, the MPC "
          "horizon and input limit, the initial tilt) is stated in `models/pendulum/model.py` and in the header of "
@@ -594,7 +614,8 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
           "(noise levels, costs) are this model's, not the lab's. The orderings are what carries over.",
           "- The printed Luenberger update is inconsistent with its stated error dynamics (above); we use the "
           "current form, which uses the newest measurement as the printed one intends.",
-          "- Not done: the speed benchmark, and Rn sweeps (`pendulum_kalman` takes `scale_R`).", ""]
+          "- Not done: Rn sweeps (`pendulum_kalman` takes `scale_R`) and a Jitterbug-style cost analysis of the "
+          "delay; the speed benchmark is `tests/models/test_pendulum_speed.py` (opt-in, prints its figures).", ""]
     (out / "README.md").write_text("\n".join(L))
 
 
