@@ -420,8 +420,9 @@ TEXT: dict[str, str] = {
                "against {sw_ps_noise} (slowest set) | holds |\n"
                "| larger Qn: faster response to the measurement (less smooth) | alpha_dot noise {sw_qlo_noise} to "
                "{sw_qhi_noise} rad/s from the smallest to the largest Qn; error radius only {sw_qlo_rho} to "
-               "{sw_qhi_rho} | holds for the noise; the speed barely moves, because the slowest error mode is "
-               "one the voltage disturbance hardly excites |\n"
+               "{sw_qhi_rho} | holds for the noise; the error radius barely moves: Qn, the voltage "
+               "disturbance, enters only along the input direction, and more of it does not speed up the slowest "
+               "error mode |\n"
                "| the Kalman observer balances prediction and measurement optimally | lowest LQG cost after the first "
                "second: {best_lqg1}; over the whole run from the tilt: {best_lqg} | holds once the initial error has "
                "gone; from a zero initial estimate the slow Kalman filter loses the transient |"),
