@@ -201,9 +201,8 @@ def jobs_table(records: Iterable[Any], node: str | None = None) -> pd.DataFrame:
         },
         columns=JOB_COLUMNS[:-1],
     )
-    from netsim.kernel.records import (
-        job_outcome,  # lazily: importing netsim.kernel loads simpy
-    )
+    # imported here: importing netsim.kernel loads simpy
+    from netsim.kernel.records import job_outcome
 
     frame["outcome"] = [job_outcome(d, k, m) for d, k, m in zip(col("deadline"), frame["killed"], col("deadline_met"))]
     return frame
