@@ -94,3 +94,6 @@ def pendulum_metric(result: Any, params: Any, baseline: Any = None) -> dict[str,
     p = validate_params(PendulumMetricParams, params, "pendulum")
     ok = str(getattr(result, "status", "ok")).startswith("ok")
     return {f"pendulum.{k}": v for k, v in pendulum_measures(result.signals, ok, p).items()}
+
+
+pendulum_metric.Params = PendulumMetricParams  # type: ignore[attr-defined]

@@ -22,6 +22,10 @@ Definitions (over the control samples ``t_k = k Ts``; true angles from the plant
 * ``stable``: the run did not diverge and ``|alpha| < 0.05 rad`` over its last second;
 * ``theta_dot_noise``, ``alpha_dot_noise``: std of the velocity estimates in the hold-still run of the
   estimator (the same for both controllers: the estimator alone makes it).
+
+Why this module is long: it holds every case of the study, the tables built from them and the prose templates
+with the function that quotes each of their numbers; the templates and the quoting are kept next to each other
+so that a placeholder and the value it names are edited together.
 """
 
 from __future__ import annotations
