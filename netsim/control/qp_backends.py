@@ -14,6 +14,8 @@ to 4e-15; piqp 210 us and 7e-6; clarabel 990 us and 6e-6 (no warm start for inte
 
 from __future__ import annotations
 
+import abc
+
 from typing import Any
 
 import numpy as np
@@ -21,7 +23,7 @@ import numpy as np
 __all__ = ["Backend", "make_backend"]
 
 
-class Backend:
+class Backend(abc.ABC):
     """One QP solver: ``solve(g, lo, hi, warm) -> (U or None, status, iterations)``.
 
     The problem is ``min 1/2 U'HU + g'U`` subject to ``lo <= G U <= hi``; ``warm`` is a primal guess (used by
@@ -30,9 +32,9 @@ class Backend:
 
     warm_start = False
 
+    @abc.abstractmethod
     def solve(self, g: np.ndarray, lo: np.ndarray, hi: np.ndarray, warm: np.ndarray | None) -> tuple[Any, str, int]:
         """Solve for the linear term ``g`` and the bounds ``lo``, ``hi``."""
-        raise NotImplementedError
 
 
 class _Daqp(Backend):
