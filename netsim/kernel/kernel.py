@@ -64,6 +64,7 @@ from netsim.kernel.events import DEADLINE, NORMAL, URGENT, schedule_call
 from netsim.kernel.interpreter import Interpreter
 from netsim.kernel.job import Job, JobContext
 from netsim.kernel.load import PeriodicLoad
+from netsim.kernel.monitor import monitor_killed
 from netsim.kernel.policies import Policy, resolve_policy
 from netsim.kernel.records import JobRecord, deadline_verdict
 from netsim.kernel.states import BLOCKED, DONE, NEW, READY
@@ -160,6 +161,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
         self.switches = 0
         self.switch_time = 0
         self.segments = 0
+        self.halted = False  # halt(): the node stopped for good (its battery ran out, netsim.energy)
         # the event loop's heap and id counter: wake-ups are call entries pushed on it (kernel.events)
         _, self._queue, self._eid = env.sim.scheduler()
         schedule_call(self._sim, 0, URGENT, self._on_start)
@@ -183,18 +185,24 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
     def create_job(self, task: str, data: Any = None) -> Job:
         """Release a job of ``task`` now (queued FIFO behind an unfinished job of the same task)."""
         job = self._release(self._get(self.tasks, task, "task"), data)
+        if self.halted:
+            self._kill(job)
         self._request_dispatch_deferred()
         return job
 
     def invoke_handler(self, handler: str, data: Any = None, invoker: str | None = None) -> Job:
         """Raise the interrupt of ``handler`` now (queued if it is already queued or running)."""
         job = self._invoke(self._get(self.handlers, handler, "handler"), data, invoker)
+        if self.halted:
+            self._kill(job)
         self._request_dispatch_deferred()
         return job
 
     def trigger(self, name: str, data: Any = None) -> bool:
         """An edge on external trigger ``name``; returns ``False`` if ignored by its minimum inter-arrival."""
         trig = self._get(self.triggers, name, "trigger")
+        if self.halted:
+            return False
         now = self._sim.now
         if trig.last is not None and now - trig.last < trig.min_interarrival:
             trig.ignored += 1
@@ -207,6 +215,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
 
     def deliver(self, network: str, msg: Message) -> None:
         """Receiver protocol: ``msg`` arrived on ``network`` now (queued, then the bound target is run)."""
+        if self.halted:
+            return
         inbox = self._inboxes.get(network)
         if inbox is None:
             inbox = self._inboxes[network] = deque()
@@ -233,6 +243,24 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
             return
         self._kill(job)
         self._request_dispatch_deferred()
+
+    def halt(self) -> None:
+        """Stop the node for good (its battery ran out: :mod:`netsim.energy`).
+
+        Every unfinished job is killed now (its record says killed), timers stop, and from now on no task is
+        released, no trigger is accepted and received messages are ignored; a job created from program code
+        is killed at once.
+        """
+        if self.halted:
+            return
+        self.halted = True
+        for ent in (*self.handlers.values(), *self.tasks.values()):
+            for job in list(ent.queue):
+                self._kill(job)
+            if ent.active is not None:
+                self._kill(ent.active)
+        for timer in self.timers.values():
+            timer.active = False
 
 
     # ================================================================= releases and invocations
@@ -315,6 +343,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
 
     def _on_periodic_release(self, ev: tuple) -> None:
         task: Task = ev[1]
+        if self.halted:
+            return
         self._release(task, None)
         heappush(self._queue, (self._sim.now + task.spec.period, NORMAL, next(self._eid),
                                (self._on_periodic_release, task)))
@@ -385,6 +415,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
 
     def _kill(self, job: Job) -> None:
         now = self._sim.now
+        if job._held is not None:  # it used a monitor: release what it owns, leave what it waits for
+            monitor_killed(self, job)
         if job is self._running:
             if self._seg_job is job:
                 self._seg_job = None
