@@ -76,8 +76,19 @@ class _Sample:
         self.k = k
         self.x_prior = x_prior
         self.P_prior = P_prior
-        self.ys: list[np.ndarray] = []
+        self.ys: list[tuple[tuple[int, ...] | None, np.ndarray]] = []  # (rows measured or None: all, values)
         self.u: np.ndarray | None = None
+
+    def has_rows(self, rows: tuple[int, ...] | None) -> bool:
+        """True when a measurement fused at this sample already covers one of ``rows`` (``None``: any row)."""
+        if not self.ys:
+            return False
+        if rows is None:
+            return True
+        for got, _ in self.ys:
+            if got is None or not set(got).isdisjoint(rows):
+                return True
+        return False
 
 
 class KalmanFilter:
@@ -117,9 +128,15 @@ class KalmanFilter:
     ``k_s + 1 ... k``. For a linear filter the result equals, to rounding, the filter that had received the
     measurement on time; it costs ``k - k_s`` predictions and corrections per late measurement.
 
-    *Stale and duplicate measurements* are never fused: one measurement per sample index is fused (a second
-    one for the same ``k`` is a duplicate), and one older than ``history`` samples is stale. Both make
-    :meth:`correct` return ``False`` and are counted in :attr:`duplicates` and :attr:`stale`.
+    *Partial measurements* (time-varying filter only). ``correct(y, k, rows=...)`` fuses a measurement of some
+    rows of ``C`` only (e.g. one of two sensors with their own rates): the update uses those rows of ``C`` and
+    the matching block of ``R``. Fusing the parts of a sample one after the other equals fusing them together
+    when ``R`` has no cross-covariance between the parts (independent sensors); see :meth:`independent_rows`.
+
+    *Stale and duplicate measurements* are never fused: each row of ``y`` is fused at most once per sample
+    index (a second measurement of a row for the same ``k`` is a duplicate), and one older than ``history``
+    samples is stale. Both make :meth:`correct` return ``False`` and are counted in :attr:`duplicates` and
+    :attr:`stale`.
 
     The feed-through ``D`` is taken as zero (the measurement at ``k`` is taken before ``u[k]`` is computed).
     """
@@ -192,17 +209,36 @@ class KalmanFilter:
         return kalman_gain(self.P, self.C, self.R)
 
     # --- the two half-steps ------------------------------------------------------------------------------
-    def _fuse(self, x: np.ndarray, P: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        C = self.C
+    def _fuse(self, x: np.ndarray, P: np.ndarray, y: np.ndarray,
+              rows: tuple[int, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        if rows is None:
+            C, R = self.C, self.R
+        else:
+            idx = list(rows)
+            C, R = self.C[idx], self.R[np.ix_(idx, idx)]
         if self.steady_state:
             return x + self.K_ss @ (y - C @ x), P
         PCt = P @ C.T
-        S = C @ PCt + self.R
+        S = C @ PCt + R
         K = np.linalg.solve(S, PCt.T).T
         x = x + K @ (y - C @ x)
         IKC = self._I - K @ C
-        P = IKC @ P @ IKC.T + K @ self.R @ K.T  # Joseph form: stays symmetric positive semidefinite
+        P = IKC @ P @ IKC.T + K @ R @ K.T  # Joseph form: stays symmetric positive semidefinite
         return x, P
+
+    @property
+    def fuses_partial(self) -> bool:
+        """True when :meth:`correct` accepts ``rows`` (the time-varying filter; the steady-state gain is designed
+        for the whole measurement)."""
+        return not self.steady_state
+
+    def independent_rows(self, groups: list[list[int]]) -> bool:
+        """True when ``R`` has no cross-covariance between the row ``groups`` (so fusing them apart is exact)."""
+        for i, gi in enumerate(groups):
+            for gj in groups[i + 1:]:
+                if np.any(self.R[np.ix_(gi, gj)] != 0):
+                    return False
+        return True
 
     def _propagate(self, x: np.ndarray, P: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         A = self.A
@@ -221,38 +257,44 @@ class KalmanFilter:
             )
         return u
 
-    def correct(self, y: Any, k: int | None = None) -> bool:
+    def correct(self, y: Any, k: int | None = None, rows: Any = None) -> bool:
         """Fuse a measurement taken at sample ``k`` (default: the current sample).
 
         Parameters
         ----------
         y
-            Measurement (``p`` entries; a scalar when ``p`` is 1).
+            Measurement (``p`` entries, or one per row in ``rows``; a scalar when that is 1).
         k
             Sample index at which ``y`` was taken. An older ``k`` (a delayed measurement) is fused at that
             sample and the estimate brought forward again (see the class notes).
+        rows
+            Which rows of ``C`` ``y`` measures (``None``: all of them). Time-varying filter only.
 
         Returns
         -------
         bool
-            ``True`` when fused; ``False`` for a duplicate (already one measurement for ``k``) or a stale one
+            ``True`` when fused; ``False`` for a duplicate (a row already measured at ``k``) or a stale one
             (older than ``history`` samples).
 
         Raises
         ------
         SimulationError
-            ``k`` in the future, or ``y`` of the wrong size.
+            ``k`` in the future, ``y`` of the wrong size, ``rows`` out of range or given to the steady-state
+            filter.
         """
         y = np.asarray(y, dtype=float).reshape(-1)
-        if y.shape[0] != self.p:
-            raise SimulationError(f"Kalman filter: the measurement has {y.shape[0]} entries, C has {self.p} rows")
+        sel = self._rows(rows)
+        want = self.p if sel is None else len(sel)
+        if y.shape[0] != want:
+            raise SimulationError(f"Kalman filter: the measurement has {y.shape[0]} entries, expected {want} "
+                                  f"({'the rows of C' if sel is None else f'rows {list(sel)}'})")
         if k is None or k == self.k:
             rec = self._hist[-1]
-            if rec.ys:
+            if rec.has_rows(sel):
                 self.duplicates += 1
                 return False
-            rec.ys.append(y)
-            self.x, self.P = self._fuse(self.x, self.P, y)
+            rec.ys.append((sel, y))
+            self.x, self.P = self._fuse(self.x, self.P, y, sel)
             self.fused += 1
             return True
         if k > self.k:
@@ -264,20 +306,35 @@ class KalmanFilter:
             self.stale += 1
             return False
         recs = list(self._hist)[-1 - back :]
-        if recs[0].ys:
+        if recs[0].has_rows(sel):
             self.duplicates += 1
             return False
-        recs[0].ys.append(y)
+        recs[0].ys.append((sel, y))
         x, P = recs[0].x_prior, recs[0].P_prior
         for i, rec in enumerate(recs):
             if i > 0:
                 x, P = self._propagate(x, P, recs[i - 1].u)
                 rec.x_prior, rec.P_prior = x, P
-            for yy in rec.ys:
-                x, P = self._fuse(x, P, yy)
+            for rr, yy in rec.ys:
+                x, P = self._fuse(x, P, yy, rr)
         self.x, self.P = x, P
         self.fused += 1
         return True
+
+    def _rows(self, rows: Any) -> tuple[int, ...] | None:
+        """``rows`` checked: ``None`` when it means every row, else a tuple of distinct row indices."""
+        if rows is None:
+            return None
+        sel = tuple(int(r) for r in np.atleast_1d(rows))
+        if len(set(sel)) != len(sel) or any(r < 0 or r >= self.p for r in sel) or not sel:
+            raise SimulationError(f"Kalman filter: rows must be distinct indices of the {self.p} rows of C, "
+                                  f"got {list(sel)}")
+        if sel == tuple(range(self.p)):
+            return None
+        if self.steady_state:
+            raise SimulationError("Kalman filter: the steady-state filter fuses whole measurements only; use the "
+                                  "time-varying filter (steady_state: false) for sensors with their own rates")
+        return sel
 
     def predict(self, u: Any = None) -> None:
         """Move to the next sample: ``x <- A x + B u`` and (time-varying filter) ``P <- A P A' + Q``."""

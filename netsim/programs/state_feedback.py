@@ -28,8 +28,12 @@ the controller sample nearest to that time (:func:`~netsim.control.interface.sam
 re-filters from its history (``history`` samples), the other estimators use only measurements of the current
 sample; ``fuse_at: arrival`` fuses it at the sample where it is read (the baseline it is compared against).
 A payload without ``t_ns`` (the ``sampler`` program's float) is fused at arrival. When several measurement
-sources make up ``y``, a sample is fused once all of them are in; a sample still incomplete when it leaves the
-filter's history is dropped (counted as ``partial``). A sample without any measurement is prediction only.
+sources make up ``y`` and the estimator is the time-varying Kalman filter with no cross-covariance in ``R``
+between the sources (independent sensors), each source's measurement is fused on its own at its sample, with
+its rows of ``C`` and its block of ``R``: sensors with their own rates, or a lost packet from one of them,
+still correct the estimate (``fused`` counts the parts). With any other estimator a sample is fused once all
+sources are in; a sample still incomplete when it leaves the filter's history is dropped (counted as
+``partial``). A sample without any measurement is prediction only.
 
 *Execution time.* The task's ``execution:`` is charged after the computation; with an MPC law, ``solve_time``
 adds ``{base, per_iteration}`` (a model: ``base + per_iteration * solver iterations``, reproducible) or
@@ -196,6 +200,10 @@ class StateFeedbackProgram:
         # where each source's values go in y (positions in the measured rows)
         self.slots = [[self.rows.index(r) for r in rows] for rows in self.per_source]
         self.pending: dict[int, dict[int, np.ndarray]] = {}
+        # several sources into a filter that can fuse a part of y (independent sensors): fuse each part as it comes
+        est = self.estimator
+        self.by_part = (len(self.slots) > 1 and bool(getattr(est, "fuses_partial", False))
+                        and bool(est.independent_rows(self.slots)))
         self.u = np.zeros(self.m)
         self.y_last = np.zeros(self.p_rows)
         self.counts = {"steps": 0, "fused": 0, "prediction_only": 0, "stale": 0, "duplicates": 0, "partial": 0}
@@ -249,6 +257,8 @@ class StateFeedbackProgram:
             inbox.extend(keep)
 
     def _fuse(self, k_now: int) -> bool:
+        if self.by_part:
+            return self._fuse_parts(k_now)
         fused_any = False
         n_src = len(self.p.measurements)
         for k in sorted(self.pending):
@@ -273,6 +283,20 @@ class StateFeedbackProgram:
             if ok:  # a refused one is counted by the filter (its stale and duplicates counters)
                 self.counts["fused"] += 1
                 fused_any = fused_any or k == k_now
+        return fused_any
+
+    def _fuse_parts(self, k_now: int) -> bool:
+        """Fuse every source's measurement on its own, at its sample (the time-varying Kalman filter)."""
+        fused_any = False
+        for k in sorted(self.pending):
+            got = self.pending.pop(k)
+            for src in sorted(got):
+                v = got[src]
+                if k == k_now:
+                    self.y_last[self.slots[src]] = v
+                if self.estimator.correct(v, k, rows=self.slots[src]):
+                    self.counts["fused"] += 1
+                    fused_any = fused_any or k == k_now
         return fused_any
 
     # ------------------------------------------------------------------ the job

@@ -185,3 +185,81 @@ def test_bad_matrices_are_refused_naming_the_parameter(kwargs, match):
     args = dict(A=A, B=B, C=C, Q=Q, R=R) | kwargs
     with pytest.raises(ConfigError, match=match):
         KalmanFilter(args["A"], args["B"], args["C"], args["Q"], args["R"])
+
+
+# --- partial measurements (two sensors with their own rates) ------------------------------------------------
+C2 = np.array([[1.0, 0.0], [0.0, 1.0]])  # position and velocity sensors
+R2 = np.diag([0.01, 0.04])  # independent: no cross-covariance
+
+
+def _joint_update(x, P, y, Cm, Rm):
+    """One textbook correction with the measured rows ``Cm`` and their covariance ``Rm`` (written out here)."""
+    S = Cm @ P @ Cm.T + Rm
+    K = P @ Cm.T @ np.linalg.inv(S)
+    return x + K @ (y - Cm @ x), P - K @ Cm @ P
+
+
+def test_fusing_two_independent_parts_one_after_the_other_equals_fusing_them_together():
+    kf = KalmanFilter(A, B, C2, Q, R2, x0=[0.3, -0.2], P0=np.diag([1.0, 2.0]))
+    assert kf.correct([0.5], rows=[0]) and kf.correct([0.1], rows=[1])
+    x_ref, P_ref = _joint_update(np.array([0.3, -0.2]), np.diag([1.0, 2.0]), np.array([0.5, 0.1]), C2, R2)
+    np.testing.assert_allclose(kf.x_hat, x_ref, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(kf.P, P_ref, rtol=1e-10, atol=1e-14)
+
+
+def test_a_part_uses_only_its_rows_of_c_and_its_block_of_r():
+    kf = KalmanFilter(A, B, C2, Q, R2, x0=[0.0, 0.0], P0=np.eye(2))
+    kf.correct([0.2], rows=[1])
+    x_ref, P_ref = _joint_update(np.zeros(2), np.eye(2), np.array([0.2]), C2[[1]], R2[[1]][:, [1]])
+    np.testing.assert_allclose(kf.x_hat, x_ref, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(kf.P, P_ref, rtol=1e-12, atol=1e-15)
+
+
+def test_a_late_part_fused_at_its_sample_equals_the_on_time_filter():
+    # on time: position at every sample, velocity at even samples; late: each velocity part arrives 3 samples late
+    rng = np.random.default_rng(7)
+    ys = rng.standard_normal((40, 2))
+    on_time = KalmanFilter(A, B, C2, Q, R2, history=5)
+    late = KalmanFilter(A, B, C2, Q, R2, history=5)
+    for k in range(40):
+        u = [np.sin(0.1 * k)]
+        on_time.correct(ys[k, :1], rows=[0])
+        late.correct(ys[k, :1], rows=[0])
+        if k % 2 == 0:
+            on_time.correct(ys[k, 1:], rows=[1])
+        if k >= 3 and (k - 3) % 2 == 0:
+            assert late.correct(ys[k - 3, 1:], k - 3, rows=[1])
+        on_time.predict(u)
+        late.predict(u)
+    # the last two on-time velocity parts (samples 38, 36 + 3 > 39 for 38) have not reached the late filter yet:
+    # compare with an on-time filter that skipped the velocity of sample 38 instead
+    ref = KalmanFilter(A, B, C2, Q, R2, history=5)
+    for k in range(40):
+        ref.correct(ys[k, :1], rows=[0])
+        if k % 2 == 0 and k + 3 <= 39:
+            ref.correct(ys[k, 1:], rows=[1])
+        ref.predict([np.sin(0.1 * k)])
+    np.testing.assert_allclose(late.x_hat, ref.x_hat, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(late.P, ref.P, rtol=1e-9, atol=1e-12)
+
+
+def test_each_row_is_fused_once_per_sample_and_other_rows_still_count():
+    kf = KalmanFilter(A, B, C2, Q, R2)
+    assert kf.correct([1.0], rows=[0])
+    assert not kf.correct([1.0], rows=[0])  # the same row again: a duplicate
+    assert not kf.correct([1.0, 2.0])  # the whole measurement overlaps row 0
+    assert kf.correct([2.0], rows=[1])  # the other row is new
+    assert (kf.fused, kf.duplicates) == (2, 2)
+
+
+def test_the_steady_state_filter_refuses_a_part_and_says_what_to_use():
+    kf = KalmanFilter(A, B, C2, Q, R2, steady_state=True)
+    assert not kf.fuses_partial
+    with pytest.raises(SimulationError, match="steady_state: false"):
+        kf.correct([1.0], rows=[0])
+    assert kf.correct([1.0, 2.0], rows=[0, 1])  # every row, in order: the whole measurement
+
+
+def test_independent_rows_sees_cross_covariance_between_sources():
+    assert KalmanFilter(A, B, C2, Q, R2).independent_rows([[0], [1]])
+    assert not KalmanFilter(A, B, C2, Q, np.array([[0.01, 0.005], [0.005, 0.04]])).independent_rows([[0], [1]])
