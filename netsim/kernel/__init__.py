@@ -27,6 +27,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.job import Job
     from netsim.kernel.kernel import Kernel
     from netsim.kernel.load import PeriodicLoad
+    from netsim.kernel.monitor import Monitor
     from netsim.kernel.policies import (DeadlineMonotonic, EarliestDeadlineFirst, FixedPriority,
                                         NonPreemptiveEDF, NonPreemptiveFixedPriority, Policy, RateMonotonic)
     from netsim.kernel.records import JobRecord
@@ -43,6 +44,7 @@ _HOMES = {
     "Mailbox": "sync",
     "Semaphore": "sync",
     "Event": "sync",
+    "Monitor": "monitor",
     "JobRecord": "records",
     "Policy": "policies",
     "FixedPriority": "policies",
@@ -68,6 +70,7 @@ __all__ = [
     "Mailbox",
     "Semaphore",
     "Event",
+    "Monitor",
     "JobRecord",
     "Policy",
     "FixedPriority",

@@ -228,6 +228,16 @@ class Interpreter:
         req.a.give()
         return None
 
+    def _op_enter(self, job: Job, req: Request, now: int) -> Any:
+        if req.a.enter(job, self):
+            return None
+        self._block(job, req.a, now)
+        return GAVE_UP
+
+    def _op_exit(self, job: Job, req: Request, now: int) -> Any:
+        req.a.exit(job, self)
+        return None
+
     def _op_wait(self, job: Job, req: Request, now: int) -> Any:
         req.a._waiters.append(job)
         self._block(job, req.a, now)

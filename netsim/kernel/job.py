@@ -22,6 +22,7 @@ import numpy as np
 
 from netsim.errors import SimulationError
 from netsim.kernel import requests as rq
+from netsim.kernel.monitor import Monitor
 from netsim.kernel.requests import Request
 from netsim.kernel.states import NEW, STATE_NAMES
 from netsim.kernel.sync import Event, Mailbox, Semaphore
@@ -103,6 +104,9 @@ class JobState:
         For a periodic load's real invocation at a tick: the end of its window.
     _blocked_on, _wake
         What a blocked job waits on; its pending sleep wake-up.
+    _held, _own_rank
+        The monitors the job owns (``None`` until it first enters or waits for one) and its own rank while
+        ``_rank``/``_base_rank`` carry an inherited or ceiling rank (:mod:`netsim.kernel.monitor`).
     """
 
     _gen: Any = None
@@ -122,6 +126,8 @@ class JobState:
     _blocked_on: Any = None
     _wake: Any = None
     _np = False
+    _held: "list[Monitor] | None" = None
+    _own_rank: Any = None
 
 
 class Job(JobState):
@@ -285,6 +291,16 @@ class Job(JobState):
         """Wake the first waiter of ``event`` (every waiter with ``all=True``)."""
         self._check(event, Event, "notify")
         return Request(rq.NOTIFY, event, bool(all))
+
+    def enter(self, monitor: Monitor) -> Request:
+        """Enter ``monitor`` (TrueTime's ``ttEnterMonitor``), blocking while another job holds it."""
+        self._check(monitor, Monitor, "enter")
+        return Request(rq.ENTER, monitor)
+
+    def exit(self, monitor: Monitor) -> Request:
+        """Leave ``monitor`` (TrueTime's ``ttExitMonitor``); its most urgent waiter gets it."""
+        self._check(monitor, Monitor, "exit")
+        return Request(rq.EXIT, monitor)
 
     def kill(self, target: "Job | None" = None) -> Request:
         """End ``target`` now (default: this job). Killing this job ends its body at the yield."""

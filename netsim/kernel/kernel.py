@@ -64,6 +64,7 @@ from netsim.kernel.events import DEADLINE, NORMAL, URGENT, schedule_call
 from netsim.kernel.interpreter import Interpreter
 from netsim.kernel.job import Job, JobContext
 from netsim.kernel.load import PeriodicLoad
+from netsim.kernel.monitor import monitor_killed
 from netsim.kernel.policies import Policy, resolve_policy
 from netsim.kernel.records import JobRecord, deadline_verdict
 from netsim.kernel.states import BLOCKED, DONE, NEW, READY
@@ -414,6 +415,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
 
     def _kill(self, job: Job) -> None:
         now = self._sim.now
+        if job._held is not None:  # it used a monitor: release what it owns, leave what it waits for
+            monitor_killed(self, job)
         if job is self._running:
             if self._seg_job is job:
                 self._seg_job = None

@@ -4,7 +4,7 @@ A body never builds these itself: it calls a method of its :class:`~netsim.kerne
 (``job.execute(...)``, ``job.fetch(mb)`` ...) and yields what that returns. The kernel carries the request
 out when it is yielded. Zero-time requests (``analog_in``, ``send``, ``try_fetch`` ...) are answered at
 once, without a trip through the simpy event queue; only ``execute``, ``sleep`` and requests that block
-(``fetch`` on an empty mailbox, ``take`` of a zero semaphore, ``wait``) give up the CPU or take time.
+(``fetch`` on an empty mailbox, ``take`` of a zero semaphore, ``wait``, ``enter`` of a held monitor) give up the CPU or take time.
 
 A request is an immutable value: the kernel only reads it. A program that yields the same request at every
 job (``job.receive("net")``, ``job.execute(exec_time)``) may build it once, ``Request(RECEIVE, "net")``, and
@@ -39,6 +39,8 @@ class Op(IntEnum):
     NOTIFY = 13
     KILL = 14
     SLEEP = 15
+    ENTER = 16
+    EXIT = 17
 
 
 # The operations as plain ints (``Request(RECEIVE, "net")`` in programs that prebuild their requests). Requests
@@ -60,6 +62,8 @@ WAIT = Op.WAIT.value
 NOTIFY = Op.NOTIFY.value
 KILL = Op.KILL.value
 SLEEP = Op.SLEEP.value
+ENTER = Op.ENTER.value
+EXIT = Op.EXIT.value
 
 #: The name of each operation (the name of its ``Job`` method).
 OP_NAMES: dict[int, str] = {op.value: op.name.lower() for op in Op}
