@@ -37,12 +37,14 @@ from netsim.units import StrictModel
 __all__ = [
     "ESTIMATOR_TYPES",
     "LAW_TYPES",
+    "ContinuousModel",
     "Design",
     "DirectState",
     "KalmanPart",
     "LQRPart",
     "LuenbergerPart",
     "MPCPart",
+    "ModelEKFPart",
     "NoEstimatorPart",
     "StateFeedbackPart",
     "SteadyStateKalmanPart",
@@ -66,6 +68,8 @@ class Design:
         Rows of the outputs a reference applies to (``None``: no reference, the law regulates the state to 0).
     x0
         The plant's initial state when known (the MPC checks its feasibility), else ``None``.
+    nonlinear
+        The plant's own continuous model when it has one (a nonlinear plant), for the ``ekf`` estimator.
     """
 
     A: np.ndarray
@@ -74,6 +78,19 @@ class Design:
     period_s: float
     Cr: np.ndarray | None = None
     x0: np.ndarray | None = None
+    nonlinear: ContinuousModel | None = None
+
+
+@dataclass(frozen=True)
+class ContinuousModel:
+    """A plant's continuous model ``x' = f(t, x, u, params)``, ``y = h(t, x, u, params)``, measured ``rows`` of y."""
+
+    f: Any
+    h: Any
+    params: Any
+    n_states: int
+    n_inputs: int
+    rows: tuple[int, ...]
 
 
 class DirectState:
@@ -135,6 +152,38 @@ class SteadyStateKalmanPart(KalmanPart):
     """``estimator: {type: steady_state_kalman, Q, R, x0, history}``."""
 
     steady_state = True
+
+
+class _EKFParams(StrictModel):
+    Q: Weight = Field(description="process noise covariance over one period (n x n, PSD)")
+    R: Weight = Field(description="measurement noise covariance (p x p, positive definite)")
+    x0: list[float] | None = Field(None, description="initial estimate (default zeros)")
+    P0: Weight = Field(None, description="initial covariance (default identity)")
+    substeps: int = Field(4, ge=1, le=10_000, description="Runge-Kutta 4 steps per period for the prediction")
+    history: int = Field(20, ge=0, le=10_000,
+                         description="samples back a delayed measurement is fused at its sample time")
+
+
+@register("estimator", "ekf", "extended Kalman filter on the plant's own nonlinear model (f, h), RK4 per period")
+class ModelEKFPart:
+    """``estimator: {type: ekf, Q, R, x0, P0, substeps, history}``: needs a plant with its own model (f, h)."""
+
+    Params = _EKFParams
+
+    @classmethod
+    def build(cls, params: _EKFParams, design: Design) -> Any:
+        from netsim.control.model_ekf import ModelEKF
+
+        model = design.nonlinear
+        if model is None:
+            raise ConfigError("type 'ekf' filters the plant's own nonlinear model, and this plant has none (its "
+                              "model is linear or not given as f and h): use 'kalman' for a linear plant")
+        if model.n_states != design.A.shape[0] or model.n_inputs != design.B.shape[1]:
+            raise ConfigError(f"type 'ekf': the plant has {model.n_states} states and {model.n_inputs} inputs, the "
+                              f"controller's model {design.A.shape[0]} and {design.B.shape[1]}; make them agree")
+        return ModelEKF(model.f, model.h, model.params, model.n_states, model.n_inputs, model.rows,
+                        design.period_s, params.Q, params.R, x0=params.x0, P0=params.P0, substeps=params.substeps,
+                        history=params.history)
 
 
 class _LuenbergerParams(StrictModel):
@@ -262,5 +311,5 @@ class MPCPart:
 
 
 #: The estimator and law types a ``state_feedback`` program accepts (``pid`` is the registered PID).
-ESTIMATOR_TYPES = ("kalman", "steady_state_kalman", "luenberger", "none")
+ESTIMATOR_TYPES = ("kalman", "steady_state_kalman", "ekf", "luenberger", "none")
 LAW_TYPES = ("lqr", "state_feedback", "mpc", "pid")

@@ -134,7 +134,20 @@ def design_model(p: Any, scenario: Any, plant: Any, period_ns: int) -> tuple[Any
     if scenario is not None and scenario.plant is not None and scenario.plant.x0 is not None and p.model is None:
         x0 = np.asarray(scenario.plant.x0, dtype=float)
     return Design(A=np.asarray(A, float), B=np.asarray(B, float), C=np.asarray(Cf[rows], float), period_s=h,
-                  Cr=Cr, x0=x0), per, rows
+                  Cr=Cr, x0=x0, nonlinear=_continuous_model(plant, rows)), per, rows
+
+
+def _continuous_model(plant: Any, rows: list[int]) -> Any:
+    """The plant's own model ``(f, h, params)`` when it is a single-mode nonlinear plant, else ``None``."""
+    from netsim.control.parts import ContinuousModel
+
+    f, h = getattr(plant, "f", None), getattr(plant, "h", None)
+    if not (callable(f) and callable(h)) or len(getattr(plant, "modes", {})) > 1:
+        return None
+    if getattr(plant, "select_mode", None) is not None or max(rows) >= int(plant.n_outputs):
+        return None
+    return ContinuousModel(f=f, h=h, params=getattr(plant, "params", None), n_states=int(plant.n_states),
+                           n_inputs=int(plant.n_inputs), rows=tuple(rows))
 
 
 def _located(exc: ConfigError, prefix: str, raw: dict[str, Any]) -> ConfigError:
