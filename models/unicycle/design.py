@@ -169,14 +169,31 @@ class TrackingLaw:
             for ph in traj.phases:
                 if ph.v not in self.gains:
                     self.gains[ph.v] = lqr_gain(ph.v, Q, R, traj.ts, a_sign)
+        # plain floats for the per-sample step: reference poses, inputs, and per sample the gain's entries
+        # (k11, k22, k23) of eq (27) (the others are zero by construction)
+        self._poses: list[list[float]] = traj.poses.tolist()
+        self._inputs: list[tuple[float, float]] = [(float(a), float(b)) for a, b in traj.inputs.tolist()]
+        self._k = {v: (float(K[0, 0]), float(K[1, 1]), float(K[1, 2])) for v, K in self.gains.items()}
 
-    def step(self, k: int, xi_hat: np.ndarray) -> np.ndarray:
+    def ref_at(self, k: int) -> list[float]:
+        """Reference pose at sample ``k`` as floats (held after the end)."""
+        return self._poses[min(max(k, 0), self.traj.n)]
+
+    def step(self, k: int, xi_hat: Any) -> tuple[float, float]:
         """Command ``(v, w)`` at sample ``k`` for the estimate ``xi_hat``."""
-        ref, u_ref = self.traj.at(k)
+        k = min(max(int(k), 0), self.traj.n)
+        u_ref = self._inputs[k]
         if self.law == "feedforward":
-            return u_ref.copy()
-        u = -self.gains[float(u_ref[0])] @ cart_frame_error(ref, xi_hat)
-        return u + u_ref if self.law == "lqr_ff" else u
+            return u_ref
+        rx, ry, rt = self._poses[k]
+        x, y, th = float(xi_hat[0]), float(xi_hat[1]), float(xi_hat[2])
+        ex, ey, et = rx - x, ry - y, rt - th
+        et = math.atan2(math.sin(et), math.cos(et))
+        c, s = math.cos(th), math.sin(th)
+        e1, e2 = c * ex + s * ey, -s * ex + c * ey
+        k11, k22, k23 = self._k[u_ref[0]]
+        v, w = -(k11 * e1), -(k22 * e2 + k23 * et)
+        return (v + u_ref[0], w + u_ref[1]) if self.law == "lqr_ff" else (v, w)
 
 
 def make_ekf(Q: Any = Q_REPORT, R: Any = R_REPORT, x0: Any = XI0_HAT, P0_: Any = P0, ts: float = TS,

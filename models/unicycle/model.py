@@ -35,7 +35,7 @@ import numpy as np
 __all__ = [
     "ALPHA", "BETA", "GAMMA", "WALL_FRONT", "WALL_SIDE", "TS", "WHEEL_RADIUS", "HALF_WHEELBASE",
     "XI0_HAT", "P0", "Q_REPORT", "R_REPORT", "FRONT_OFFSET", "SIDE_DERIVED", "SIDE_PRINTED",
-    "wheels_to_body", "body_to_wheels", "arc", "euler_step", "jac_A", "jac_B", "rotation",
+    "wheels_to_body", "body_to_wheels", "arc", "arc_floats", "euler_step", "jac_A", "jac_B", "rotation",
     "sensor_position", "wall_distance", "measure", "measure_jacobian", "side_offset",
 ]
 
@@ -94,13 +94,17 @@ def body_to_wheels(v: float, w: float, r: float = WHEEL_RADIUS, a: float = HALF_
     return (v - a * w) / r, (v + a * w) / r
 
 
-def arc(xi: np.ndarray, v: float, w: float, dt: float) -> np.ndarray:
-    """Exact solution of eq (3) after ``dt`` seconds with ``(v, w)`` held (a straight line when ``w = 0``)."""
-    th = float(xi[2])
+def arc_floats(x: float, y: float, th: float, v: float, w: float, dt: float) -> tuple[float, float, float]:
+    """:func:`arc` on floats: the pose ``(x, y, theta)`` after ``dt`` seconds with ``(v, w)`` held."""
     half = 0.5 * w * dt
     s = v * dt * (math.sin(half) / half if half != 0.0 else 1.0)
     mid = th + half
-    return np.array([xi[0] + s * math.cos(mid), xi[1] + s * math.sin(mid), th + w * dt])
+    return x + s * math.cos(mid), y + s * math.sin(mid), th + w * dt
+
+
+def arc(xi: np.ndarray, v: float, w: float, dt: float) -> np.ndarray:
+    """Exact solution of eq (3) after ``dt`` seconds with ``(v, w)`` held (a straight line when ``w = 0``)."""
+    return np.array(arc_floats(float(xi[0]), float(xi[1]), float(xi[2]), v, w, dt))
 
 
 def euler_step(xi: np.ndarray, u: np.ndarray, ts: float = TS) -> np.ndarray:

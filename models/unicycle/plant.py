@@ -12,17 +12,22 @@ diag(process_noise))`` (stream ``plant.unicycle.process``), the truth of eq (10)
 model matches the truth. The initial pose is ``pose0 + N(0, diag(pose0_var))`` (stream
 ``plant.unicycle.initial``), drawn when the plant is bound: with ``pose0_var`` equal to the filter's ``P0`` the
 initial estimate's error has the distribution the filter assumes.
+
+The pose is kept as three floats (the plant is stepped some 2000 times a run; numpy's per-call overhead on
+3-vectors was most of its cost) and the noise is drawn :data:`NOISE_BLOCK` jumps at a time.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any, Literal
 
 import numpy as np
 from pydantic import Field
 
+from models.unicycle.ekf import Sensor
 from models.unicycle.model import (
-    FRONT_OFFSET, HALF_WHEELBASE, WALL_FRONT, WALL_SIDE, WHEEL_RADIUS, XI0_HAT, arc, measure, side_offset,
+    FRONT_OFFSET, HALF_WHEELBASE, WALL_FRONT, WALL_SIDE, WHEEL_RADIUS, XI0_HAT, arc_floats, side_offset,
     wheels_to_body,
 )
 from netsim.errors import BuildError
@@ -30,7 +35,11 @@ from netsim.plant import Plant
 from netsim.registry import register
 from netsim.units import Duration, StrictModel
 
-__all__ = ["UnicycleParams", "UnicyclePlant", "unicycle"]
+__all__ = ["UnicycleParams", "UnicyclePlant", "unicycle", "NOISE_BLOCK"]
+
+#: Process-noise jumps drawn per call of the generator (the same normals, in the same order, as one call per
+#: jump: a ``Generator``'s ``standard_normal`` fills its output from the stream in order).
+NOISE_BLOCK = 256
 
 
 class UnicycleParams(StrictModel):
@@ -63,18 +72,23 @@ class UnicyclePlant(Plant):
             raise BuildError("plant unicycle: pose0_var and process_noise are variances, give numbers >= 0")
         if self.p.noise_period <= 0:
             raise BuildError("plant unicycle: noise_period must be positive")
-        self._x = np.array(self.p.pose0, dtype=float)
+        self._x: tuple[float, float, float] = tuple(float(v) for v in self.p.pose0)  # type: ignore[assignment]
         self._side = side_offset(self.p.side)
-        self._sd = np.sqrt(np.array(self.p.process_noise, dtype=float))
-        self._noisy = bool(np.any(self._sd > 0))
+        self._sd = tuple(math.sqrt(v) for v in self.p.process_noise)
+        self._noisy = any(v > 0 for v in self._sd)
         self._rng: Any = None
+        self._noise: list[list[float]] = []  # drawn ahead, NOISE_BLOCK jumps at a time (module docstring)
         self._vw = (0.0, 0.0)
+        self._front = Sensor(FRONT_OFFSET, WALL_FRONT, 1.0)
+        self._side_sensor = Sensor(self._side, WALL_SIDE, 1.0)
 
     def _bind_streams(self, env: Any) -> None:
         var0 = np.array(self.p.pose0_var, dtype=float)
         if np.any(var0 > 0):
-            self._x = self._x + np.sqrt(var0) * env.rng(f"plant.{self.name}.initial").standard_normal(3)
+            x0 = np.array(self._x) + np.sqrt(var0) * env.rng(f"plant.{self.name}.initial").standard_normal(3)
+            self._x = tuple(float(v) for v in x0)  # type: ignore[assignment]
         self._rng = env.rng(f"plant.{self.name}.process")
+        self._noise = []
 
     def _check_source(self, src: Any) -> None:
         if src.kind not in ("piecewise", "held"):
@@ -84,33 +98,44 @@ class UnicyclePlant(Plant):
         u = self._piecewise_input()
         self._vw = wheels_to_body(float(u[0]), float(u[1]), self.p.wheel_radius, self.p.half_wheelbase)
 
+    def _jump(self) -> list[float]:
+        """The next process-noise jump ``sd * N(0, 1)`` (the stream's normals in order, drawn a block ahead)."""
+        if not self._noise:
+            if self._rng is None:
+                raise BuildError(f"plant {self.name}: bind(env) before running with process noise")
+            self._noise = (self._rng.standard_normal((NOISE_BLOCK, 3)) * np.array(self._sd)).tolist()[::-1]
+        return self._noise.pop()
+
     def _step(self, t: int) -> bool:
         grid = int(self.p.noise_period)
         noisy = False
         v, w = self._vw
-        while self._t < t:
-            nxt = (self._t // grid + 1) * grid
+        x, y, th = self._x
+        now = self._t
+        while now < t:
+            nxt = (now // grid + 1) * grid
             end = min(t, nxt)
-            self._x = arc(self._x, v, w, (end - self._t) * 1e-9)
-            self._t = end
+            x, y, th = arc_floats(x, y, th, v, w, (end - now) * 1e-9)
+            now = end
             if end == nxt and self._noisy:
-                if self._rng is None:
-                    raise BuildError(f"plant {self.name}: bind(env) before running with process noise")
-                self._x = self._x + self._sd * self._rng.standard_normal(3)
+                q = self._jump()
+                x, y, th = x + q[0], y + q[1], th + q[2]
                 noisy = True
-        if not np.all(np.abs(self._x) < self.divergence_bound):
-            self._diverged(t, self._x)
+        self._x, self._t = (x, y, th), now
+        bound = self.divergence_bound
+        if not (abs(x) < bound and abs(y) < bound and abs(th) < bound):
+            self._diverged(t, np.array(self._x))
         return noisy
 
     def _output_now(self) -> np.ndarray:
-        x = self._x
-        return np.array([measure(x, FRONT_OFFSET, WALL_FRONT), measure(x, self._side, WALL_SIDE), x[0], x[1], x[2]])
+        x, y, th = self._x
+        return np.array([self._front.h(x, y, th), self._side_sensor.h(x, y, th), x, y, th])
 
     def _state_now(self) -> np.ndarray:
-        return self._x.copy()
+        return np.array(self._x)
 
     def _set_state_now(self, x: np.ndarray) -> None:
-        self._x = np.asarray(x, dtype=float).copy()
+        self._x = tuple(float(v) for v in np.asarray(x, dtype=float).reshape(3))  # type: ignore[assignment]
 
 
 @register("plant", "unicycle", "2WD cart (seed 001): wheel speeds in, exact arcs, IR wall distances and pose out")

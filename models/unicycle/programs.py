@@ -35,11 +35,9 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field
 
-from models.unicycle.design import PHASES, Phase, TrackingLaw, Trajectory, make_ekf
-from models.unicycle.model import (
-    FRONT_OFFSET, HALF_WHEELBASE, P0, Q_REPORT, R_REPORT, WALL_FRONT, WALL_SIDE, WHEEL_RADIUS, XI0_HAT,
-    body_to_wheels, measure, measure_jacobian, side_offset,
-)
+from models.unicycle.design import PHASES, Phase, TrackingLaw, Trajectory
+from models.unicycle.ekf import CartEkf
+from models.unicycle.model import HALF_WHEELBASE, P0, Q_REPORT, R_REPORT, WHEEL_RADIUS, XI0_HAT, body_to_wheels
 from netsim.programs.basic import ProgramContext, _newest
 from netsim.registry import register
 from netsim.units import StrictModel, Time
@@ -149,36 +147,40 @@ class UnicycleEkf:
         self.offset = int(getattr(ctx.spec, "offset", 0) or 0)
         ts = self.period * 1e-9
         p = params
-        self.ekf = make_ekf(np.diag(p.Q), p.R, p.x0, np.diag(p.P0), ts, p.side_model)
+        self.ekf = CartEkf(p.Q, p.R, p.x0, np.diag(p.P0), ts, p.side_model)
         phases = [Phase(ph.duration * 1e-9, ph.v, ph.w, ph.front, ph.side, ph.name) for ph in p.phases]
         self.traj = Trajectory(phases, p.start, ts)
         self.law = TrackingLaw(self.traj, p.law, np.diag(p.lqr_Q), np.diag(p.lqr_R), p.a_sign)
-        self.off_side = side_offset(p.side_model)
-        self.R = np.array(p.R, dtype=float)
         self.k = 0
-        self.hist: dict[int, dict[str, Any]] = {0: {"x": self.ekf.x.copy(), "P": self.ekf.P.copy(), "u": None,
-                                                    "meas": {}}}
-        self.u = np.zeros(2)
+        # per sample: [prior x, prior P, input (v, w) or None, {source: reading}]; x and P are tuples (CartEkf)
+        self.hist: dict[int, list[Any]] = {0: [self.ekf.x, self.ekf.P, None, {}]}
+        self._oldest = 0
+        self.u = (0.0, 0.0)
         self.counts = {"steps": 0, "fused_front": 0, "fused_side": 0, "late": 0, "stale": 0, "duplicates": 0,
                        "prediction_only": 0}
+        self._wheels = (p.wheel_radius, p.half_wheelbase)
+        self._cols = (tuple(f"xhat[{i}]" for i in range(3)), tuple(f"sd[{i}]" for i in range(3)),
+                      tuple(f"ref[{i}]" for i in range(3)))
 
     # ------------------------------------------------------------------ filter bookkeeping
     def _advance(self) -> None:
         """Predict from sample ``self.k`` to the next with the input stored there (or the held one)."""
         h = self.hist[self.k]
-        if h["u"] is None:
-            h["u"] = self.u.copy()
-        self.ekf.predict(h["u"])
+        if h[2] is None:
+            h[2] = self.u
+        self.ekf.predict(*h[2])
         self.k += 1
-        self.hist[self.k] = {"x": self.ekf.x.copy(), "P": self.ekf.P.copy(), "u": None, "meas": {}}
+        self.hist[self.k] = [self.ekf.x, self.ekf.P, None, {}]
 
     def _correct(self, k: int) -> int:
-        n = 0
+        meas = self.hist[k][3]
+        if not meas:
+            return 0
         for s in SOURCES:
-            y = self.hist[k]["meas"].get(s)
-            if y is not None and self.ekf.correct([y], s):
-                n += 1
-        return n
+            y = meas.get(s)
+            if y is not None:
+                self.ekf.correct(y, s)
+        return len(meas)
 
     def _take(self, k_now: int) -> int:
         """Messages into the history; returns the earliest sample that got a new measurement."""
@@ -202,10 +204,10 @@ class UnicycleEkf:
                 if h is None:
                     self.counts["stale"] += 1
                     continue
-                if src.source in h["meas"]:
+                if src.source in h[3]:
                     self.counts["duplicates"] += 1
                     continue
-                h["meas"][src.source] = y
+                h[3][src.source] = y
                 self.counts["fused_" + src.source] += 1
                 if k < k_now:
                     self.counts["late"] += 1
@@ -218,53 +220,63 @@ class UnicycleEkf:
         while self.k < k_now:  # jobs that did not run: predicted with the held input
             self._advance()
         earliest = self._take(k_now)
+        ekf, hist = self.ekf, self.hist
         if earliest < k_now:  # re-filter from the prior of the earliest sample that got a late measurement
-            h = self.hist[earliest]
-            self.ekf.reset(h["x"], h["P"])
-            self.ekf.k = self.k = earliest
+            h = hist[earliest]
+            ekf.reset(h[0], h[1])
+            ekf.k = self.k = earliest
             while self.k < k_now:
+                h = hist[self.k]
                 self._correct(self.k)
-                self.ekf.predict(self.hist[self.k]["u"])
+                ekf.predict(*h[2])
                 self.k += 1
-                self.hist[self.k]["x"], self.hist[self.k]["P"] = self.ekf.x.copy(), self.ekf.P.copy()
+                h = hist[self.k]
+                h[0], h[1] = ekf.x, ekf.P
         if self._correct(k_now) == 0:
             self.counts["prediction_only"] += 1
         self.counts["steps"] += 1
-        x_hat = self.ekf.x.copy()
-        v, w = (float(a) for a in self.law.step(k_now, x_hat))
-        self.u = np.array([v, w])
-        self.hist[k_now]["u"] = self.u.copy()
+        v, w = self.law.step(k_now, ekf.x)
+        self.u = (v, w)
+        hist[k_now][2] = self.u
         if self.p.record:
-            self._record(k_now, x_hat)
+            self._record(k_now)
         self._advance()
-        for old in [k for k in self.hist if k < self.k - self.p.history]:
-            del self.hist[old]
+        while self._oldest < self.k - self.p.history:
+            hist.pop(self._oldest, None)
+            self._oldest += 1
         if self.ctx.execution is not None:
             yield job.execute(self.ctx.execution)
-        wl, wr = body_to_wheels(v, w, self.p.wheel_radius, self.p.half_wheelbase)
+        wl, wr = body_to_wheels(v, w, *self._wheels)
         yield job.send(self.p.network, self.p.to, [wl, wr], self.p.bits, priority=self.p.priority, tag=self.p.tag)
 
-    def _record(self, k: int, x_hat: np.ndarray) -> None:
+    def _record(self, k: int) -> None:
         """Record the posterior, its bands and the predicted readings at the sample instant (floats: the recorder's
         fast path; the same columns as vectors would give, ``xhat[0]`` ...)."""
         t = k * self.period
-        P = self.ekf.P
+        ekf = self.ekf
         rec = self.ctx.record
-        for i in range(3):
-            rec(f"xhat[{i}]", float(x_hat[i]), t)
-        for i in range(3):
-            rec(f"sd[{i}]", math.sqrt(float(P[i, i])), t)
-        rec("detP", float(np.linalg.det(P)), t)
-        for i, (off, wall, r) in enumerate(((FRONT_OFFSET, WALL_FRONT, self.R[0]),
-                                            (self.off_side, WALL_SIDE, self.R[1]))):
-            H = measure_jacobian(x_hat, off, wall)[0]
-            rec(f"zhat[{i}]", measure(x_hat, off, wall), t)
-            rec(f"zsd[{i}]", math.sqrt(float(H @ P @ H) + r), t)
-        ref, _ = self.traj.at(k)
-        for i in range(3):
-            rec(f"ref[{i}]", float(ref[i]), t)
-        rec("vw[0]", float(self.u[0]), t)
-        rec("vw[1]", float(self.u[1]), t)
+        c_x, c_sd, c_ref = self._cols
+        x = ekf.x
+        P = ekf.P
+        rec(c_x[0], x[0], t)
+        rec(c_x[1], x[1], t)
+        rec(c_x[2], x[2], t)
+        rec(c_sd[0], math.sqrt(P[0]), t)
+        rec(c_sd[1], math.sqrt(P[3]), t)
+        rec(c_sd[2], math.sqrt(P[5]), t)
+        rec("detP", ekf.det(), t)
+        zf, sf = ekf.predicted("front")
+        zs, ss = ekf.predicted("side")
+        rec("zhat[0]", zf, t)
+        rec("zsd[0]", sf, t)
+        rec("zhat[1]", zs, t)
+        rec("zsd[1]", ss, t)
+        ref = self.law.ref_at(k)
+        rec(c_ref[0], ref[0], t)
+        rec(c_ref[1], ref[1], t)
+        rec(c_ref[2], ref[2], t)
+        rec("vw[0]", self.u[0], t)
+        rec("vw[1]", self.u[1], t)
 
     def metrics(self) -> dict[str, float]:
         """The counters of the run (module docstring)."""

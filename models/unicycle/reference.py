@@ -14,10 +14,10 @@ from typing import Any, Literal, Sequence
 
 import numpy as np
 
-from models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, TrackingLaw, Trajectory, make_ekf
+from models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, TrackingLaw, Trajectory
+from models.unicycle.ekf import CartEkf, Sensor
 from models.unicycle.model import (
-    FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, TS, WALL_FRONT, WALL_SIDE, XI0_HAT, arc, measure,
-    measure_jacobian, side_offset,
+    FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, TS, WALL_FRONT, WALL_SIDE, XI0_HAT, arc_floats,
 )
 
 __all__ = ["simulate"]
@@ -49,40 +49,46 @@ def simulate(
     """
     traj = Trajectory(phases, XI0_HAT, ts)
     ctl = TrackingLaw(traj, law, lqr_Q, lqr_R, a_sign)
-    ekf = make_ekf(Q_filter, R_filter, XI0_HAT, P0_, ts, side_model)
+    ekf = CartEkf(Q_filter, R_filter, XI0_HAT, P0_, ts, side_model)
     s0, s1, s2, s3 = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
     sdQ = np.sqrt(np.diag(np.asarray(Q_true, dtype=float)))
     sdR = np.sqrt(np.asarray(R_true, dtype=float).reshape(-1))
-    Rf = np.asarray(R_filter, dtype=float).reshape(-1)
-    off_f = side_offset(side_model)
     n = traj.n
-    xi = XI0_HAT + np.sqrt(np.diag(np.asarray(P0_, dtype=float))) * s0.standard_normal(3)
-    out = {k: np.empty((n + 1, 3)) for k in ("truth", "xhat", "ref")}
-    out["P"] = np.empty((n + 1, 3, 3))
-    out["zhat"] = np.empty((n + 1, 2))
-    out["zsd"] = np.empty((n + 1, 2))
-    out["u"] = np.empty((n + 1, 2))
-    out["z"] = np.full((n + 1, 2), np.nan)
+    front, side = Sensor(FRONT_OFFSET, WALL_FRONT, 1.0), Sensor(SIDE_DERIVED, WALL_SIDE, 1.0)  # the truth's
+    xi0 = XI0_HAT + np.sqrt(np.diag(np.asarray(P0_, dtype=float))) * s0.standard_normal(3)
+    x, y, th = (float(v) for v in xi0)
+    # the random numbers of the whole run, drawn per stream in the order one-at-a-time draws would give them
+    wq = (s1.standard_normal((n + 1, 3)) * sdQ).tolist()
+    on = [traj.phase(k * ts) for k in range(n + 1)]
+    k_front = [k for k in range(n + 1) if on[k].front and k % front_every == 0]
+    k_side = [k for k in range(n + 1) if on[k].side and k % side_every == 0]
+    vf = dict(zip(k_front, (sdR[0] * s2.standard_normal(len(k_front))).tolist()))
+    vs = dict(zip(k_side, (sdR[1] * s3.standard_normal(len(k_side))).tolist()))
+    truth, xhat, Ps, zhat, zsd, us = [], [], [], [], [], []
+    z = np.full((n + 1, 2), np.nan)
     for k in range(n + 1):
-        ph = traj.phase(k * ts)
-        if ph.front and k % front_every == 0:
-            z = measure(xi, FRONT_OFFSET, WALL_FRONT) + sdR[0] * s2.standard_normal()
-            out["z"][k, 0] = z
-            ekf.correct([z], "front")
-        if ph.side and k % side_every == 0:
-            z = measure(xi, SIDE_DERIVED, WALL_SIDE) + sdR[1] * s3.standard_normal()
-            out["z"][k, 1] = z
-            ekf.correct([z], "side")
-        xh, P = ekf.x.copy(), ekf.P.copy()
-        out["truth"][k], out["xhat"][k], out["P"][k] = xi, xh, P
-        out["ref"][k] = traj.at(k)[0]
-        for j, (off, wall) in enumerate(((FRONT_OFFSET, WALL_FRONT), (off_f, WALL_SIDE))):
-            H = measure_jacobian(xh, off, wall)
-            out["zhat"][k, j] = measure(xh, off, wall)
-            out["zsd"][k, j] = math.sqrt(float((H @ P @ H.T)[0, 0]) + Rf[j])
-        u = ctl.step(k, xh)
-        out["u"][k] = u
-        ekf.predict(u)
-        xi = arc(xi, float(u[0]), float(u[1]), ts) + sdQ * s1.standard_normal(3)
+        if k in vf:
+            z[k, 0] = zk = front.h(x, y, th) + vf[k]
+            ekf.correct(zk, "front")
+        if k in vs:
+            z[k, 1] = zk = side.h(x, y, th) + vs[k]
+            ekf.correct(zk, "side")
+        truth.append((x, y, th))
+        xhat.append(ekf.x)
+        Ps.append(ekf.P)
+        zf, sf = ekf.predicted("front")
+        zs, ss = ekf.predicted("side")
+        zhat.append((zf, zs))
+        zsd.append((sf, ss))
+        v, w = ctl.step(k, ekf.x)
+        us.append((v, w))
+        ekf.predict(v, w)
+        x, y, th = arc_floats(x, y, th, v, w, ts)
+        q = wq[k]
+        x, y, th = x + q[0], y + q[1], th + q[2]
+    P = np.array(Ps)
+    out = {"truth": np.array(truth), "xhat": np.array(xhat), "ref": traj.poses.copy(), "zhat": np.array(zhat),
+           "zsd": np.array(zsd), "u": np.array(us), "z": z,
+           "P": P[:, [0, 1, 2, 1, 3, 4, 2, 4, 5]].reshape(n + 1, 3, 3)}
     out["t"] = np.arange(n + 1) * ts
     return out

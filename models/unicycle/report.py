@@ -18,11 +18,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from models.unicycle import studies as S
 from models.unicycle.design import PHASES
+from netsim.lazy_import import lazy_module
 from netsim.registry import register
+
+pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["unicycle_report"]
 
