@@ -28,9 +28,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
+from netsim.lazy_import import lazy_module
 from netsim.registry import register
+
+pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["PAPER", "TEXT", "LABEL_PATTERNS", "Quoted", "hdd_report", "render", "overshoot_pct", "VARIANTS"]
 
@@ -40,7 +42,8 @@ ROOT = Path(__file__).resolve().parents[1]
 T = 20e-6
 
 #: Section 5 of the paper (NaN: not printed). Ua of Cases 5-6 computed from Nca/464 (not printed).
-PAPER = pd.DataFrame(
+#: ``PAPER`` (a DataFrame of these rows) is built at its first use, so importing this module imports no pandas.
+_PAPER_ROWS = (
     [
         (1, 464, 464, 1.00, 1.00, 66, 3.75, np.nan, np.nan),
         (2, 250, 78, 0.54, 0.16, 35, 3.75, 0.54, 0.14),
@@ -49,8 +52,15 @@ PAPER = pd.DataFrame(
         (5, 338, 231, 0.73, 231 / 464, 48, 3.75, np.nan, 0.02),
         (6, 360, 315, 0.78, 315 / 464, 53, 3.75, np.nan, 0.01),
     ],
-    columns=["case", "Nsc", "Nca", "Uc", "Ua", "Cc_pct", "ISE", "ISEP", "NE"],
+    ["case", "Nsc", "Nca", "Uc", "Ua", "Cc_pct", "ISE", "ISEP", "NE"],
 )
+
+
+def __getattr__(name: str) -> Any:
+    """``PAPER``: the paper's section 5 table as a DataFrame, built when first read (PEP 562)."""
+    if name == "PAPER":
+        return pd.DataFrame(_PAPER_ROWS[0], columns=_PAPER_ROWS[1])
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 #: Fig. 5 / section 5: the thresholds the paper found optimal (delta_s = sigma_s, delta_c = sigma_c).
 PAPER_OPT = {"sigma_s": 100e-7, "sigma_c": 1.32e-2}
 
@@ -287,7 +297,7 @@ def _plain_c_ise() -> float:
 def _quote(rows: dict[str, dict], gpi: pd.DataFrame | None, gpi_meta: dict, gpi4: pd.DataFrame | None = None,
            gpi4_meta: dict | None = None) -> Quoted:
     q = Quoted()
-    P = PAPER.set_index("case")
+    P = __getattr__("PAPER").set_index("case")
     for n in range(1, 7):
         for col in ("Nsc", "Nca"):
             q.add(f"p{n}_{col}", P.loc[n, col], "d", "paper section 5")
@@ -432,7 +442,7 @@ def _quote_gpi(q: Quoted, gpi: pd.DataFrame, meta: dict, pre: str = "gpi") -> No
 # ------------------------------------------------------------------------------------------ output
 def _table(rows: dict[str, dict], texts: dict[str, str]) -> pd.DataFrame:
     out = []
-    P = PAPER.set_index("case")
+    P = __getattr__("PAPER").set_index("case")
     for n in range(1, 7):
         r = rows[f"case{n}"]
         row: dict[str, Any] = {"case": n}

@@ -28,7 +28,10 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-import pandas as pd
+
+from netsim.lazy_import import lazy_module
+
+pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = [
     "OSC_THRESHOLD",

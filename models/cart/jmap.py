@@ -28,9 +28,11 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from netsim.errors import SimulationError
+from netsim.lazy_import import lazy_module
+
+sp = lazy_module("scipy.sparse")  # imported at first use (30 ms): a lookup of another cart plugin needs none
 
 __all__ = ["JmapResult", "reconstruct", "interval_bounds"]
 

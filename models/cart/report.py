@@ -20,13 +20,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from models.cart.claims import claims as make_claims
 from models.cart.claims import fmt as _fmt
 from models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool_sigma, pooling_difference
 from models.cart.metrics import STOP_WINDOW
+from netsim.lazy_import import lazy_module
 from netsim.registry import register
+
+pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["cart_report", "run_point", "fig2_points", "quant_points", "sensitivity_points", "FRICTIONS"]
 

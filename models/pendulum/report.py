@@ -38,9 +38,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
+from netsim.lazy_import import lazy_module
 from netsim.registry import register
+
+pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["pendulum_report", "run_case", "closed_loop_cases", "TEXT", "render", "LABEL_PATTERNS", "ESTIMATORS"]
 

@@ -385,7 +385,7 @@ def _cmd_list(args: argparse.Namespace) -> int:
         kinds = [kind]
     else:
         kinds = list(LIST_KINDS.values())
-    for problem in plugin_load_problems():
+    for problem in plugin_load_problems(load_all=True):
         print(f"warning: {problem.message}", file=sys.stderr)
     if args.name is not None:
         _print_plugin(kinds[0], args.name)
@@ -442,7 +442,7 @@ def _cmd_docs(args: argparse.Namespace) -> int:
     from netsim.cli.docs import scenario_reference
     from netsim.scenario.validate import plugin_load_problems
 
-    for problem in plugin_load_problems():
+    for problem in plugin_load_problems(load_all=True):
         print(f"warning: {problem.message}", file=sys.stderr)
     sys.stdout.write(scenario_reference())
     return EXIT_OK

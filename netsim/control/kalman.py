@@ -16,7 +16,6 @@ from collections import deque
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 
 from netsim.control.design_checks import (
     as_input_matrix,
@@ -27,6 +26,9 @@ from netsim.control.design_checks import (
     check_weight,
 )
 from netsim.errors import ConfigError, SimulationError
+from netsim.lazy_import import lazy_module
+
+sla = lazy_module("scipy.linalg")  # imported when a filter is designed, not when a scenario is checked
 
 __all__ = ["KalmanFilter", "steady_state_prior", "kalman_gain", "riccati_step"]
 

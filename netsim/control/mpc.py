@@ -36,12 +36,14 @@ import time
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 
 from netsim.control.design_checks import as_matrix, as_vector, check_weight
 from netsim.control.lqr import _limits, _model, dlqr_gain, reference_gains
 from netsim.control.qp_backends import Backend, make_backend
 from netsim.errors import ConfigError, SimulationError
+from netsim.lazy_import import lazy_module
+
+sla = lazy_module("scipy.linalg")  # imported when an MPC is built, not when a scenario is checked
 
 __all__ = ["LinearMPC", "SOLVERS"]
 

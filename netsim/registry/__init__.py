@@ -7,17 +7,23 @@ NAME`` one plugin's parameters (:mod:`netsim.registry.params`).
 
 Where registered things come from (issue 14: a scenario file is data, it cannot name arbitrary code):
 
-* netsim's own plugin modules (:data:`PLUGIN_MODULES`): :func:`load_plugins` imports every module of each
-  listed package (``netsim.network``, ``models``, ...), so a new medium, program or case study is one file plus
-  its ``@register`` line; no ``__init__`` has to import it. ``tests/test_registry.py`` reads every module of
-  ``netsim/`` and ``models/`` and fails when one that registers something is not covered by the list;
+* netsim's own plugin modules (:data:`PLUGIN_MODULES`): every module of each listed package (``netsim.network``,
+  ``models``, ...), so a new medium, program or case study is one file plus its ``@register`` line; no
+  ``__init__`` has to import it. ``tests/test_registry.py`` reads every module of ``netsim/`` and ``models/``
+  and fails when one that registers something is not covered by the list. They are loaded **lazily**
+  (issue 19): :func:`lookup` reads the index of their ``@register("kind", "name")`` lines
+  (:mod:`netsim.registry.index`, built from the sources without importing them and cached) and imports only
+  the modules that declare the name asked for; :func:`load_plugins` (``netsim list``, ``netsim docs``,
+  :func:`entries`) imports them all. ``tests/test_registry_index.py`` checks that both register the same;
 * installed packages that declare a ``netsim.plugins`` entry point (each entry point names a module,
-  imported by :func:`load_plugins`; installing a package is the user's decision);
+  imported by :func:`load_plugins`, or by a lookup of a name no netsim module declares; installing a package
+  is the user's decision);
 * plugin files, loaded by :func:`load_plugin_file` only when the scenario's ``plugins:`` list names them and
   the user allowed it (:mod:`netsim.trust`).
 
-A module that fails to import is never skipped silently: :func:`load_plugins` returns it with its error
-(``netsim validate`` and ``netsim list`` print it as a warning). A name registered twice for two different
+A module that fails to import is never skipped silently: :func:`plugin_failures` (and :func:`load_plugins`)
+return it with its error (``netsim validate`` and ``netsim list`` print it as a warning), and a lookup of a
+name that module declares says so. A name registered twice for two different
 objects is an error (a plugin cannot shadow a built-in by accident).
 
 A ``"module:attr"`` path (:func:`resolve`) is only another way to name a registered object: it must resolve
@@ -72,7 +78,7 @@ from netsim.errors import ConfigError
 from netsim.registry.params import TIME_UNIT, ParamRow, param_rows, params_model
 
 __all__ = ["Entry", "KINDS", "KIND_BASES", "PLUGIN_MODULES", "ParamRow", "TIME_UNIT", "register", "lookup", "entries", "kinds",
-           "load_plugins", "load_plugin_file", "plugin_file_loaded", "resolve", "is_builtin", "is_plugin_module",
+           "load_plugins", "plugin_failures", "load_plugin_file", "plugin_file_loaded", "resolve", "is_builtin", "is_plugin_module",
            "params_model", "param_rows", "ENTRY_POINT_GROUP"]
 
 KINDS = (
@@ -118,8 +124,11 @@ _PLUGINS_LOADED = False
 _PLUGIN_FAILURES: list[tuple[str, str]] = []
 _log = logging.getLogger(__name__)
 
-#: Modules imported from installed packages' ``netsim.plugins`` entry points (filled by :func:`load_plugins`).
+#: Modules imported from installed packages' ``netsim.plugins`` entry points (filled by :func:`_load_entry_points`).
 _ENTRY_POINT_MODULES: list[str] = []
+_ENTRY_POINTS_LOADED = False
+#: Plugin modules a lazy lookup already imported (or tried to): never imported twice.
+_TRIED: set[str] = set()
 #: Plugin files already executed: resolved path -> module name.
 _PLUGIN_FILES: dict[str, str] = {}
 
@@ -127,9 +136,10 @@ _PLUGIN_FILES: dict[str, str] = {}
 #: netsim's own plugin modules and packages. :func:`load_plugins` imports each, and every module below a
 #: listed package (a new file in ``netsim/network/`` or ``models/`` registers without being imported anywhere).
 #: The application layer (CLI, scenario loading, runner, sweeps, plots) is not listed: it uses plugins and
-#: defines none, and ``tests/test_registry.py`` fails when a module outside these registers something. Every
-#: module below a listed package is imported at the first lookup of every run: a module there imports heavy
-#: libraries (python-control, solvers, matplotlib) inside the functions that use them.
+#: defines none, and ``tests/test_registry.py`` fails when a module outside these registers something. A lookup
+#: imports only the modules that declare the name (:mod:`netsim.registry.index`); ``netsim list`` and ``netsim
+#: docs`` import them all, so a module there imports heavy libraries (python-control, solvers, matplotlib)
+#: inside the functions that use them.
 PLUGIN_MODULES: list[str] = [
     "netsim.kernel",
     "netsim.network",
@@ -179,8 +189,15 @@ def is_plugin_module(module_name: str) -> bool:
 
 
 def _failed(module_name: str, exc: BaseException, where: str = "") -> None:
+    if any(m == module_name for m, _ in _PLUGIN_FAILURES):  # tried again by load_plugins after a lookup
+        return
     _PLUGIN_FAILURES.append((module_name, f"{type(exc).__name__}: {exc}"))
     _log.warning("could not load plugin module %s%s: %s", module_name, where, exc)
+
+
+def plugin_failures() -> list[tuple[str, str]]:
+    """The ``(module, error)`` pairs of the plugin modules that failed to import so far in this process."""
+    return list(_PLUGIN_FAILURES)
 
 
 def _import_tree(module_name: str) -> None:
@@ -214,13 +231,67 @@ def load_plugins() -> list[tuple[str, str]]:
     _PLUGINS_LOADED = True
     for mod in PLUGIN_MODULES:
         _import_tree(mod)
+    _load_entry_points()
+    return list(_PLUGIN_FAILURES)
+
+
+def _load_entry_points() -> None:
+    """Import the modules of the installed packages' ``netsim.plugins`` entry points (once)."""
+    global _ENTRY_POINTS_LOADED
+    if _ENTRY_POINTS_LOADED:
+        return
+    _ENTRY_POINTS_LOADED = True
     for mod in _entry_point_modules():
         try:
             importlib.import_module(mod)
             _ENTRY_POINT_MODULES.append(mod)
         except Exception as exc:  # noqa: BLE001 - an installed plugin package that is broken: reported
             _failed(mod, exc, f" (entry point {ENTRY_POINT_GROUP})")
-    return list(_PLUGIN_FAILURES)
+
+
+def _index(refresh: bool = False) -> Any:
+    """The declarations of the plugin modules (:mod:`netsim.registry.index`), for the current PLUGIN_MODULES
+    (``refresh``: look at the files again, for a module written since this process built the index)."""
+    from netsim.registry.index import plugin_index
+
+    return plugin_index(PLUGIN_MODULES, KINDS, refresh=refresh)
+
+
+def _import_once(module_name: str) -> None:
+    """Import one plugin module for a lookup (once per process; a failure is recorded, not raised)."""
+    if module_name in _TRIED or module_name in sys.modules:
+        return
+    _TRIED.add(module_name)
+    try:
+        importlib.import_module(module_name)
+    except Exception as exc:  # noqa: BLE001 - recorded and reported (a broken module must not hide the others)
+        _failed(module_name, exc)
+
+
+def _ensure(kind: str, name: str) -> None:
+    """Import what registers ``kind``/``name`` when it is not registered yet: the modules the index names;
+    then, for a name no module declares, the modules the index cannot read and the entry points."""
+    if name in _REGISTRY[kind] or _PLUGINS_LOADED:
+        return
+    index = _index()
+    if not index.modules_for(kind, name):
+        index = _index(refresh=True)  # a miss: a plugin module may have been written since (a few ms of stat)
+    for module in index.modules_for(kind, name):
+        _import_once(module)
+    if name in _REGISTRY[kind]:
+        return
+    for module in index.opaque:
+        _import_once(module)
+    if name not in _REGISTRY[kind]:
+        _load_entry_points()
+
+
+def _known_names(kind: str) -> list[str]:
+    """Registered and declared names of ``kind`` (for "did you mean"), without importing anything."""
+    names = set(_REGISTRY[kind])
+    if not _PLUGINS_LOADED:
+        names.update(_index().names(kind))
+    return sorted(names)
 
 
 def _entry_point_modules() -> list[str]:
@@ -301,12 +372,19 @@ def lookup(kind: str, name: str) -> Any:
     """
     if ":" in name:
         return resolve(name, kind)
-    load_plugins()
+    if kind not in _REGISTRY:
+        raise ValueError(f"unknown registry kind {kind!r}; known: {', '.join(KINDS)}")
+    _ensure(kind, name)
     table = _REGISTRY[kind]
     if name in table:
         return table[name].obj
-    close = difflib.get_close_matches(name, list(table), n=1)
-    hint = f"; did you mean '{close[0]}'?" if close else f" (known: {', '.join(sorted(table)) or 'none'})"
+    broken = [(m, e) for m, e in _PLUGIN_FAILURES if m in _index().modules_for(kind, name)]
+    if broken:
+        raise ConfigError(f"{kind} '{name}' is unavailable: its module '{broken[0][0]}' failed to import "
+                          f"({broken[0][1]}); fix that module")
+    known = [n for n in _known_names(kind)]
+    close = difflib.get_close_matches(name, known, n=1)
+    hint = f"; did you mean '{close[0]}'?" if close else f" (known: {', '.join(known) or 'none'})"
     raise ConfigError(f"unknown {kind} '{name}'{hint}")
 
 
@@ -322,8 +400,12 @@ def is_builtin(obj: Any) -> bool:
 
 def _trusted_module(module_name: str) -> bool:
     """Whether ``module_name`` may be imported to resolve a path: netsim's own modules and entry points."""
-    roots = ["netsim", *PLUGIN_MODULES, *_ENTRY_POINT_MODULES, *_PLUGIN_FILES.values()]
-    return any(module_name == r or module_name.startswith(r + ".") for r in roots)
+    def under(roots: list[str]) -> bool:
+        return any(module_name == r or module_name.startswith(r + ".") for r in roots)
+
+    if under(["netsim", *PLUGIN_MODULES, *_ENTRY_POINT_MODULES, *_PLUGIN_FILES.values()]):
+        return True
+    return under(_entry_point_modules())  # an installed plugin package that no lookup has imported yet
 
 
 def _base(kind: str) -> type | None:
@@ -358,7 +440,6 @@ def resolve(path: str, kind: str) -> Any:
     if not _DOTTED.match(module_name) or not _DOTTED.match(attr) or "__" in path:  # no __main__, __class__
         raise ConfigError(f"'{shown}' is not a plugin path; write a registered {kind} name (see {listing}) or "
                           "'package.module:Class'")
-    load_plugins()
     module = sys.modules.get(module_name)
     if module is None:
         if not _trusted_module(module_name):
@@ -377,6 +458,8 @@ def resolve(path: str, kind: str) -> Any:
     except AttributeError:
         raise ConfigError(f"module '{module_name}' has no attribute '{attr}'") from None
     base = _base(kind)
+    if not _is_registered(kind, obj) and not (base is not None and isinstance(obj, type) and issubclass(obj, base)):
+        load_plugins()  # registered elsewhere than where it is defined: known only once everything is imported
     if _is_registered(kind, obj) or (base is not None and isinstance(obj, type) and issubclass(obj, base)):
         if inspect.isabstract(obj):
             raise ConfigError(f"'{shown}' is an abstract base class; name a concrete {kind} (see {listing})")

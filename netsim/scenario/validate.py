@@ -14,7 +14,8 @@ What is checked
 - ``wcet_handler``/``deadline_handler`` name handlers of the node.
 - A network's ``nodes`` exist; ``release: on_message:<net>`` and ``trigger: {on_message: <net>}`` name a
   network the node is attached to.
-- A periodic task has a period, an aperiodic or message-released task has none; under policy ``fp`` every
+- A periodic task has a period, an aperiodic or message-released task has none, a sporadic task has a
+  ``min_interarrival`` (and only it); under policy ``fp`` every
   task has a priority. A deadline longer than the period is allowed (TrueTime semantics: jobs continue and
   may queue up) but reported as a **warning**.
 - Program parameter naming conventions: ``network``/``*_network`` (and ``networks``/``*_networks``) name a
@@ -63,27 +64,21 @@ __all__ = ["validate_params", "check_raw", "plugin_load_problems"]
 
 log = logging.getLogger(__name__)
 
-_PLUGIN_WARNINGS: list[Problem] | None = None
-
-
-def plugin_load_problems() -> list[Problem]:
-    """Load the registry's plugin modules once; a module that fails to import becomes a warning.
+def plugin_load_problems(load_all: bool = False) -> list[Problem]:
+    """The plugin modules that failed to import so far in this process, as warnings (``load_all``: import
+    every plugin module first, as ``netsim list`` and ``netsim docs`` do).
 
     A half-written or broken plugin module must not stop validation: its plugins are then reported as
-    unknown names, and this warning says why.
+    unavailable, and this warning says why. Plugin modules are imported lazily (:mod:`netsim.registry`), so
+    without ``load_all`` the warnings cover the modules the checks so far needed.
     """
-    global _PLUGIN_WARNINGS
-    if _PLUGIN_WARNINGS is not None:
-        return list(_PLUGIN_WARNINGS)
     from netsim import registry
 
-    warnings = [
+    failures = registry.load_plugins() if load_all else registry.plugin_failures()
+    return [
         Problem("", f"plugin module '{module}' failed to import ({error}); its plugins are unavailable", severity=WARNING)
-        for module, error in registry.load_plugins()
+        for module, error in failures
     ]
-    _PLUGIN_WARNINGS = warnings
-    return list(warnings)
-
 
 
 def _params_model(plugin: Any) -> type[BaseModel] | None:
@@ -219,7 +214,6 @@ class _Checker:
 
     # ------------------------------------------------------------------ sections
     def run(self) -> None:
-        self.problems += plugin_load_problems()
         outputs, inputs = self.plant()
         self.io_channels(outputs, inputs)
         self.signal_specs()
@@ -229,6 +223,7 @@ class _Checker:
                 self.node(name, node)
         self.metrics()
         self.record(outputs)
+        self.problems += plugin_load_problems()  # the modules the lookups above imported (lazy registry)
 
     def plant(self) -> tuple[list[Any] | None, list[Any] | None]:
         plant = self.raw.get("plant")
@@ -381,7 +376,9 @@ class _Checker:
         release = task.get("release")
         rel = release.strip().replace(" ", "") if isinstance(release, str) else None
         if rel is None and release is None:
-            rel = "periodic" if period is not None else "aperiodic"
+            rel = ("periodic" if period is not None else "sporadic" if task.get("min_interarrival") is not None
+                   else "aperiodic")
+        self.sporadic(task, rel, at)
         if rel == "periodic" and period is None:
             self.error([*at, "period"], "a periodic task needs a period; add e.g. 'period: 10 ms', or set 'release: aperiodic' or 'release: on_message:<network>'")
         if rel is not None and rel != "periodic" and period is not None:
@@ -401,6 +398,15 @@ class _Checker:
                 known = [h for h in handlers if isinstance(h, str)]
                 self.error([*at, key], f"node '{node_name}' has no handler '{ref}'{did_you_mean(ref, known, what='handlers')}")
 
+    def sporadic(self, task: dict[str, Any], rel: str | None, at: list[PathPart]) -> None:
+        """``release: sporadic`` goes with ``min_interarrival`` (and ``extra_interarrival`` with both)."""
+        if rel == "sporadic" and task.get("min_interarrival") is None:
+            self.error([*at, "min_interarrival"], "a sporadic task needs a minimum inter-arrival time; add e.g. "
+                                                  "'min_interarrival: 10 ms'")
+        if rel is not None and rel != "sporadic" and task.get("min_interarrival") is not None:
+            self.error([*at, "min_interarrival"], f"only sporadic tasks have a minimum inter-arrival time (this one "
+                                                  f"is released '{rel}'); remove it or set 'release: sporadic'")
+
     def kernel_checks(self, node_name: str, node: dict[str, Any], task: dict[str, Any], rel: str | None,
                       at: list[PathPart]) -> set[str]:
         """The kernel's own checks of a task (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
@@ -413,13 +419,18 @@ class _Checker:
         from netsim.kernel.building import task_spec
 
         times: dict[str, int | None] = {}
-        for key in ("period", "offset", "deadline", "wcet"):
+        for key in ("period", "offset", "deadline", "wcet", "min_interarrival"):
             value = task.get(key)
             times[key] = _time_or_none(value)
             if value is not None and (times[key] is None or (key != "offset" and times[key] <= 0)):
                 return set()  # the schema reports it
         if rel is not None and rel != "periodic":
             times["period"] = None
+        if rel != "sporadic":
+            times["min_interarrival"] = None
+        abort = task.get("abort_on_miss", False)
+        if not isinstance(abort, bool):
+            return set()  # the schema reports it
         priority = task.get("priority")
         if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
             return set()
@@ -428,7 +439,8 @@ class _Checker:
         try:
             spec = task_spec(node_name, name, period=times["period"], offset=times["offset"] or 0,
                              deadline=times["deadline"], priority=priority, wcet=times["wcet"],
-                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"))
+                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"),
+                             min_interarrival=times["min_interarrival"], abort_on_miss=abort)
             if is_builtin_policy(policy_name):
                 find_policy(policy_name)().check(node_name, spec)
         except BuildError as exc:

@@ -9,7 +9,6 @@ import pytest
 
 from netsim import registry
 from netsim.scenario import check_scenario, load_scenario
-from netsim.scenario import validate as validate_mod
 from netsim.scenario.schema import HandlerSpec, TaskSpec, UniformExec
 from netsim.timebase import MS, US
 
@@ -320,11 +319,15 @@ def test_baseline_overrides_are_checked_and_applied(base):
 
 
 def test_a_broken_plugin_module_becomes_a_warning_not_a_crash(tmp_path, monkeypatch, base):
-    (tmp_path / "zzt_broken_plugins.py").write_text("raise RuntimeError('half written')\n")
+    # plugin modules load lazily (issue 19): the broken module declares the program the scenario names
+    (tmp_path / "zzt_broken_plugins.py").write_text(
+        "from netsim.registry import register\n\nraise RuntimeError('half written')\n\n"
+        "@register('program', 'zzt_from_broken_module')\nclass P:\n    pass\n")
     monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv("NETSIM_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(registry, "PLUGIN_MODULES", [*registry.PLUGIN_MODULES, "zzt_broken_plugins"])
     monkeypatch.setattr(registry, "_PLUGINS_LOADED", False)
-    monkeypatch.setattr(validate_mod, "_PLUGIN_WARNINGS", None)
+    monkeypatch.setattr(registry, "_PLUGIN_FAILURES", [])
     raw = base()
     raw["nodes"]["controller"]["tasks"][0]["program"] = "zzt_from_broken_module"
     problems = check_scenario(raw)
