@@ -14,8 +14,7 @@ What is checked
 - ``wcet_handler``/``deadline_handler`` name handlers of the node.
 - A network's ``nodes`` exist; ``release: on_message:<net>`` and ``trigger: {on_message: <net>}`` name a
   network the node is attached to.
-- A periodic task has a period, an aperiodic or message-released task has none, a sporadic task has a
-  ``min_interarrival`` (and only it); under policy ``fp`` every
+- A periodic task has a period, an aperiodic or message-released task has none; under policy ``fp`` every
   task has a priority. A deadline longer than the period is allowed (TrueTime semantics: jobs continue and
   may queue up) but reported as a **warning**.
 - Program parameter naming conventions: ``network``/``*_network`` (and ``networks``/``*_networks``) name a
@@ -376,9 +375,7 @@ class _Checker:
         release = task.get("release")
         rel = release.strip().replace(" ", "") if isinstance(release, str) else None
         if rel is None and release is None:
-            rel = ("periodic" if period is not None else "sporadic" if task.get("min_interarrival") is not None
-                   else "aperiodic")
-        self.sporadic(task, rel, at)
+            rel = "periodic" if period is not None else "aperiodic"
         if rel == "periodic" and period is None:
             self.error([*at, "period"], "a periodic task needs a period; add e.g. 'period: 10 ms', or set 'release: aperiodic' or 'release: on_message:<network>'")
         if rel is not None and rel != "periodic" and period is not None:
@@ -398,15 +395,6 @@ class _Checker:
                 known = [h for h in handlers if isinstance(h, str)]
                 self.error([*at, key], f"node '{node_name}' has no handler '{ref}'{did_you_mean(ref, known, what='handlers')}")
 
-    def sporadic(self, task: dict[str, Any], rel: str | None, at: list[PathPart]) -> None:
-        """``release: sporadic`` goes with ``min_interarrival`` (and ``extra_interarrival`` with both)."""
-        if rel == "sporadic" and task.get("min_interarrival") is None:
-            self.error([*at, "min_interarrival"], "a sporadic task needs a minimum inter-arrival time; add e.g. "
-                                                  "'min_interarrival: 10 ms'")
-        if rel is not None and rel != "sporadic" and task.get("min_interarrival") is not None:
-            self.error([*at, "min_interarrival"], f"only sporadic tasks have a minimum inter-arrival time (this one "
-                                                  f"is released '{rel}'); remove it or set 'release: sporadic'")
-
     def kernel_checks(self, node_name: str, node: dict[str, Any], task: dict[str, Any], rel: str | None,
                       at: list[PathPart]) -> set[str]:
         """The kernel's own checks of a task (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
@@ -419,18 +407,13 @@ class _Checker:
         from netsim.kernel.building import task_spec
 
         times: dict[str, int | None] = {}
-        for key in ("period", "offset", "deadline", "wcet", "min_interarrival"):
+        for key in ("period", "offset", "deadline", "wcet"):
             value = task.get(key)
             times[key] = _time_or_none(value)
             if value is not None and (times[key] is None or (key != "offset" and times[key] <= 0)):
                 return set()  # the schema reports it
         if rel is not None and rel != "periodic":
             times["period"] = None
-        if rel != "sporadic":
-            times["min_interarrival"] = None
-        abort = task.get("abort_on_miss", False)
-        if not isinstance(abort, bool):
-            return set()  # the schema reports it
         priority = task.get("priority")
         if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
             return set()
@@ -439,8 +422,7 @@ class _Checker:
         try:
             spec = task_spec(node_name, name, period=times["period"], offset=times["offset"] or 0,
                              deadline=times["deadline"], priority=priority, wcet=times["wcet"],
-                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"),
-                             min_interarrival=times["min_interarrival"], abort_on_miss=abort)
+                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"))
             if is_builtin_policy(policy_name):
                 find_policy(policy_name)().check(node_name, spec)
         except BuildError as exc:
