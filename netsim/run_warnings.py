@@ -28,7 +28,8 @@ def load_warnings(metrics: Mapping[str, float], jobs: Any, nodes: Mapping[str, A
     metrics
         The run's metrics (``net.<name>.utilization``, ``net.<name>.copies``, ``net.<name>.dropped[.<reason>]``).
     jobs
-        The jobs table (``node, task`` columns).
+        The jobs table (``node, task`` columns): a DataFrame, a summary table, or the records' columns
+        (:class:`netsim.results.rows.Rows`, whose ``jobs["node"]`` is a numpy array).
     nodes
         The scenario's node specs (each with ``tasks``), to find tasks that never ran.
     networks

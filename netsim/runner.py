@@ -227,9 +227,10 @@ def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | N
     loggers = [logging.getLogger("netsim"), logging.getLogger("models")]
     for lg in loggers:
         lg.addHandler(capture)
-    try:
-        values = generic_metrics(result, sim, t_end_ns)
-        values.update(compute_metrics(result, list(scenario.metrics), baseline))
+    view = _metrics_view(result)  # a table a metric reads is built on the view: the run folder's CSVs are still
+    try:                           # written straight from the records (RunResult.table_rows)
+        values = generic_metrics(view, sim, t_end_ns)
+        values.update(compute_metrics(view, list(scenario.metrics), baseline))
     finally:
         for lg in loggers:
             lg.removeHandler(capture)
@@ -347,7 +348,8 @@ def run(
         from netsim.run_warnings import load_warnings
 
         mode = result.traces.get("jobs", "full")  # 'never ran' is known from the rows or the summary, not when off
-        ran = result.jobs if mode == "full" else result.job_summary
+        rows = result.table_rows("jobs")  # the records' columns: no DataFrame built for the warnings
+        ran = (result.jobs if rows is None else rows) if mode == "full" else result.job_summary
         extra = load_warnings(result.metrics.to_dict(), ran, scenario.nodes if mode != "off" else {},
                               scenario.networks or {})
         for text in extra:
@@ -417,13 +419,24 @@ def _baseline_key(scenario: Any) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+def _metrics_view(result: RunResult) -> RunResult:
+    """``result`` for the metrics: the same signals, metadata and records, with its unbuilt tables as their own
+    :class:`~netsim.results.Lazy` builders, so a table a metric reads is built on the view, not on ``result``."""
+    return RunResult(signals=result.signals, jobs=_lazy_view(result, "jobs"), messages=_lazy_view(result, "messages"),
+                     metrics=result.metrics, meta=result.meta, scenario=result.scenario,
+                     schedule=_lazy_view(result, "schedule"), out_dir=result.out_dir, traces=result.traces,
+                     job_summary=result.job_summary, message_summary=result.message_summary,
+                     job_rows=result.job_rows, message_rows=result.message_rows)
+
+
 def _shared(result: RunResult) -> RunResult:
     """A view of a cached result that a metric may modify without touching the cache (copy-on-write)."""
-    return RunResult(signals=result.signals.copy(deep=False), jobs=result.jobs.copy(deep=False),
-                     messages=result.messages.copy(deep=False), metrics=result.metrics.copy(deep=False),
+    return RunResult(signals=result.signals.copy(deep=False), jobs=_lazy_view(result, "jobs"),
+                     messages=_lazy_view(result, "messages"), metrics=result.metrics.copy(deep=False),
                      meta=dict(result.meta), scenario=result.scenario,
                      schedule=_lazy_view(result, "schedule"), traces=dict(result.traces),
-                     job_summary=result.job_summary, message_summary=result.message_summary)
+                     job_summary=result.job_summary, message_summary=result.message_summary,
+                     job_rows=result.job_rows, message_rows=result.message_rows)
 
 
 def _lazy_view(result: RunResult, name: str) -> Any:

@@ -8,6 +8,8 @@ Generic metrics (:func:`generic_metrics`, always added by the runner), named wit
     from the jobs table (finished jobs; a job unfinished at the end whose deadline passed counts as a miss).
 ``net.<network>.messages`` / ``.utilization`` / ``.lost`` / ``.loss_rate`` / ``.mean_delay_s`` / ``.max_delay_s``
     from the messages table, plus everything the network's own ``metrics(t_end)`` reports (prefixed).
+``energy.<node>.J`` / ``.cpu_J`` / ``.radio_J`` / ``.depleted_s`` ...
+    what a node's energy model reports (issue 20, :mod:`netsim.energy`; only nodes that have one).
 ``control.<node>.<task>.<name>``
     what a task's program reports from its ``metrics()`` method (e.g. ``state_feedback``: ``fused``,
     ``prediction_only``, ``stale``, ``mpc_fallbacks``; see :mod:`netsim.programs.state_feedback`).
@@ -122,6 +124,74 @@ def _network_metrics(messages: pd.DataFrame) -> dict[str, float]:
     return out
 
 
+def _rows(result: Any, name: str) -> Any:
+    """The records' columns of ``result``'s table ``name`` while its DataFrame is unbuilt
+    (:meth:`netsim.results.RunResult.table_rows`), else None (a result read back, or a table built)."""
+    fn = getattr(result, "table_rows", None)
+    return fn(name) if callable(fn) else None
+
+
+def _groups(*keys: list[Any]) -> dict[tuple[Any, ...], np.ndarray]:
+    """Row indices per distinct key tuple, each in table order, keys sorted (``groupby(..., sort=True)``)."""
+    index: dict[tuple[Any, ...], list[int]] = {}
+    for i, key in enumerate(zip(*keys)):
+        index.setdefault(key, []).append(i)
+    return {key: np.asarray(index[key], dtype=np.intp) for key in sorted(index)}
+
+
+def _mean_max(values: np.ndarray) -> tuple[float, float]:
+    """Mean and maximum of the non-NaN ``values`` as pandas' ``Series.mean``/``max`` give them (NaN when none):
+    the sum of every value with NaN counted as 0, divided by the count of the others."""
+    missing = np.isnan(values)
+    n = int(values.size - missing.sum())
+    if n == 0:
+        return math.nan, math.nan
+    kept = np.where(missing, 0.0, values) if missing.any() else values
+    return float(kept.sum() / n), float(np.max(values[~missing]))
+
+
+def _task_metrics_rows(rows: Any) -> dict[str, float]:
+    """:func:`_task_metrics` from the records' columns (:class:`netsim.results.rows.Rows`), no DataFrame."""
+    out: dict[str, float] = {}
+    if len(rows) == 0:
+        return out
+    outcome = rows.data["outcome"]
+    response = rows.array("response_s")
+    for (node, task), idx in _groups(rows.data["node"], rows.data["task"]).items():
+        labels = [outcome[i] for i in idx.tolist()]
+        killed = labels.count("killed")
+        resp = response[idx]
+        resp = resp[~np.isnan(resp)]  # killed and unfinished jobs have no response time
+        key = f"task.{node}.{task}"
+        out[f"{key}.jobs"] = float(len(idx))
+        out[f"{key}.deadline_misses"] = float(labels.count("missed") + killed)
+        out[f"{key}.killed"] = float(killed)
+        out[f"{key}.pending"] = float(labels.count("pending"))
+        out[f"{key}.max_response_s"] = float(resp.max()) if len(resp) else math.nan
+        out[f"{key}.mean_response_s"] = float(resp.sum() / len(resp)) if len(resp) else math.nan
+    return out
+
+
+def _network_metrics_rows(rows: Any) -> dict[str, float]:
+    """:func:`_network_metrics` from the records' columns (:class:`netsim.results.rows.Rows`), no DataFrame."""
+    out: dict[str, float] = {}
+    if len(rows) == 0:
+        return out
+    dropped_all = rows.array("dropped")
+    delivered_all = ~np.isnan(rows.array("delivered_s"))
+    delay_all = rows.array("delay_s")
+    for (net,), idx in _groups(rows.data["network"]).items():
+        dropped = dropped_all[idx]
+        lost = int(dropped.sum())
+        key = f"net.{net}"
+        out[f"{key}.messages"] = float(len(idx))
+        out[f"{key}.lost"] = float(lost)
+        out[f"{key}.loss_rate"] = float(lost / len(idx))
+        delays = delay_all[idx][~dropped & delivered_all[idx]]
+        out[f"{key}.mean_delay_s"], out[f"{key}.max_delay_s"] = _mean_max(delays)
+    return out
+
+
 #: Summary columns (``output.jobs: summary``) -> metric names: the same names as from the rows, plus percentiles.
 _JOB_SUMMARY_KEYS = {"jobs": "jobs", "deadline_misses": "deadline_misses", "killed": "killed", "pending": "pending",
                      "max_response_s": "max_response_s", "mean_response_s": "mean_response_s",
@@ -165,12 +235,14 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
         for node, grp in result.jobs.groupby("node", sort=True):
             out[f"cpu.{node}.utilization"] = float(grp["cpu_time_s"].astype(float).sum() / t_end_s)
     traces = getattr(result, "traces", None) or {}
+    rows = _rows(result, "jobs")
     if traces.get("jobs", "full") == "full":
-        out.update(_task_metrics(result.jobs, t_end_s))
+        out.update(_task_metrics_rows(rows) if rows is not None else _task_metrics(result.jobs, t_end_s))
     else:
         out.update(_summary_metrics(getattr(result, "job_summary", None), "task", ("node", "task"), _JOB_SUMMARY_KEYS))
     if traces.get("messages", "full") == "full":
-        out.update(_network_metrics(result.messages))
+        rows = _rows(result, "messages")
+        out.update(_network_metrics_rows(rows) if rows is not None else _network_metrics(result.messages))
     else:
         out.update(_summary_metrics(getattr(result, "message_summary", None), "net", ("network",),
                                     _MESSAGE_SUMMARY_KEYS))
@@ -187,6 +259,11 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
                 v = extra[k]
                 if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
                     out[f"net.{name}.{k}"] = float(v)
+        energy = getattr(sim, "energy", None) or {}
+        for node in sorted(energy):  # nodes with an energy model (issue 20): energy.<node>.J, ...
+            extra = energy[node].metrics(t_end_ns)
+            for k in sorted(extra):
+                out[f"energy.{node}.{k}"] = float(extra[k])
         programs = getattr(sim, "programs", None) or {}
         for key in sorted(programs):  # "node.task": a program's own counters (state_feedback: fallbacks ...)
             fn = getattr(programs[key], "metrics", None)

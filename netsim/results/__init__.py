@@ -135,6 +135,18 @@ class RunResult:
     job_summary: pd.DataFrame | None = None
     #: Per-network statistics (``output.messages: summary``; columns :data:`MESSAGE_SUMMARY_COLUMNS`), else None.
     message_summary: pd.DataFrame | None = None
+    #: The jobs table's columns straight from the records (:class:`netsim.results.rows.Rows`; this run's, not one
+    #: read back): ``jobs.csv`` and the metrics are made from them, ``jobs`` is built from them when read.
+    job_rows: Any = None
+    #: The messages table's columns straight from the records (as :attr:`job_rows`).
+    message_rows: Any = None
+
+    def table_rows(self, name: str) -> Any:
+        """The :class:`~netsim.results.rows.Rows` of table ``name`` (``"jobs"`` or ``"messages"``) while its
+        DataFrame has not been built (nothing can have changed it), else None: read the DataFrame."""
+        if type(object.__getattribute__(self, name)) is not Lazy:
+            return None
+        return object.__getattribute__(self, "job_rows" if name == "jobs" else "message_rows")
 
     @property
     def status(self) -> str:
@@ -177,10 +189,14 @@ class RunResult:
             write_atomic(out / "scenario.yaml",
                          yaml.dump(self.scenario, Dumper=dumper, sort_keys=False, allow_unicode=True))
         write_csv(self.signals, out / "signals.csv")
-        for name, table, summary in (("jobs", self.jobs, self.job_summary),
-                                     ("messages", self.messages, self.message_summary)):
+        for name, summary in (("jobs", self.job_summary), ("messages", self.message_summary)):
             if self.traces.get(name, "full") == "full":
-                write_csv(table, out / f"{name}.csv")
+                rows = self.table_rows(name)
+                chunks = rows.csv_chunks() if rows is not None else None
+                if chunks is not None:  # straight from the records: the same bytes as the DataFrame's
+                    write_atomic(out / f"{name}.csv", chunks)
+                else:
+                    write_csv(getattr(self, name), out / f"{name}.csv")
             if summary is not None:
                 write_csv(summary, out / f"{name}_summary.csv")
         from netsim.status import ERROR, INTERRUPTED, kind_of

@@ -16,6 +16,7 @@ from netsim.results.tables import (
     signals_table,
     summary_table,
 )
+from netsim.results.rows import Rows, job_rows, message_rows
 from netsim.results.traces import JobSummary, MessageSummary
 
 __all__ = ["collect"]
@@ -28,19 +29,20 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
     rec = sim.env.recorder
     signals = signals_table(rec.times, rec.values, order=sim.scenario.record)
     output = sim.scenario.output
-    job_rows = [row for k in sim.kernels.values() if isinstance(k.job_records, JobSummary)
-                for row in k.job_records.rows()]
-    msg_rows = [row for n in sim.networks.values() if isinstance(n.records, MessageSummary) for row in n.records.rows()]
-    job_frames = [jobs_table(k.job_records, name) for name, k in sim.kernels.items()
-                  if not isinstance(k.job_records, JobSummary)]
-    jobs = pd.concat(job_frames, ignore_index=True) if job_frames else jobs_table([])
-    if not jobs.empty:
-        jobs = jobs.sort_values(["release_s", "node", "task", "job_id"], kind="stable").reset_index(drop=True)
-    msg_frames = [messages_table(net.records) for net in sim.networks.values()
-                  if not isinstance(net.records, MessageSummary)]
-    messages = pd.concat(msg_frames, ignore_index=True) if msg_frames else messages_table([])
-    if not messages.empty:
-        messages = messages.sort_values(["msg_id", "network", "receiver"], kind="stable").reset_index(drop=True)
+    job_stats = [row for k in sim.kernels.values() if isinstance(k.job_records, JobSummary)
+                 for row in k.job_records.rows()]
+    msg_stats = [row for n in sim.networks.values() if isinstance(n.records, MessageSummary) for row in n.records.rows()]
+    full_kernels = [(name, k.job_records) for name, k in sim.kernels.items()
+                    if not isinstance(k.job_records, JobSummary)]
+    full_networks = [net.records for net in sim.networks.values() if not isinstance(net.records, MessageSummary)]
+    try:  # columns straight from the records; a DataFrame only when result.jobs / .messages is read
+        job_cols: Rows | None = job_rows(full_kernels)
+        msg_cols: Rows | None = message_rows(full_networks)
+        jobs: Any = Lazy(job_cols.frame)
+        messages: Any = Lazy(msg_cols.frame)
+    except TypeError:  # records whose sort keys do not compare (mixed types): the tables through pandas
+        job_cols = msg_cols = None
+        jobs, messages = _jobs_frame(full_kernels), _messages_frame(full_networks)
     traces_kept = [(name, getattr(k, "schedule", [])) for name, k in sim.kernels.items()]
 
     def schedule_frame() -> pd.DataFrame:  # built when first read (the Gantt chart): most runs never do
@@ -50,6 +52,25 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
     schedule = Lazy(schedule_frame)
     traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
     return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
-                     job_summary=summary_table(job_rows, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
-                     message_summary=summary_table(msg_rows, MESSAGE_SUMMARY_COLUMNS)
+                     job_rows=job_cols, message_rows=msg_cols,
+                     job_summary=summary_table(job_stats, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
+                     message_summary=summary_table(msg_stats, MESSAGE_SUMMARY_COLUMNS)
                      if output.messages == "summary" else None)
+
+
+def _jobs_frame(kernels: list[tuple[str, Any]]) -> pd.DataFrame:
+    """The jobs table built through pandas (records :func:`job_rows` cannot sort)."""
+    frames = [jobs_table(records, name) for name, records in kernels]
+    jobs = pd.concat(frames, ignore_index=True) if frames else jobs_table([])
+    if not jobs.empty:
+        jobs = jobs.sort_values(["release_s", "node", "task", "job_id"], kind="stable").reset_index(drop=True)
+    return jobs
+
+
+def _messages_frame(networks: list[Any]) -> pd.DataFrame:
+    """The messages table built through pandas (records :func:`message_rows` cannot sort)."""
+    frames = [messages_table(records) for records in networks]
+    messages = pd.concat(frames, ignore_index=True) if frames else messages_table([])
+    if not messages.empty:
+        messages = messages.sort_values(["msg_id", "network", "receiver"], kind="stable").reset_index(drop=True)
+    return messages
