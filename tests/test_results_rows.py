@@ -121,11 +121,16 @@ def test_empty_tables_have_every_column(tmp_path: Path) -> None:
     assert _csv(message_rows([]), tmp_path / "c.csv") == _frame_csv(messages_table([]), tmp_path / "d.csv")
 
 
-def test_an_extra_job_column_comes_before_outcome() -> None:
+def test_an_extra_job_column_comes_before_outcome_when_a_record_sets_it() -> None:
     recs = _jobs(random.Random(3), "n", 5)
-    rows = job_rows([("n", recs)], extra=(Column("arrival_s", "arrival", "time"),))
+    extra = (Column("arrival_s", "late", "time"),)
+    assert job_rows([("n", recs)], extra=extra).columns == list(jobs_table([]).columns)  # no record has 'late'
+    recs = [{**{f: getattr(r, f) for f in r.__slots__}, "late": None} for r in recs]
+    recs[1]["late"] = 1_500_000_000
+    rows = job_rows([("n", recs)], extra=extra)
     assert rows.columns[-2:] == ["arrival_s", "outcome"]
-    assert rows.frame()["arrival_s"].isna().all()  # JobRecord.arrival is None (no release jitter)
+    assert rows.frame()["arrival_s"].isna().sum() == 4
+    assert 1.5 in list(rows.frame()["arrival_s"])
 
 
 def test_run_writes_the_tables_from_the_records_and_builds_frames_when_read(tmp_path: Path) -> None:

@@ -275,7 +275,8 @@ def job_rows(kernels: Iterable[tuple[str, Iterable[Any]]], extra: Sequence[Colum
     """The jobs table of the kernels ``(name, records)``: sorted by release time, node, task and job id (stable,
     kernels in the given order), with the derived ``outcome`` column last.
 
-    ``extra`` columns (optional job fields) come after ``killed`` and before ``outcome``.
+    ``extra`` columns (optional job fields) come after ``killed`` and before ``outcome``; one whose values are all
+    None (no record has the field set) is left out, so a run that does not use the field has the same table.
     """
     from netsim.kernel.records import job_outcome  # here: importing netsim.kernel loads simpy
 
@@ -291,6 +292,7 @@ def job_rows(kernels: Iterable[tuple[str, Iterable[Any]]], extra: Sequence[Colum
     if not parts:
         return Rows([], empty_columns=[c.name for c in fields] + ["outcome"])
     cols = _ordered(fields, parts, key)
+    fields = tuple(JOB_FIELDS) + tuple(c for c in extra if any(v is not None for v in cols[c.name]))
     outcome = Column("outcome", "outcome", "str")
     cols["outcome"] = [job_outcome(d, bool(k), m) for d, k, m in zip(cols["deadline_s"], cols["killed"],
                                                                       cols["deadline_met"])]
