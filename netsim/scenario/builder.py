@@ -18,6 +18,7 @@ What :func:`build` does, in order:
    :class:`~netsim.programs.ProgramContext`; timers and external triggers are created from ``trigger:``;
 6. the networks (``make_network``), attached to their nodes' kernels; tasks with
    ``release: on_message:<net>`` and handlers with ``trigger: {on_message: net}`` are bound to receptions;
+   the energy meters of the nodes with ``energy:`` (:mod:`netsim.energy`);
 7. recording of the scenario signals named in ``record:`` (at 0 and at every jump; continuous ones on the grid).
 
 Steps 5 and 6 are :mod:`netsim.scenario.wiring` (shared with ``netsim validate``); its names are re-exported here.
@@ -31,6 +32,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from netsim.energy import attach_energy
 from netsim.env import SimEnv, run_events
 from netsim.errors import BuildError, ConfigError, NetsimError
 from netsim.scenario.wiring import bind_receivers, build_networks, checked_call, wire_kernels
@@ -76,6 +78,7 @@ class Simulation:
     networks: dict[str, Any] = field(default_factory=dict)
     programs: dict[str, Any] = field(default_factory=dict)
     duration: int = 0
+    energy: dict[str, Any] = field(default_factory=dict)  # node -> EnergyMeter (nodes with an energy model)
     finished_at: int | None = None
 
     def run(self, until: int | None = None, progress: ProgressFn | None = None) -> int:
@@ -430,6 +433,8 @@ def build(scenario: Any) -> Simulation:
     kernels, programs, bindings = _build_kernels(scenario, env, signals, channels, plant)
     networks = build_networks(scenario, env, kernels)
     bind_receivers(kernels, networks, bindings)
+    energy = attach_energy(scenario, env, kernels, networks)
     _record_signals(scenario, env, signals)
     return Simulation(scenario=scenario, env=env, plant=plant, signals=signals, channels=channels,
-                      kernels=kernels, networks=networks, programs=programs, duration=scenario.duration)
+                      kernels=kernels, networks=networks, programs=programs, duration=scenario.duration,
+                      energy=energy)

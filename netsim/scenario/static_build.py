@@ -116,6 +116,7 @@ def build_problems(scenario: Any) -> list[Problem]:
     from netsim.env import SimEnv
     from netsim.scenario.builder import (_build_io, _build_plant, _make_signals, bind_receivers, build_networks,
                                          wire_kernels)
+    from netsim.energy import attach_energy
 
     if not _netsim_kernels(scenario):
         return []
@@ -130,6 +131,7 @@ def build_problems(scenario: Any) -> list[Problem]:
         if _netsim_networks(scenario):
             networks = build_networks(scenario, env, kernels)
             bind_receivers(kernels, networks, bindings)
+            attach_energy(scenario, env, kernels, networks)
         for name, kernel in kernels.items():
             try:
                 kernel.validate()
