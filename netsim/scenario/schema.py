@@ -33,7 +33,8 @@ Public classes and their fields (times in ns)
 ``SignalSpec``
     ``type`` and ``params`` (the other keys of the YAML mapping).
 ``NodeSpec``
-    ``policy, context_switch, tasks: list[TaskSpec], handlers: list[HandlerSpec]``.
+    ``policy, context_switch, tasks: list[TaskSpec], handlers: list[HandlerSpec], energy`` (CPU and radio power, battery:
+    :class:`~netsim.energy.params.EnergyModel`, or None).
 ``TaskSpec``
     ``name, program, params, period, offset, deadline (default: period), priority, execution, wcet,
     release ("periodic" | "aperiodic" | "on_message:<net>"; default periodic when a period is given),
@@ -86,6 +87,7 @@ from pydantic import (
     model_validator,
 )
 
+from netsim.energy.params import EnergyModel
 from netsim.scenario.paths import format_path, parse_path, plain_copy
 from netsim.scenario.problems import Problem, ScenarioError
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
@@ -638,6 +640,7 @@ class NodeSpec(SpecModel):
     context_switch: Time = 0
     tasks: list[TaskSpec] = Field(default_factory=list)
     handlers: list[HandlerSpec] = Field(default_factory=list)
+    energy: EnergyModel | None = None  # CPU and radio power, battery (issue 20): netsim.energy
 
     def task(self, name: str) -> TaskSpec:
         """The task called ``name`` (KeyError if none)."""
@@ -803,6 +806,9 @@ class Scenario(SpecModel):
         data = self.model_dump(mode="json")
         if not data.get("plugins"):
             data.pop("plugins", None)  # most scenarios have none: their resolved form (and hash) stays as it was
+        for node in data.get("nodes", {}).values():  # a node without an energy model resolves as before (issue 20)
+            if node.get("energy", 0) is None:
+                del node["energy"]
         for key, default in OutputSpec.TRACE_DEFAULTS.items():  # the same for the trace settings (issue 19)
             if data["output"].get(key) == default:
                 data["output"].pop(key)
