@@ -65,6 +65,7 @@ from netsim.kernel.interpreter import Interpreter
 from netsim.kernel.job import Job, JobContext
 from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.monitor import monitor_killed
+from netsim.kernel.node_sync import NodeSync
 from netsim.kernel.policies import Policy, resolve_policy
 from netsim.kernel.records import JobRecord, deadline_verdict
 from netsim.kernel.states import BLOCKED, DONE, NEW, READY
@@ -104,6 +105,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
     ----------
     shared : dict
         Per-node state shared by the node's bodies.
+    sync : NodeSync
+        The node's named mailboxes, semaphores, events and monitors (``nodes.<n>.sync`` in a scenario).
     job_records : list[JobRecord]
         One record per finished or killed task job (plus, after the run, one per unfinished job).
     schedule : list[tuple[str, str, int, int]]
@@ -128,6 +131,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
         self.trace = bool(trace)
         self.livelock_limit = int(livelock_limit)
         self.shared: dict[str, Any] = {}
+        self.sync = NodeSync(name)
         self.job_records: list[JobRecord] = []
         self.schedule: list[tuple[str, str, int, int]] = []
         self.tasks: dict[str, Task] = {}

@@ -90,6 +90,7 @@ from pydantic import (
 from netsim.energy.params import EnergyModel
 from netsim.scenario.paths import format_path, parse_path, plain_copy
 from netsim.scenario.problems import Problem, ScenarioError
+from netsim.scenario.schema_sync import SyncSpec
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
 from netsim.kernel.task import TaskSpec as KernelTaskSpec
 from netsim.units import Duration, StrictModel, Time
@@ -641,6 +642,7 @@ class NodeSpec(SpecModel):
     tasks: list[TaskSpec] = Field(default_factory=list)
     handlers: list[HandlerSpec] = Field(default_factory=list)
     energy: EnergyModel | None = None  # CPU and radio power, battery (issue 20): netsim.energy
+    sync: SyncSpec | None = None  # mailboxes, semaphores, events, monitors (issue 20): netsim.scenario.schema_sync
 
     def task(self, name: str) -> TaskSpec:
         """The task called ``name`` (KeyError if none)."""
@@ -809,6 +811,8 @@ class Scenario(SpecModel):
         for node in data.get("nodes", {}).values():  # a node without an energy model resolves as before (issue 20)
             if node.get("energy", 0) is None:
                 del node["energy"]
+            if node.get("sync", 0) is None:  # the same for the sync objects
+                del node["sync"]
         for key, default in OutputSpec.TRACE_DEFAULTS.items():  # the same for the trace settings (issue 19)
             if data["output"].get(key) == default:
                 data["output"].pop(key)

@@ -56,6 +56,7 @@ from netsim.scenario.limits import NAME_MAX, LineOf, limit_problems
 from netsim.scenario.messages import problems_from_validation_error
 from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path
 from netsim.scenario.problems import WARNING, Problem, ScenarioError
+from netsim.scenario.schema_sync import sync_ref_problems
 from netsim.kernel.policies import find_policy, is_builtin_policy
 from netsim.timebase import TimeParseError, format_time, parse_time
 
@@ -356,6 +357,7 @@ class _Checker:
                 raw = {} if raw is None else raw
                 model = self.params(program, raw, [*at, "params"], format_path(at))
                 values = _values(model) if model is not None else _d(raw)
+                self.problems += sync_ref_problems(name, node, model, [*at, "params"])
                 if kind == "tasks" and item.get("period") is None:
                     self.pid_period(model, [*at, "params"])
                 self.conventions(name, values, [*at, "params"])

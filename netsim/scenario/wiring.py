@@ -60,6 +60,10 @@ def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
         env.components[f"kernel.{node_name}"] = kernel
         if attach is not None:
             attach(kernel)
+        if node.sync is not None:  # before the programs, which look their objects up by name
+            from netsim.scenario.schema_sync import create_sync
+
+            checked_call(create_sync, f"{npath}.sync", kernel, node, f"{npath}.sync")
         for i, h in enumerate(node.handlers):
             hpath = f"{npath}.handlers[{i}]"
             checked_call(kernel.add_handler, hpath, h.kernel_spec(), body(h, kernel, node_name, hpath, None))
