@@ -55,7 +55,7 @@ class KernelBuilder:
     _bindings: dict[str, str]
     _ain: dict[str, Callable[[int], Any]]
     _aout: dict[str, Callable[[int, Any], None]]
-    _on_periodic_release: Callable[[Any], None]
+    _schedule_first_release: Callable[[Task], None]
     _on_timer: Callable[[Any], None]
     _get: Callable[..., Any]
 
@@ -118,8 +118,8 @@ class KernelBuilder:
         self.policy.check(node, spec)
         task = Task(spec, body, data)
         self.tasks[name] = task
-        if spec.period is not None:
-            schedule_call(self._sim, spec.offset, NORMAL, self._on_periodic_release, task)
+        if spec.self_released:
+            self._schedule_first_release(task)
         return task
 
     def create_handler(self, name: str, body: Callable[[Job], Any], *, priority: int | float = 0, latency: int = 0,

@@ -33,6 +33,7 @@ _DISTS: dict[str, tuple[str, ...]] = {
     "uniform": ("low", "high"),
     "normal": ("mean", "std", "min", "max"),
     "empirical": ("values",),
+    "exponential": ("mean", "shift"),
 }
 
 
@@ -63,7 +64,7 @@ class ExecTime:
     Attributes
     ----------
     kind : str
-        ``"constant"``, ``"uniform"``, ``"normal"``, ``"empirical"`` or ``"function"``.
+        ``"constant"``, ``"uniform"``, ``"normal"``, ``"empirical"``, ``"exponential"`` or ``"function"``.
     const : int | None
         The duration of a ``"constant"`` model (what every :meth:`draw` returns), else ``None``; the kernel
         reads it instead of calling :meth:`draw`.
@@ -116,6 +117,15 @@ class ExecTime:
         return cls("empirical", values=np.asarray(vals, dtype=np.int64))
 
     @classmethod
+    def exponential(cls, mean: int, shift: int = 0) -> "ExecTime":
+        """``shift`` plus an exponential variable of mean ``mean`` (ns, rounded to integer ns): e.g. the random
+        part of a sporadic task's inter-arrival time (unbounded: :attr:`upper_bound` is ``None``)."""
+        mean_ns = _ns(mean, "exponential time 'mean'")
+        if mean_ns <= 0:
+            raise ConfigError(f"exponential time needs a positive mean, got {mean_ns} ns")
+        return cls("exponential", a=mean_ns, lo=_ns(shift, "exponential time 'shift'"))
+
+    @classmethod
     def function(cls, fn: Callable[[Any], int]) -> "ExecTime":
         """Data-dependent: ``fn(job) -> ns`` is called at each request (e.g. depends on ``job.data``)."""
         if not callable(fn):
@@ -131,7 +141,8 @@ class ExecTime:
         spec
             ``"0.5 ms"`` (or a bare number of **seconds**), an :class:`ExecTime` (returned as is), or a
             mapping ``{dist: uniform, low, high}``, ``{dist: normal, mean, std, min, max}``,
-            ``{dist: empirical, values: [...]}``, ``{dist: constant, value}``; times in the mapping are
+            ``{dist: empirical, values: [...]}``, ``{dist: constant, value}``, ``{dist: exponential, mean,
+            shift}``; times in the mapping are
             strings with units or seconds.
 
         Raises
@@ -175,6 +186,9 @@ class ExecTime:
             return cls.normal(_spec_time(need("mean"), "execution time 'mean'"),
                               _spec_time(need("std"), "execution time 'std'"), lo,
                               None if hi is None else _spec_time(hi, "execution time 'max'"))
+        if dist == "exponential":
+            return cls.exponential(_spec_time(need("mean"), "exponential time 'mean'"),
+                                   _spec_time(spec.get("shift", 0), "exponential time 'shift'"))
         values = need("values")
         if not isinstance(values, (list, tuple)):
             raise ConfigError(f"execution time dist 'empirical' needs a list of 'values', got {values!r}")
@@ -207,6 +221,8 @@ class ExecTime:
             values = self._values
             assert values is not None
             return int(values[int(rng.integers(0, len(values)))])
+        if kind == "exponential":
+            return self._lo + int(round(float(rng.exponential(float(self._a)))))
         assert self._fn is not None
         ns = self._fn(job)
         try:
@@ -238,6 +254,8 @@ class ExecTime:
             return f"ExecTime.uniform({format_time(self._a)!r}, {format_time(self._b)!r})"
         if self.kind == "normal":
             return f"ExecTime.normal(mean={self._a}, std={self._b}, lo={self._lo}, hi={self._hi})"
+        if self.kind == "exponential":
+            return f"ExecTime.exponential(mean={self._a}, shift={self._lo})"
         if self.kind == "empirical":
             return f"ExecTime.empirical(<{0 if self._values is None else len(self._values)} values>)"
         return f"ExecTime.function({self._fn!r})"

@@ -156,6 +156,9 @@ class Job(JobState):
         True when it was ended by ``kill``.
     invoker : str | None
         For handler invocations: who raised it (timer, trigger, network, task name).
+    arrival : int | None
+        For a task with release jitter: the time the job actually arrived (``release`` is the nominal one);
+        ``None`` otherwise.
     """
 
     start: int | None = None
@@ -164,6 +167,7 @@ class Job(JobState):
     preemptions = 0
     killed = False
     invoker: str | None = None
+    arrival: int | None = None
     wcet_overrun = False
     deadline_overrun = False
 

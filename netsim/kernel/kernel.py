@@ -58,6 +58,7 @@ from typing import Any, Callable
 
 from netsim.env import SimEnv
 from netsim.errors import BuildError, SimulationError
+from netsim.kernel.arrivals import Arrivals
 from netsim.kernel.building import KernelBuilder
 from netsim.kernel.dispatch import Dispatcher
 from netsim.kernel.events import DEADLINE, NORMAL, URGENT, schedule_call
@@ -82,7 +83,7 @@ log = logging.getLogger(__name__)
 _WINDOW_RANK = (-1, 0)
 
 
-class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
+class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
     """A simulated real-time computer: tasks, interrupt handlers, a scheduler and I/O.
 
     Parameters
@@ -274,13 +275,18 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
             raise SimulationError(f"node '{self.name}': no {what} '{name}'{did_you_mean(str(name), table)}")
         return obj
 
-    def _release(self, task: Task, data: Any) -> Job:
+    def _release(self, task: Task, data: Any, nominal: int | None = None) -> Job:
+        """Release a job of ``task`` now; ``nominal``: its nominal release (a jittered arrival, see
+        :mod:`netsim.kernel.arrivals`), from which its release time and deadline count."""
         now = self._sim.now
         spec = task.spec
         jid = task.released
         task.released = jid + 1
-        deadline = None if spec.deadline is None else now + spec.deadline
-        job = Job(self._ctx, task, jid, task.data if data is None else data, now, deadline)
+        release = now if nominal is None else nominal
+        deadline = None if spec.deadline is None else release + spec.deadline
+        job = Job(self._ctx, task, jid, task.data if data is None else data, release, deadline)
+        if nominal is not None:
+            job.arrival = now
         key = task.key
         if key is None:
             key = self.policy.key(job)
@@ -289,8 +295,9 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
         job._rank = job._base_rank = (1, key)
         job._np = not (spec.preemptible and self.policy.preemptive)
         job._budget = spec.wcet
-        if task.deadline_handler is not None and deadline is not None:
-            heappush(self._queue, (deadline, DEADLINE, next(self._eid), (self._on_deadline, job)))
+        if task.watch_deadline and deadline is not None:  # a deadline handler or abort_on_miss
+            heappush(self._queue, (deadline if deadline > now else now, DEADLINE, next(self._eid),
+                                   (self._on_deadline, job)))
         if task.active is None:
             task.active = job
             self._make_ready(job, now)
@@ -381,7 +388,11 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
         if job.finish is not None:
             return
         job.deadline_overrun = True
-        self._fire_overrun(job._task.deadline_handler, job, "deadline")
+        task = job._task
+        if task.deadline_handler is not None or not task.spec.abort_on_miss:
+            self._fire_overrun(task.deadline_handler, job, "deadline")
+        if task.spec.abort_on_miss and job.finish is None:
+            self._kill(job)  # abort on deadline miss: the record is killed (and so missed)
         self._request_dispatch()
 
     # ================================================================= ending jobs
@@ -398,11 +409,12 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
             if killed:  # never completed: no response time, and a miss (deadline_verdict)
                 self.job_records.append(JobRecord(
                     task.name, self.name, job.job_id, job.release, job.start, now, None, deadline, False,
-                    job.preemptions, job.cpu_time, True))
+                    job.preemptions, job.cpu_time, True, job.arrival))
             else:  # deadline_verdict(deadline, now, False), inlined on the hot path
                 self.job_records.append(JobRecord(
                     task.name, self.name, job.job_id, job.release, job.start, now, now - job.release, deadline,
-                    True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, False))
+                    True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, False,
+                    job.arrival))
         if task.queue:
             nxt = task.queue.popleft()
             task.active = nxt
@@ -437,7 +449,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing):
             if not job.is_handler:
                 self.job_records.append(JobRecord(
                     job.task_name, self.name, job.job_id, job.release, None, now, None,
-                    job.deadline, deadline_verdict(job.deadline, now, True), 0, 0, True))
+                    job.deadline, deadline_verdict(job.deadline, now, True), 0, 0, True, job.arrival))
             return
         job._wake = None
         gen = job._gen

@@ -7,9 +7,9 @@ The schedule trace is a plain list of ``(task, state, t0, t1)`` tuples (``state`
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable
+from typing import Any, Iterable
 
-__all__ = ["JobRecord", "busy_time", "deadline_verdict", "job_outcome", "OUTCOMES"]
+__all__ = ["JobRecord", "busy_time", "deadline_verdict", "job_outcome", "has_arrivals", "ARRIVAL_COLUMNS", "OUTCOMES"]
 
 #: The values of :func:`job_outcome` (the ``outcome`` column of ``jobs.csv``).
 OUTCOMES = ("met", "missed", "killed", "pending", "done")
@@ -88,6 +88,9 @@ class JobRecord:
         CPU time consumed, including the context switches charged to it.
     killed
         Ended by ``kill`` rather than by returning.
+    arrival
+        The actual arrival of a job of a task with release jitter (``release`` is its nominal release, and
+        ``response`` counts from it); ``None`` for every other job (it arrived at ``release``).
     """
 
     task: str
@@ -102,6 +105,30 @@ class JobRecord:
     preemptions: int
     cpu_time: int
     killed: bool
+    arrival: int | None = None
+
+    @property
+    def release_jitter(self) -> int:
+        """``arrival - release``: how late the job arrived after its nominal release (0 without jitter)."""
+        return 0 if self.arrival is None else self.arrival - self.release
+
+    @property
+    def response_from_arrival(self) -> int | None:
+        """``finish - arrival`` (``response`` for a job without jitter; ``None`` when ``response`` is)."""
+        if self.response is None or self.finish is None:
+            return None
+        return self.response if self.arrival is None else self.finish - self.arrival
+
+
+#: The jobs table's columns for release jitter, ``(column, JobRecord attribute)``: only in the tables of runs
+#: with at least one jittered job (:func:`has_arrivals`), so other runs' tables keep their columns.
+ARRIVAL_COLUMNS: tuple[tuple[str, str], ...] = (("release_jitter_s", "release_jitter"),
+                                                ("response_from_arrival_s", "response_from_arrival"))
+
+
+def has_arrivals(records: Iterable[Any]) -> bool:
+    """True when a job of ``records`` has an ``arrival`` (its task has release jitter)."""
+    return any(getattr(r, "arrival", None) is not None for r in records)
 
 
 def busy_time(intervals: Iterable[tuple[str, str, int, int]], t0: int, t1: int) -> int:

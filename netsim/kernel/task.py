@@ -123,6 +123,21 @@ class TaskSpec:
     wcet_handler, deadline_handler
         A handler name (invoked with the overrunning job as data) or a callable ``fn(job)`` run at the
         overrun instant (``None``: the overrun is only logged).
+    release_jitter
+        Release jitter of a periodic or sporadic task: each job arrives a draw of this distribution after
+        its nominal release (an :class:`~netsim.kernel.exectime.ExecTime`, or an integer of ns for a
+        constant delay), drawn from the task's stream ``kernel.<node>.release.<task>``. ``job.release``, the
+        absolute deadline and the record's ``response`` are measured from the nominal release; the record's
+        ``arrival`` is the actual arrival.
+    min_interarrival
+        A **sporadic** task (no ``period``): the kernel releases it by itself, successive arrivals at least
+        this far apart (the first at ``offset``); the deadline defaults to it.
+    extra_interarrival
+        A sporadic task's random gap added to ``min_interarrival`` at each arrival (an ``ExecTime``, e.g.
+        ``ExecTime.exponential(mean)``; ``None``: arrivals exactly ``min_interarrival`` apart).
+    abort_on_miss
+        Kill a job that has not finished at its absolute deadline (after its ``deadline_handler``): its
+        record is killed and missed, and the task's next job may start.
     """
 
     name: str
@@ -134,6 +149,15 @@ class TaskSpec:
     preemptible: bool = True
     wcet_handler: str | Callable[[Any], Any] | None = None
     deadline_handler: str | Callable[[Any], Any] | None = None
+    release_jitter: Any = None
+    min_interarrival: int | None = None
+    extra_interarrival: Any = None
+    abort_on_miss: bool = False
+
+    @property
+    def self_released(self) -> bool:
+        """True for a task the kernel releases by itself: periodic (``period``) or sporadic."""
+        return self.period is not None or self.min_interarrival is not None
 
     def checked(self, node: str) -> TaskSpec:
         """This description validated for node ``node``, with ``deadline`` defaulting to the period.
@@ -150,11 +174,28 @@ class TaskSpec:
         period_ns = check_time(node, name, "period", self.period, positive=True, allow_none=True)
         offset_ns = check_time(node, name, "offset", self.offset)
         assert offset_ns is not None
-        if period_ns is None and offset_ns:
-            raise task_error(node, name, "offset", "applies to periodic tasks only; give a period or drop it")
+        mia_ns = check_time(node, name, "min_interarrival", self.min_interarrival, positive=True, allow_none=True)
+        if mia_ns is not None and period_ns is not None:
+            raise task_error(node, name, "min_interarrival", "is for sporadic tasks, which have no period; drop "
+                             "'period' (a sporadic task) or 'min_interarrival' (a periodic task)")
+        if period_ns is None and mia_ns is None and offset_ns:
+            raise task_error(node, name, "offset", "applies to periodic and sporadic tasks only; give a period or "
+                             "drop it")
         deadline_ns = check_time(node, name, "deadline", self.deadline, positive=True, allow_none=True)
         if deadline_ns is None:
-            deadline_ns = period_ns
+            deadline_ns = period_ns if mia_ns is None else mia_ns
+        jitter = _distribution(node, name, "release_jitter", self.release_jitter)
+        if jitter is not None and period_ns is None and mia_ns is None:
+            raise task_error(node, name, "release_jitter", "applies to periodic and sporadic tasks only (an "
+                             "aperiodic task is released by program code or messages); give a period or drop it")
+        extra = _distribution(node, name, "extra_interarrival", self.extra_interarrival)
+        if extra is not None and mia_ns is None:
+            raise task_error(node, name, "extra_interarrival", "needs 'min_interarrival' (the random gap is added "
+                             "to it between two arrivals of a sporadic task)")
+        if not isinstance(self.abort_on_miss, bool):
+            raise task_error(node, name, "abort_on_miss", f"must be true or false, got {self.abort_on_miss!r}")
+        if self.abort_on_miss and deadline_ns is None:
+            raise task_error(node, name, "abort_on_miss", "needs a deadline (or a period) to abort the job at")
         priority = self.priority
         if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
             raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
@@ -168,7 +209,23 @@ class TaskSpec:
         if self.deadline_handler is not None and deadline_ns is None:
             raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
         return TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(self.preemptible),
-                        self.wcet_handler, self.deadline_handler)
+                        self.wcet_handler, self.deadline_handler, jitter, mia_ns, extra, self.abort_on_miss)
+
+
+def _distribution(node: str, task: str, field: str, value: Any) -> Any:
+    """A distribution field of a task as an :class:`~netsim.kernel.exectime.ExecTime` (an int: constant ns)."""
+    if value is None:
+        return None
+    from netsim.kernel.exectime import ExecTime  # the run time (numpy) only for tasks that use the field
+
+    if isinstance(value, ExecTime):
+        return value
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise task_error(node, task, field, f"must be an ExecTime distribution or an integer number of ns, got "
+                         f"{value!r}")
+    if value < 0:
+        raise task_error(node, task, field, f"must not be negative, got {format_time(int(value))}")
+    return ExecTime.constant(int(value))
 
 
 @dataclass(frozen=True)
@@ -209,7 +266,7 @@ class Task:
     """Run-time state of a task: its body, its FIFO of released jobs and its counters."""
 
     __slots__ = ("spec", "name", "body", "data", "wcet_handler", "deadline_handler", "queue", "active",
-                 "released", "key", "cpu", "trace_state", "trace_since")
+                 "released", "key", "cpu", "trace_state", "trace_since", "watch_deadline", "rng", "first_release")
 
     def __init__(self, spec: TaskSpec, body: Callable[[Any], Any], data: Any) -> None:
         self.spec = spec
@@ -225,6 +282,9 @@ class Task:
         self.cpu = 0  # CPU time consumed by all its jobs, ns
         self.trace_state: str | None = None
         self.trace_since = 0
+        self.watch_deadline = spec.deadline_handler is not None or spec.abort_on_miss  # push a deadline check
+        self.rng: Any = None  # the task's own stream for release jitter and sporadic gaps (set by add_task)
+        self.first_release: int | None = None  # nominal time of the first self-release
 
 
 class Handler:

@@ -122,7 +122,7 @@ class Tracing:
                 cpu = job.cpu_time + (partial if job is running else 0)
                 rec = JobRecord(task.name, self.name, job.job_id, job.release, job.start, None, None, job.deadline,
                                 deadline_verdict(job.deadline, None, False, t_end),
-                                job.preemptions + (windows if job is running else 0), cpu, False)
+                                job.preemptions + (windows if job is running else 0), cpu, False, job.arrival)
                 self._unfinished.append(rec)
         self.job_records.extend(self._unfinished)
         if self.trace:

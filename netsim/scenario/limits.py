@@ -144,7 +144,8 @@ def _structure_problems(raw: dict[str, Any], line_of: LineOf | None) -> Iterator
                               f"node '{node_name}' runs no task and no handler (messages sent to it are dropped); "
                               "add a task or a handler if it should do something", severity=WARNING)
         for i, task in enumerate(_l(node.get("tasks"))):
-            if isinstance(task, dict) and task.get("period") is None and task.get("release") is None:
+            if (isinstance(task, dict) and task.get("period") is None and task.get("release") is None
+                    and task.get("min_interarrival") is None):  # a sporadic task releases itself
                 yield Problem(format_path(["nodes", node_name, "tasks", i]),
                               f"task '{_short(str(task.get('name')))}' has no period and no release, so it is "
                               "aperiodic: it runs only when a program creates its jobs, which none of netsim's "

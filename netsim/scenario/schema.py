@@ -37,8 +37,9 @@ Public classes and their fields (times in ns)
     :class:`~netsim.energy.params.EnergyModel`, or None).
 ``TaskSpec``
     ``name, program, params, period, offset, deadline (default: period), priority, execution, wcet,
-    release ("periodic" | "aperiodic" | "on_message:<net>"; default periodic when a period is given),
-    preemptible, wcet_handler, deadline_handler``; properties ``release_kind``, ``release_network``;
+    release ("periodic" | "aperiodic" | "sporadic" | "on_message:<net>"; default periodic when a period is given),
+    preemptible, wcet_handler, deadline_handler, release_jitter, min_interarrival, extra_interarrival,
+    abort_on_miss``; properties ``release_kind``, ``release_network``;
     method ``execution_spec()``. A program that sends on ``params.network`` names the receiver in
     ``params.to``: a node, or ``all`` to broadcast to every other node on that network (netsim's programs
     refuse a missing ``to``; it used to broadcast silently).
@@ -91,6 +92,7 @@ from netsim.energy.params import EnergyModel
 from netsim.scenario.paths import format_path, parse_path, plain_copy
 from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema_sync import SyncSpec
+from netsim.scenario.schema_task import TimeDistribution, kernel_fields, without_unused_arrivals
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
 from netsim.kernel.task import TaskSpec as KernelTaskSpec
 from netsim.units import Duration, StrictModel, Time
@@ -197,9 +199,9 @@ _RELEASE = re.compile(r"^on_message:([A-Za-z0-9_-]+)$")
 def _release(value: Any) -> str:
     if isinstance(value, str):
         text = value.strip().replace(" ", "")
-        if text in ("periodic", "aperiodic") or _RELEASE.match(text):
+        if text in ("periodic", "aperiodic", "sporadic") or _RELEASE.match(text):
             return text
-    raise ValueError(f"release must be 'periodic', 'aperiodic' or 'on_message:<network>', got {value!r}")
+    raise ValueError(f"release must be 'periodic', 'aperiodic', 'sporadic' or 'on_message:<network>', got {value!r}")
 
 
 Release = Annotated[str, BeforeValidator(_release)]
@@ -486,6 +488,12 @@ class TaskSpec(PluginSpec):
     - ``release: aperiodic`` (the default without ``period``): no ``period``; released by program code.
     - ``release: on_message:<network>``: no ``period``; the node must be attached to ``<network>`` and has one
       receiver per network.
+    - ``release: sporadic`` (the default with ``min_interarrival`` and no ``period``): the kernel releases it,
+      arrivals ``min_interarrival`` plus a draw of ``extra_interarrival`` apart; the deadline defaults to
+      ``min_interarrival``.
+    - ``release_jitter`` (periodic and sporadic tasks): each job arrives a random time after its nominal
+      release; ``abort_on_miss: true`` kills a job unfinished at its deadline
+      (:mod:`netsim.scenario.schema_task`).
     - Under policy ``fp`` every task needs a ``priority``; a ``wcet_handler`` needs a ``wcet``.
 
     The scheduling fields (``period`` ... ``deadline_handler``) are the kernel's static description of a task,
@@ -507,14 +515,23 @@ class TaskSpec(PluginSpec):
     preemptible: bool = _KTASK.preemptible
     wcet_handler: Name | None = _KTASK.wcet_handler  # type: ignore[assignment]
     deadline_handler: Name | None = _KTASK.deadline_handler  # type: ignore[assignment]
+    release_jitter: TimeDistribution | None = None  # arrivals: netsim.scenario.schema_task
+    min_interarrival: Duration | None = _KTASK.min_interarrival
+    extra_interarrival: TimeDistribution | None = None
+    abort_on_miss: bool = _KTASK.abort_on_miss
 
     @model_validator(mode="after")
     def _defaults(self) -> TaskSpec:
         if self.release is None:
-            object.__setattr__(self, "release", "periodic" if self.period is not None else "aperiodic")
-        if self.deadline is None and self.period is not None:  # the kernel's default (TaskSpec.checked)
-            object.__setattr__(self, "deadline", self.period)
+            object.__setattr__(self, "release", "periodic" if self.period is not None else
+                               "sporadic" if self.min_interarrival is not None else "aperiodic")
+        if self.deadline is None:  # the kernel's default (TaskSpec.checked)
+            object.__setattr__(self, "deadline", self.period if self.period is not None else self.min_interarrival)
         return self
+
+    @model_serializer(mode="wrap")
+    def _without_unused_arrivals(self, handler: Any) -> Any:
+        return without_unused_arrivals(handler(self))  # resolved scenarios that use none stay as they were
 
     def kernel_spec(self) -> KernelTaskSpec:
         """The kernel's description of this task (unchecked: ``Kernel.add_task`` checks it); a task released
@@ -522,14 +539,16 @@ class TaskSpec(PluginSpec):
         fields = {name: getattr(self, name) for name in _KTASK_FIELDS}
         if self.release_kind != "periodic":
             fields["period"] = None
-        return KernelTaskSpec(**fields)
+        if self.release_kind != "sporadic":
+            fields["min_interarrival"] = None
+        return KernelTaskSpec(**kernel_fields(fields))
 
     def plugin_name(self) -> str:
         return self.program
 
     @property
     def release_kind(self) -> str:
-        """``"periodic"``, ``"aperiodic"`` or ``"on_message"``."""
+        """``"periodic"``, ``"aperiodic"``, ``"sporadic"`` or ``"on_message"``."""
         return str(self.release).split(":", 1)[0]
 
     @property

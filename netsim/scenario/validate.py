@@ -14,7 +14,8 @@ What is checked
 - ``wcet_handler``/``deadline_handler`` name handlers of the node.
 - A network's ``nodes`` exist; ``release: on_message:<net>`` and ``trigger: {on_message: <net>}`` name a
   network the node is attached to.
-- A periodic task has a period, an aperiodic or message-released task has none; under policy ``fp`` every
+- A periodic task has a period, an aperiodic or message-released task has none, a sporadic task has a
+  ``min_interarrival`` (and only it); under policy ``fp`` every
   task has a priority. A deadline longer than the period is allowed (TrueTime semantics: jobs continue and
   may queue up) but reported as a **warning**.
 - Program parameter naming conventions: ``network``/``*_network`` (and ``networks``/``*_networks``) name a
@@ -221,7 +222,7 @@ class _Checker:
         for name, node in _d(self.raw.get("nodes")).items():
             if isinstance(name, str) and len(name) <= NAME_MAX and isinstance(node, dict):  # limits: long names
                 self.node(name, node)
-        self.metrics()
+        self.metrics(outputs)
         self.record(outputs)
         self.problems += plugin_load_problems()  # the modules the lookups above imported (lazy registry)
 
@@ -377,7 +378,9 @@ class _Checker:
         release = task.get("release")
         rel = release.strip().replace(" ", "") if isinstance(release, str) else None
         if rel is None and release is None:
-            rel = "periodic" if period is not None else "aperiodic"
+            rel = ("periodic" if period is not None else "sporadic" if task.get("min_interarrival") is not None
+                   else "aperiodic")
+        self.sporadic(task, rel, at)
         if rel == "periodic" and period is None:
             self.error([*at, "period"], "a periodic task needs a period; add e.g. 'period: 10 ms', or set 'release: aperiodic' or 'release: on_message:<network>'")
         if rel is not None and rel != "periodic" and period is not None:
@@ -397,6 +400,15 @@ class _Checker:
                 known = [h for h in handlers if isinstance(h, str)]
                 self.error([*at, key], f"node '{node_name}' has no handler '{ref}'{did_you_mean(ref, known, what='handlers')}")
 
+    def sporadic(self, task: dict[str, Any], rel: str | None, at: list[PathPart]) -> None:
+        """``release: sporadic`` goes with ``min_interarrival`` (and ``extra_interarrival`` with both)."""
+        if rel == "sporadic" and task.get("min_interarrival") is None:
+            self.error([*at, "min_interarrival"], "a sporadic task needs a minimum inter-arrival time; add e.g. "
+                                                  "'min_interarrival: 10 ms'")
+        if rel is not None and rel != "sporadic" and task.get("min_interarrival") is not None:
+            self.error([*at, "min_interarrival"], f"only sporadic tasks have a minimum inter-arrival time (this one "
+                                                  f"is released '{rel}'); remove it or set 'release: sporadic'")
+
     def kernel_checks(self, node_name: str, node: dict[str, Any], task: dict[str, Any], rel: str | None,
                       at: list[PathPart]) -> set[str]:
         """The kernel's own checks of a task (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
@@ -409,13 +421,18 @@ class _Checker:
         from netsim.kernel.building import task_spec
 
         times: dict[str, int | None] = {}
-        for key in ("period", "offset", "deadline", "wcet"):
+        for key in ("period", "offset", "deadline", "wcet", "min_interarrival"):
             value = task.get(key)
             times[key] = _time_or_none(value)
             if value is not None and (times[key] is None or (key != "offset" and times[key] <= 0)):
                 return set()  # the schema reports it
         if rel is not None and rel != "periodic":
             times["period"] = None
+        if rel != "sporadic":
+            times["min_interarrival"] = None
+        abort = task.get("abort_on_miss", False)
+        if not isinstance(abort, bool):
+            return set()  # the schema reports it
         priority = task.get("priority")
         if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
             return set()
@@ -424,7 +441,8 @@ class _Checker:
         try:
             spec = task_spec(node_name, name, period=times["period"], offset=times["offset"] or 0,
                              deadline=times["deadline"], priority=priority, wcet=times["wcet"],
-                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"))
+                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"),
+                             min_interarrival=times["min_interarrival"], abort_on_miss=abort)
             if is_builtin_policy(policy_name):
                 find_policy(policy_name)().check(node_name, spec)
         except BuildError as exc:
@@ -545,7 +563,7 @@ class _Checker:
         elif net is None and not (self.attached.get(node, set()) & self.attached.get(to, set())):
             self.error(at, f"nodes '{node}' and '{to}' share no network; attach both to one in 'networks'")
 
-    def metrics(self) -> None:
+    def metrics(self, outputs: list[Any] | None = None) -> None:
         for i, metric in enumerate(_l(self.raw.get("metrics"))):
             if not isinstance(metric, dict):
                 continue
@@ -556,6 +574,9 @@ class _Checker:
             if plugin is not None:
                 values = _values(model) if model is not None else _d(raw)
                 self.metric_signals(str(metric.get("type")), values, ["metrics", i, "params"])
+                refs = [*_signal_refs(values, ["metrics", i, "params"]),
+                        *((["metrics", i, "type"], n) for n in getattr(plugin, "reads_signals", ()))]
+                self.grid_outputs(str(metric.get("type")), values, refs, outputs)
                 self.metric_reads(plugin, str(metric.get("type")), ["metrics", i, "type"])
                 for key, value in values.items():
                     if isinstance(key, str) and (key == "chain" or key.endswith("_chain")):
@@ -569,21 +590,34 @@ class _Checker:
         if not isinstance(record, list):
             return  # omitted or null: everything is recorded
         kept = {r for r in record if isinstance(r, str)}
-        for key, value in values.items():
-            if not isinstance(key, str):
+        for where, name in _signal_refs(values, at):
+            if name in kept or name.split("[", 1)[0] in kept:
                 continue
-            if key in ("reference", "output", "signal") or key.endswith("_signal"):
-                refs = [([*at, key], value)]
-            elif key in ("signals", "outputs") or key.endswith("_signals"):
-                refs = [([*at, key, j], v) for j, v in enumerate(_l(value))]
-            else:
-                continue
-            for where, name in refs:
-                if not isinstance(name, str) or not name or name in kept or name.split("[", 1)[0] in kept:
-                    continue
-                listed = ", ".join(r for r in record if isinstance(r, str)) or "nothing"
-                self.error(where, f"metric '{metric}' reads signal '{name}', which 'record:' leaves out "
-                                  f"(record: [{listed}]); add '{name}' to 'record:'")
+            listed = ", ".join(r for r in record if isinstance(r, str)) or "nothing"
+            self.error(where, f"metric '{metric}' reads signal '{name}', which 'record:' leaves out "
+                              f"(record: [{listed}]); add '{name}' to 'record:'")
+
+    def grid_outputs(self, metric: str, values: dict[str, Any], refs: list[tuple[list[PathPart], str]],
+                     outputs: list[Any] | None) -> None:
+        """A plant output is recorded under its name only on ``plant.record_grid``: without the grid, a metric
+        reading one (``refs``: its signal parameters and its ``reads_signals``) fails after the run ("signal 'y'
+        was not recorded"), unless something else records that
+        name (an ``io`` channel or a ``signals`` source of that name, or a program parameter naming it, e.g.
+        ``record_as: y``), so the check stays on the safe side."""
+        plant = self.raw.get("plant")
+        if not isinstance(plant, dict) or plant.get("record_grid") is not None or not outputs:
+            return
+        ports = {p for p in outputs if isinstance(p, str)}
+        others = {*_d(self.raw.get("io")), *_d(self.raw.get("signals")), *_strings(self.raw.get("nodes"))}
+        for where, name in refs:
+            base = name.split("[", 1)[0]
+            if base in ports and base not in others:
+                period = values.get("period")
+                grid = (format_time(period) if isinstance(period, int) and not isinstance(period, bool) and period > 0
+                        else period if isinstance(period, str) else "1 ms")
+                self.error(where, f"metric '{metric}' reads the plant output '{name}', which is recorded only on "
+                                  f"the plant's record grid, and 'plant:' sets no 'record_grid'; add e.g. "
+                                  f"'record_grid: {grid}' under 'plant:'")
 
     def metric_reads(self, plugin: Any, metric: str, at: list[PathPart]) -> None:
         """A metric that reads fixed signal names declares them (``reads_signals``); with a ``record:`` list, each
@@ -623,6 +657,31 @@ class _Checker:
         for i, name in enumerate(_l(self.raw.get("record"))):
             if not isinstance(name, str) or not name.strip():
                 self.error(["record", i], f"expected a signal name, got {name!r}")
+
+
+def _signal_refs(values: dict[str, Any], at: list[PathPart]) -> list[tuple[list[PathPart], str]]:
+    """``(YAML path, name)`` of each signal a metric's parameters name: fields ``reference``, ``output``,
+    ``signal``, ``*_signal`` and their plurals ``signals``, ``outputs``, ``*_signals``."""
+    refs: list[tuple[list[PathPart], Any]] = []
+    for key, value in values.items():
+        if not isinstance(key, str):
+            continue
+        if key in ("reference", "output", "signal") or key.endswith("_signal"):
+            refs.append(([*at, key], value))
+        elif key in ("signals", "outputs") or key.endswith("_signals"):
+            refs.extend(([*at, key, j], v) for j, v in enumerate(_l(value)))
+    return [(where, name) for where, name in refs if isinstance(name, str) and name]
+
+
+def _strings(tree: Any) -> set[str]:
+    """Every string value in a raw YAML tree (the names programs may record under)."""
+    if isinstance(tree, str):
+        return {tree}
+    if isinstance(tree, dict):
+        return set().union(*(_strings(v) for v in tree.values())) if tree else set()
+    if isinstance(tree, list):
+        return set().union(*(_strings(v) for v in tree)) if tree else set()
+    return set()
 
 
 def _values(model: Any) -> dict[str, Any]:

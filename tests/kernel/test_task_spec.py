@@ -26,7 +26,7 @@ def test_checked_fills_the_deadline_with_the_period_and_keeps_the_rest():
 
 @pytest.mark.parametrize("fields, field, text", [
     ({"period": 0}, "period", "must be positive"),
-    ({"offset": 3}, "offset", "applies to periodic tasks only"),
+    ({"offset": 3}, "offset", "applies to periodic and sporadic tasks only"),
     ({"period": 5, "priority": "high"}, "priority", "must be a number"),
     ({"period": 5, "wcet_handler": "h"}, "wcet_handler", "needs a 'wcet' budget"),
     ({"deadline_handler": "h"}, "deadline_handler", "needs a deadline"),

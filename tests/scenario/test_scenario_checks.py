@@ -401,7 +401,7 @@ def test_offset_on_an_aperiodic_task_is_an_error(base):
     node_name = next(iter(raw["nodes"]))
     assert _problems(raw) == {
         # the kernel's own check (netsim.kernel.building.task_spec), run by validate
-        f"nodes.{node_name}.tasks[{index}].offset": "applies to periodic tasks only; give a period or drop it"
+        f"nodes.{node_name}.tasks[{index}].offset": "applies to periodic and sporadic tasks only; give a period or drop it"
     }
 
 
