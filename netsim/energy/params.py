@@ -21,7 +21,7 @@ from __future__ import annotations
 import re
 from typing import Annotated, Any, Literal
 
-from pydantic import BeforeValidator, Field, model_validator
+from pydantic import BeforeValidator, Field, WithJsonSchema, model_validator
 
 from netsim.units import NUMBER_LIMIT, StrictModel
 
@@ -59,8 +59,13 @@ def parse_energy(value: Any) -> float:
     return _quantity(value, _ENERGY_UNITS, "energy", "'20 J', '1.5 Wh' or 20 (J)")
 
 
-Power = Annotated[float, BeforeValidator(parse_power)]
-Energy = Annotated[float, BeforeValidator(parse_energy)]
+#: A power in W (``"52 mW"`` text accepted; the JSON Schema says so, for editors).
+Power = Annotated[float, BeforeValidator(parse_power), WithJsonSchema(
+    {"anyOf": [{"type": "number", "minimum": 0}, {"type": "string", "description": "a power: 52 mW, 3 uW, 0.1 W"}]})]
+#: An energy in J (``"1.5 Wh"`` text accepted).
+Energy = Annotated[float, BeforeValidator(parse_energy), WithJsonSchema(
+    {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
+               {"type": "string", "description": "an energy: 20 J, 300 mWh, 1.5 Wh"}]})]
 
 
 class CpuPower(StrictModel):
