@@ -22,7 +22,8 @@ def attach_energy(scenario: Any, env: Any, kernels: dict[str, Any], networks: di
     Raises
     ------
     BuildError
-        At ``nodes.<n>.energy.radio`` when a node with radio powers is on no wireless network.
+        At ``nodes.<n>.energy.radio`` when a node with radio powers is on no wireless network, and at
+        ``nodes.<n>.energy.radio.listen`` when a radio that sleeps between its own frames would have to receive.
     """
     meters: dict[str, EnergyMeter] = {}
     if not any(getattr(node, "energy", None) is not None for node in scenario.nodes.values()):
@@ -39,6 +40,22 @@ def attach_energy(scenario: Any, env: Any, kernels: dict[str, Any], networks: di
             raise BuildError(f"node '{name}' has radio powers but is on no wireless network (ieee802154, "
                              "ieee80211b); remove 'radio' or attach the node to a radio network",
                              path=f"nodes.{name}.energy.radio")
+        if model.radio is not None and model.radio.listen == "own_frames":
+            radio_nets = {m.name for m in media}
+            for what, net in _receptions(node):
+                if net in radio_nets:
+                    raise BuildError(
+                        f"node '{name}': {what} is released by messages on radio network '{net}', but the radio "
+                        "sleeps except while it sends (listen: own_frames), so it would never receive; use "
+                        "listen: always", path=f"nodes.{name}.energy.radio.listen")
         meter = meters[name] = EnergyMeter(env, name, kernels[name], model, media)
         env.components[f"energy.{name}"] = meter
     return meters
+
+
+def _receptions(node: Any) -> list[tuple[str, str]]:
+    """``(what, network)`` for each task or handler of ``node`` run by message receptions."""
+    out = [(f"task '{t.name}'", t.release_network) for t in node.tasks if t.release_network is not None]
+    out += [(f"handler '{h.name}'", h.trigger.on_message) for h in node.handlers
+            if h.trigger is not None and h.trigger.on_message is not None]
+    return out

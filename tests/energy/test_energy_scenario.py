@@ -104,3 +104,11 @@ def test_the_shipped_battery_scenario_runs_out_after_the_sensor_left_the_range()
     states = sum(m[f"energy.sensor.radio_{k}_s"] for k in ("tx", "rx", "idle", "sleep"))
     assert states == pytest.approx(m["energy.sensor.depleted_s"], abs=1e-9)  # the radio's states cover its life
     assert math.isnan(m.get("energy.controller.depleted_s", math.nan))
+
+
+def test_a_radio_that_sleeps_between_its_own_frames_cannot_be_a_receiver():
+    raw = yaml.safe_load((ROOT / "scenarios" / "wireless_battery.yaml").read_text(encoding="utf-8"))
+    raw["nodes"]["controller"]["energy"]["radio"]["listen"] = "own_frames"
+    problems = _problems(raw)
+    assert any(p == "nodes.controller.energy.radio.listen" and "task 'control' is released by messages" in m
+               for p, m in problems), problems
