@@ -16,7 +16,11 @@ samples ``t_k = k period``:
 ``pendulum.stable``
     1 when ``|alpha| < stable_alpha`` over the last second, else 0;
 ``pendulum.theta_dot_est_std``, ``pendulum.alpha_dot_est_std``
-    std of the velocity estimates from ``settle`` on (in a hold-still run: the estimator's noise).
+    std of the velocity estimates from ``settle`` on (in a hold-still run: the estimator's noise);
+``pendulum.est_converged_s``
+    how long the estimator takes to catch up: the time after which both angle estimates ``x_hat[0]``,
+    ``x_hat[2]`` (the estimate made from each sample, the last one recorded before the next sample) stay within
+    ``est_tol`` of the true angles (0 when they always are; the run's length when they never settle).
 """
 
 from __future__ import annotations
@@ -43,6 +47,8 @@ class PendulumMetricParams(StrictModel):
     q_theta: float = Field(5.0, ge=0, description="LQR weight on theta")
     q_alpha: float = Field(20.0, ge=0, description="LQR weight on alpha")
     r: float = Field(1.0, gt=0, description="LQR weight on u")
+    est_tol: float = Field(0.005, gt=0, description="angle-estimate error bound for est_converged_s (rad): "
+                           "about 5.6 encoder-noise stds, so the noise alone does not cross it")
 
 
 def _at(s: pd.DataFrame, col: str, t: np.ndarray) -> np.ndarray:
@@ -83,7 +89,19 @@ def pendulum_measures(signals: pd.DataFrame, ok: bool, p: PendulumMetricParams |
         col = f"x_hat[{i}]"
         if col in s.columns:
             out[name] = float(np.std(_at(s, col, tk)[late]))
+    if "x_hat[0]" in s.columns and "x_hat[2]" in s.columns:
+        err = np.maximum(np.abs(_at(s, "x_hat[0]", tk + h - 1e-9) - theta), np.abs(_at(s, "x_hat[2]", tk + h - 1e-9) - alpha))
+        out["est_converged_s"] = _converged(tk, err, p.est_tol, h)
     return out
+
+
+def _converged(tk: np.ndarray, err: np.ndarray, tol: float, h: float) -> float:
+    """The time after which ``err`` (NaN counts as outside) stays below ``tol``: one period after the last
+    sample outside, 0 when none is."""
+    outside = np.flatnonzero(~(err < tol))
+    if outside.size == 0:
+        return 0.0
+    return float(tk[outside[-1]] + h)
 
 
 @register("metric", "pendulum", "pendulum study: u chatter, saturation, RMS angles, LQG cost, stability, estimate noise")

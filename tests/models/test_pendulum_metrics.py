@@ -46,3 +46,17 @@ def test_a_fallen_pendulum_is_not_stable():
     s2.loc[s2.time_s > 2.0, "alpha"] = 0.01
     assert pendulum_measures(s2, ok=True)["stable"] == 1.0
     assert pendulum_measures(s2, ok=True, p=tight)["stable"] == 0.0
+
+
+def test_estimate_convergence_time():
+    # the alpha estimate is 0.01 rad off (above est_tol = 0.005) until 0.3 s, exact afterwards: the last sample
+    # outside is t = 0.295 s, so the estimates have converged one period later, at 0.3 s
+    s = _signals()
+    t = s["time_s"].to_numpy()
+    s["x_hat[0]"] = s["theta"]
+    s["x_hat[2]"] = s["alpha"] + np.where(t < 0.3, 0.01, 0.0)
+    assert pendulum_measures(s, ok=True)["est_converged_s"] == pytest.approx(0.3)
+    s["x_hat[2]"] = s["alpha"] + 0.004  # always inside the bound
+    assert pendulum_measures(s, ok=True)["est_converged_s"] == 0.0
+    s["x_hat[0]"] = s["theta"] + np.where(t > 2.0, 0.02, 0.0)  # leaves the bound for good: the run's end
+    assert pendulum_measures(s, ok=True)["est_converged_s"] == pytest.approx(t[-2] + 0.005)

@@ -1,0 +1,121 @@
+"""The pendulum loop's expected cost under an input-output delay, from :mod:`netsim.analysis.lqg` (Jitterbug-style).
+
+The loop of ``scenarios/pendulum_network.yaml`` linearised: the continuous plant (the upright linearisation of
+:mod:`models.pendulum.model`), sampled every ``TS``; the estimator of the study (:func:`models.pendulum.design.
+_estimator_ss`) and the LQR as one discrete controller; the input reaches the plant ``delay_s`` after the
+sample and is held. Noise: the white input-voltage disturbance as process noise of intensity ``std^2 hold``
+through ``B`` (the simulated disturbance is that noise held over ``hold = 1 ms``, short against the loop's
+time constants), the encoder noise as measurement noise ``SENSOR_STD^2 I``. Cost: the LQR's weights
+``Q = diag(5, 0, 20, 0)``, ``R = 1``.
+
+:func:`netsim.analysis.lqg.lqg_cost` needs every output to reach the plant before the next sample, so a delay
+of ``D`` whole periods plus a fraction ``f`` is modelled as a delay line of ``D`` samples inside the controller
+(its output is ``u[k - D]``) and a delay ``f`` inside the period.
+
+* :func:`controller_matrices` -- ``(Ac, Bc, Cc, Dc)`` of the estimator + LQR (+ delay line);
+* :func:`analytic_cost` -- the stationary cost per second ``J`` (the time average of ``x' Q x + u' R u``),
+  the expected cost at the sampling instants (what the ``pendulum`` metric's ``lqg_cost_after_settle``
+  estimates) and the spectral radius of the loop;
+* :func:`lqg_delay_margin` -- the largest delay with a mean-square stable loop (bisection on the spectral
+  radius), an exact counterpart of the phase-margin estimate :func:`models.pendulum.design.delay_margin`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from models.pendulum.design import Q_LQR, R_LQR, Designs, _estimator_ss
+from models.pendulum.model import DISTURBANCE_HOLD, DISTURBANCE_STD, SENSOR_STD
+
+__all__ = ["controller_matrices", "sampled_loop", "analytic_cost", "lqg_delay_margin"]
+
+
+def controller_matrices(name: str, d: Designs, delay_samples: int = 0) -> tuple[np.ndarray, ...]:
+    """``(Ac, Bc, Cc, Dc)`` of estimator ``name`` + LQR, its output delayed by ``delay_samples`` periods.
+
+    Controller state ``xc[k] = [s[k-1], u[k-1], ..., u[k-L]]`` with ``L = max(delay_samples, 1)`` (``s`` the
+    estimator's state, ``u`` the computed inputs): ``s[k] = Fe s[k-1] + Be u[k-1] + Ge y[k]``, ``x_hat[k] = He
+    s[k] + Je y[k]``, ``u[k] = -K x_hat[k]``; the output is ``u[k]`` (no delay) or ``u[k - delay_samples]``.
+    """
+    if delay_samples < 0:
+        raise ValueError(f"delay_samples must be >= 0, got {delay_samples}")
+    Fe, Ge, Be, He, Je = _estimator_ss(name, d)
+    K = d.K_lqr
+    ne, p = Fe.shape[0], Ge.shape[1]
+    line = max(int(delay_samples), 1)
+    nc = ne + line
+    S = np.zeros((ne, nc))  # s[k] = S xc[k] + Ge y[k]
+    S[:, :ne], S[:, ne:ne + 1] = Fe, Be
+    U = -K @ He @ S  # u[k] = U xc[k] + Uy y[k]
+    Uy = -K @ (He @ Ge + Je)
+    Ac = np.zeros((nc, nc))
+    Bc = np.zeros((nc, p))
+    Ac[:ne], Bc[:ne] = S, Ge
+    Ac[ne:ne + 1], Bc[ne:ne + 1] = U, Uy
+    for i in range(1, line):  # shift the line: u[k-i] moves one place down
+        Ac[ne + i, ne + i - 1] = 1.0
+    if delay_samples == 0:
+        return Ac, Bc, U, Uy
+    Cc = np.zeros((1, nc))
+    Cc[0, ne + line - 1] = 1.0
+    return Ac, Bc, Cc, np.zeros((1, p))
+
+
+def sampled_loop(name: str, d: Designs, delay_s: float) -> tuple[Any, float]:
+    """The :class:`netsim.analysis.lqg.SampledLoop` of estimator ``name`` with a total delay ``delay_s``, and the
+    part of the delay inside one period (the rest is the controller's delay line)."""
+    from netsim.analysis.lqg import SampledLoop
+
+    h = d.lin.h
+    steps = int(math.floor(delay_s / h + 1e-9))
+    frac = max(delay_s - steps * h, 0.0)
+    Ac, Bc, Cc, Dc = controller_matrices(name, d, steps)
+    B = d.lin.B
+    loop = SampledLoop(A=d.lin.A, B=B, C=d.lin.C, Ac=Ac, Bc=Bc, Cc=Cc, Dc=Dc, period_s=h,
+                       Q1=np.diag(Q_LQR), Q2=[[R_LQR]], R1=B @ B.T * DISTURBANCE_STD**2 * DISTURBANCE_HOLD,
+                       R2=np.eye(2) * SENSOR_STD**2)
+    return loop, frac
+
+
+def analytic_cost(name: str, d: Designs, delay_s: float) -> dict[str, float]:
+    """Stationary cost of the loop with estimator ``name`` and total input-output delay ``delay_s``.
+
+    Returns ``J`` (per second: the time average of ``x' Q x + u' R u``), ``per_sample`` (the expected
+    ``x' Q x + u' R u`` at the sampling instants, the applied input held there) and ``spectral_radius``
+    (of the second-moment recursion; ``J`` is ``inf`` when it is 1 or more).
+    """
+    from netsim.analysis.lqg import lqg_cost
+
+    loop, frac = sampled_loop(name, d, delay_s)
+    res = lqg_cost(loop, delay=frac)
+    if res.covariance is None:
+        return {"J": math.inf, "per_sample": math.inf, "spectral_radius": res.spectral_radius}
+    P = res.covariance  # E[z z'], z = [x; xc; u held], at the sampling instants
+    n, nc = loop.n, loop.nc
+    per_sample = float(np.trace(loop.Q1 @ P[:n, :n]) + R_LQR * P[n + nc, n + nc])
+    return {"J": res.cost, "per_sample": per_sample, "spectral_radius": res.spectral_radius}
+
+
+def lqg_delay_margin(name: str, d: Designs, max_delay_s: float = 0.08, step_s: float = 0.0005,
+                     tol_s: float = 1e-6) -> float:
+    """The smallest delay (s) at which the loop stops being mean-square stable (its cost becomes infinite).
+
+    Scans ``0, step_s, ...`` up to ``max_delay_s`` for the first unstable delay, then bisects to ``tol_s``.
+    Returns ``inf`` when the loop is stable over the whole range.
+    """
+    def unstable(tau: float) -> bool:
+        return analytic_cost(name, d, tau)["spectral_radius"] >= 1.0
+
+    prev = 0.0
+    for tau in np.arange(step_s, max_delay_s + 1e-12, step_s):
+        if unstable(float(tau)):
+            lo, hi = prev, float(tau)
+            while hi - lo > tol_s:
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if unstable(mid) else (mid, hi)
+            return 0.5 * (lo + hi)
+        prev = float(tau)
+    return math.inf
