@@ -11,6 +11,7 @@ call resumes them).
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import pickle
 import time
@@ -45,8 +46,10 @@ class _Table:
         self.rows: list[dict[str, Any]] = []
 
     def add(self, experiment: str, setting: str, quantity: str, ours: Any, source: str = "", reason: str = "") -> Any:
+        from models.unicycle.quoting import Quotes
+
         self.rows.append({"experiment": experiment, "setting": setting, "quantity": quantity,
-                          "ours": ours if isinstance(ours, str) else _f(float(ours), 4), "source": source,
+                          "ours": Quotes.render(ours) if isinstance(ours, str) else _f(float(ours), 4), "source": source,
                           "reason": reason})
         return ours
 
@@ -168,12 +171,25 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
         with open(cache, "wb") as fh:
             pickle.dump({"facts": {k: facts[k] for k in ("qr", "zcover", "printed_side")}, "qr_runs": qr_runs}, fh)
     # ---------------------------------------------------------------- netsim sweeps
-    facts["net"] = _sweep("unicycle_net_sweep", out, workers) if sweeps else None
-    facts["delay"] = _sweep("unicycle_lqr_delay", out, workers) if sweeps else None
-    facts["burst"] = _sweep("unicycle_burst_sweep", out, workers) if sweeps else None
+    for key, name in (("net", "unicycle_net_sweep"), ("delay", "unicycle_lqr_delay"), ("burst", "unicycle_burst_sweep"),
+                      ("radio_mc", "unicycle_radio_mc"), ("radio_delay", "unicycle_radio_delay"),
+                      ("qr_can", "unicycle_qr_can"), ("qr_radio", "unicycle_qr_radio")):
+        facts[key] = _sweep(name, out, workers) if sweeps else None
+    for key in ("qr_can", "qr_radio"):
+        df = facts[key]
+        facts[f"{key}_study"] = (S.net_qr_study(df, out / "runs" / f"unicycle_{key}", t)
+                                 if df is not None and len(df) else None)
+    facts["wall_dist"] = S.wall_distances()
+    from models.unicycle.programs import UnicycleEkf
+
+    facts["history"] = UnicycleEkf.Params.model_fields["history"].default
+    speed = out / "speed.json"
+    facts["speed"] = json.loads(speed.read_text()) if speed.is_file() else None
     if plots:
         _plots(out, base, qr_runs, t)
     facts["wall_s"] = time.perf_counter() - t0
+    with open(out / "runs" / "facts.pkl", "wb") as fh:  # to rewrite the README without running (not kept in git)
+        pickle.dump(facts, fh)
     text = write_readme(out, T, facts)
     T.frame().to_csv(out / "table.csv", index=False)
     return {"table": T.frame(), "readme": pd.DataFrame({"text": [text]})}

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+from pathlib import Path
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any, Callable
 
@@ -17,7 +18,7 @@ import numpy as np
 from models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, Trajectory, cart_frame_error, error_model, lqr_gain
 from models.unicycle.metrics import run_measures
 from models.unicycle.model import (
-    FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, SIDE_PRINTED, WALL_FRONT, WALL_SIDE, jac_A,
+    FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, SIDE_PRINTED, WALL_FRONT, WALL_SIDE, jac_A, measure,
     measure_jacobian,
 )
 from models.unicycle.reference import simulate
@@ -191,3 +192,45 @@ def delay_margin(v_ref: float, max_delay: int = 400) -> int | None:
 
 
 __all__ += ["delay_margin"]
+
+
+def wall_distances() -> tuple[float, float]:
+    """Smallest and largest noiseless IR reading along the reference trajectory while its sensor is on [m]."""
+    traj = Trajectory()
+    vals = []
+    for k in range(traj.n + 1):
+        ph = traj.phase(k * traj.ts)
+        xi = traj.poses[k]
+        if ph.front:
+            vals.append(measure(xi, FRONT_OFFSET, WALL_FRONT))
+        if ph.side:
+            vals.append(measure(xi, SIDE_DERIVED, WALL_SIDE))
+    return float(min(vals)), float(max(vals))
+
+
+def net_qr_study(summary: Any, folder: Any, t: np.ndarray) -> dict[str, dict[str, float]]:
+    """:func:`qr_study` per ``setting`` of a netsim Q/R sweep, from each run's ``signals.csv`` (truth ``x, y,
+    theta`` and ``xhat[i]`` on the filter's 10 ms grid) and its coverage metrics."""
+    import pandas as pd
+
+    out: dict[str, dict[str, float]] = {}
+    cols = ["time_s", "x", "y", "theta", "xhat[0]", "xhat[1]", "xhat[2]"]
+    for setting, d in summary.groupby("setting", sort=False):
+        runs = []
+        for _, row in d.iterrows():
+            sig = pd.read_csv(Path(folder) / row["folder"] / "signals.csv", usecols=cols)
+            k = np.rint(sig["time_s"].to_numpy() / (t[1] - t[0])).astype(int)
+            keep = (k >= 0) & (k < len(t))
+            truth = np.full((len(t), 3), np.nan)
+            xhat = np.full((len(t), 3), np.nan)
+            truth[k[keep]] = sig[["x", "y", "theta"]].to_numpy()[keep]
+            xhat[k[keep]] = sig[["xhat[0]", "xhat[1]", "xhat[2]"]].to_numpy()[keep]
+            e = truth - xhat
+            e[:, 2] = np.arctan2(np.sin(e[:, 2]), np.cos(e[:, 2]))
+            runs.append({"e": e, "xhat": xhat,
+                         "m": {f"cover_{s}_all": float(row[f"unicycle.cover_{s}_all"]) for s in ("x", "y", "theta")}})
+        out[str(setting)] = qr_study(runs, t)
+    return out
+
+
+__all__ += ["wall_distances", "net_qr_study"]

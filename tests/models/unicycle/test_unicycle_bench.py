@@ -7,6 +7,7 @@ of the scenario on the local process pool (``UNICYCLE_BENCH_RUNS`` to change the
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import time
@@ -73,19 +74,30 @@ def _one(seed: int) -> str:
 @pytest.mark.benchmark
 def test_bench_single_run_against_numpy_and_pool():
     _one(1)  # warm-up: imports, python-control
-    t0 = time.perf_counter()
-    status = _one(2)
-    t_netsim = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    err = _numpy_loop(2)
-    t_numpy = time.perf_counter() - t0
-    print(f"\nunicycle_lqr: one netsim run {t_netsim:.3f} s, plain numpy EKF + LQR loop {t_numpy:.3f} s, "
-          f"ratio {t_netsim / t_numpy:.1f}x (target <= 5x); numpy loop final error {err:.3g}")
+    _numpy_loop(1)
+    repeats = int(os.environ.get("UNICYCLE_BENCH_REPEATS", "7"))
+    t_net, t_np, statuses = [], [], []
+    for i in range(repeats):  # interleaved, best of each: the machine is shared, the minimum is the least disturbed
+        t0 = time.perf_counter()
+        statuses.append(_one(2 + i))
+        t_net.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        err = _numpy_loop(2 + i)
+        t_np.append(time.perf_counter() - t0)
+    ratio = min(t_net) / min(t_np)
+    print(f"\nunicycle_lqr: one netsim run {min(t_net):.3f} s (median {sorted(t_net)[repeats // 2]:.3f}), plain numpy "
+          f"EKF + LQR loop {min(t_np):.3f} s (median {sorted(t_np)[repeats // 2]:.3f}), ratio {ratio:.1f}x "
+          f"(target <= 5x); numpy loop final error {err:.3g}")
     n = int(os.environ.get("UNICYCLE_BENCH_RUNS", "200"))
     workers = os.cpu_count() or 1
     t0 = time.perf_counter()
     with ProcessPoolExecutor(workers) as ex:
-        statuses = list(ex.map(_one, range(100, 100 + n), chunksize=max(1, n // (4 * workers))))
+        statuses += list(ex.map(_one, range(100, 100 + n), chunksize=max(1, n // (4 * workers))))
     wall = time.perf_counter() - t0
     print(f"{n} Monte-Carlo runs of the 10 s trajectory on {workers} processes: {wall:.1f} s, {n / wall:.2f} runs/s")
-    assert status == "ok" and all(s == "ok" for s in statuses)
+    out = Path(__file__).resolve().parents[3] / "reports" / "unicycle" / "speed.json"
+    if out.parent.is_dir():  # read by `netsim report unicycle` (its Speed section)
+        out.write_text(json.dumps({"ratio": ratio, "repeats": repeats, "netsim_s": min(t_net), "numpy_s": min(t_np),
+                                   "pool_runs": n, "pool_wall_s": wall, "pool_workers": workers}, indent=1))
+    assert all(s == "ok" for s in statuses)
+    assert ratio < 10.0  # the numpy-heavy version of the programs was 10.4x-10.8x; the float one 3-6x

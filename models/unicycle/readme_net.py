@@ -1,0 +1,230 @@
+"""Section 5 of the 2WD cart README (:mod:`models.unicycle.readme`): what only a networked simulator shows.
+
+Sweeps (``facts`` keys): ``net`` (CAN: front rate x Bernoulli loss), ``burst`` (CAN: Bernoulli against
+Gilbert-Elliott), ``radio_mc`` (802.15.4: sensor rate x loss model, 200 replicates), ``delay`` (CAN: command
+delay with the report's sensors), ``radio_delay`` (802.15.4: command delay, the report's and accurate sensors);
+``zigbee`` is one run's metrics. Every number goes through the :class:`~models.unicycle.quoting.Quotes`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from models.unicycle.model import TS
+from models.unicycle.quoting import Quotes
+
+__all__ = ["network_section", "loss_kind", "stability_limits", "GROWTH", "LOST_E3"]
+
+#: A delay "degrades" the loop when the mean RMS longitudinal error e1 reaches this multiple of the no-delay one.
+GROWTH = 3.0
+#: A run has "lost" the loop when its heading error exceeds this [rad] (a quarter turn: the cart faces away).
+LOST_E3 = math.pi / 2
+
+
+def loss_kind(values: Any) -> np.ndarray:
+    """Names of the loss models of a sweep column (dicts or their text)."""
+    text = values.astype(str)
+    return np.where(text.str.contains("gilbert"), "Gilbert-Elliott bursts",
+                    np.where(text.str.contains("0.0}") | text.str.contains("'p': 0.0"), "none", "Bernoulli"))
+
+
+def _ms(values: Any) -> Any:
+    return values.astype(str).str.replace(" ms", "").astype(float)
+
+
+def _tol(d: Any, col: str) -> float:
+    return 1.96 * float(d[col].std(ddof=1)) / math.sqrt(len(d)) if len(d) > 1 else float("nan")
+
+
+def stability_limits(d: Any) -> dict[str, float]:
+    """Per delay sweep (one sensor setting): the smallest delay [ms] whose mean RMS e1 reaches :data:`GROWTH`
+    times the no-delay value, and the smallest at which more than half of the runs have ``max |e3| >``
+    :data:`LOST_E3` (NaN: none in the sweep)."""
+    g = d.groupby("_ms", sort=True)
+    e1 = g["unicycle.track_rms_e1"].mean()
+    lost = g["unicycle.track_max_e3"].apply(lambda s: float(np.mean(s > LOST_E3)))
+    base = float(e1.iloc[0])
+    grow = [ms for ms, v in e1.items() if v >= GROWTH * base]
+    gone = [ms for ms, v in lost.items() if v > 0.5]
+    return {"degrade_ms": float(grow[0]) if grow else float("nan"),
+            "lost_ms": float(gone[0]) if gone else float("nan"), "e1_base": base}
+
+
+def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
+    """The README lines of section 5 (and their ``table.csv`` rows)."""
+    _f, _pct = q.f, q.pct
+    q.section = "s5"
+    L = ["## 5. What only a networked simulator shows", ""]
+    # ------------------------------------------------------------ radio Monte-Carlo
+    rm = F.get("radio_mc")
+    if rm is not None and len(rm):
+        rm = rm.copy().assign(_fp=_ms(rm["sensor_period"]), _kind=loss_kind(rm["loss_model"]))
+        order = {"none": 0, "Bernoulli": 1, "Gilbert-Elliott bursts": 2}
+        rm = rm.copy().assign(_k=rm["_kind"].map(order))
+        g = rm.sort_values(["_fp", "_k"]).groupby(["_fp", "_k"], sort=True)
+        se = [_tol(d, f"unicycle.cover_{s}_all") for _, d in g for s in ("x", "y", "theta")]
+        L += ["802.15.4 radio (`unicycle_radio_mc.yaml`, base `unicycle_zigbee.yaml`): both IR sensors at the "
+              "same rate, loss after the radio's MAC (CSMA/CA and retries deliver the frame, then the loss model "
+              "drops the copy: IR samples and wheel commands alike), "
+              f"{q.i(rm.groupby(['_fp', '_k']).size().min(), 'radio_runs')} Monte-Carlo runs per point. "
+              f"Monte-Carlo tolerance of a mean coverage: +- {_pct(min(se))} to +- {_pct(max(se))} (1.96 standard "
+              "errors of the runs' coverages).", "",
+              "| sensor rate | loss | runs | lost share | coverage x / y / theta | RMS y front part [mm] | "
+              "RMS theta all [rad] | fused samples | fused late |", "|---|---|---|---|---|---|---|---|---|"]
+        for (fp, _), d in g:
+            kind = d["_kind"].iloc[0]
+            fused = d["control.ekf.filter.fused_front"] + d["control.ekf.filter.fused_side"]
+            L.append(f"| {q.g(1e3 / fp)} Hz | {kind} | {q.i(len(d))} | {_pct(d['net.radio.loss_rate'].mean())} | "
+                     f"{_pct(d['unicycle.cover_x_all'].mean())} / {_pct(d['unicycle.cover_y_all'].mean())} / "
+                     f"{_pct(d['unicycle.cover_theta_all'].mean())} | {_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | "
+                     f"{_f(d['unicycle.rmse_theta_all'].mean())} | {_f(fused.mean())} | "
+                     f"{_pct((d['control.ekf.filter.late'] / fused).mean())} |")
+            for col, name in (("unicycle.cover_theta_all", "coverage theta"), ("unicycle.cover_y_all", "coverage y"),
+                              ("unicycle.rmse_theta_all", "RMS theta all [rad]"),
+                              ("unicycle.rmse_y_front", "RMS y front part [m]")):
+                T.add("5 radio", f"{1e3 / fp:g} Hz, {kind}, {len(d)} runs", name, d[col].mean(), "", "")
+        L.append("")
+        m = rm.groupby(["_fp", "_kind"])["unicycle.rmse_theta_all"].mean().to_dict()
+        c = rm.groupby(["_fp", "_kind"])["unicycle.cover_theta_all"].mean().to_dict()
+        ry = rm.groupby(["_fp", "_kind"])["unicycle.rmse_y_front"].mean().to_dict()
+        nan = float("nan")
+        fps = sorted(rm["_fp"].unique())
+        L += [f"- Rate: from {q.g(1e3 / fps[0])} to {q.g(1e3 / fps[-1])} Hz without loss the RMS y error after the "
+              f"turn goes from {_f(ry.get((fps[0], 'none'), nan) * 1e3)} to {_f(ry.get((fps[-1], 'none'), nan) * 1e3)} mm: fewer "
+              "readings of a weak sensor; theta is hardly observed by either rate.",
+              f"- Loss: independent loss of {_pct(rm[rm['_kind'] == 'Bernoulli']['net.radio.loss_rate'].mean())} "
+              f"of the frames moves the theta error from {_f(m.get((fps[0], 'none'), nan))} to "
+              f"{_f(m.get((fps[0], 'Bernoulli'), nan))} rad (at {q.g(1e3 / fps[0])} Hz); the same share lost in bursts "
+              f"gives {_f(m.get((fps[0], 'Gilbert-Elliott bursts'), nan))} rad and theta coverage "
+              f"{_pct(c.get((fps[0], 'Gilbert-Elliott bursts'), nan))} (without loss {_pct(c.get((fps[0], 'none'), nan))}). A lost wheel "
+              "command matters where the command changes (the start and the end of the turn): the drive keeps the "
+              "old one, and a burst keeps it for several periods, so the cart turns late or too far while the "
+              "filter, which knows the command it sent but not whether it arrived, predicts with the new one.", ""]
+    # ------------------------------------------------------------ CAN sweeps (fewer runs)
+    net = F.get("net")
+    if net is not None and len(net):
+        net = net.copy().assign(_fp=_ms(net["front_period"]))
+        g = net.sort_values(["_fp", "loss"]).groupby(["_fp", "loss"], sort=True)
+        se = [_tol(d, f"unicycle.cover_{s}_all") for _, d in g for s in ("x", "y", "theta")]
+        L += ["CAN bus: front IR rate x Bernoulli loss (`unicycle_net_sweep.yaml`; the side sensor stays at "
+              f"{q.g(1 / (4 * TS))} Hz; loss hits measurements and wheel commands). Monte-Carlo tolerance of a "
+              f"coverage with {q.i(g.size().min())} runs: +- {_pct(min(se))} to +- {_pct(max(se))}; differences "
+              "between points inside that are noise.", "",
+              "| front period | loss | runs | coverage x / y / theta | RMS y front part [mm] | sigma y end [mm] | "
+              "fused front |", "|---|---|---|---|---|---|---|"]
+        for (fp, lo), d in g:
+            L.append(f"| {q.g(fp)} ms | {q.g(lo)} | {q.i(len(d))} | {_pct(d['unicycle.cover_x_all'].mean())} / "
+                     f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} | "
+                     f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | {_f(d['unicycle.sd_y_end_front'].mean() * 1e3)} | "
+                     f"{_f(d['control.ekf.filter.fused_front'].mean())} |")
+            T.add("5 CAN", f"front {fp:g} ms, loss {lo}", "coverage y", d["unicycle.cover_y_all"].mean(), "", "")
+            T.add("5 CAN", f"front {fp:g} ms, loss {lo}", "RMS y front part [m]", d["unicycle.rmse_y_front"].mean(),
+                  "", "")
+        L.append("")
+    bu = F.get("burst")
+    if bu is not None and len(bu):
+        bu = bu.copy().assign(_kind=loss_kind(bu["loss_model"]))
+        L += ["CAN bus, the same share of frames lost independently or in bursts (`unicycle_burst_sweep.yaml`):", "",
+              "| loss | runs | lost share | coverage x / y / theta | RMS y front part [mm] | RMS theta all [rad] |",
+              "|---|---|---|---|---|---|"]
+        for kind, d in bu.groupby("_kind"):
+            L.append(f"| {kind} | {q.i(len(d))} | {_pct(d['net.can.loss_rate'].mean())} | "
+                     f"{_pct(d['unicycle.cover_x_all'].mean())} / {_pct(d['unicycle.cover_y_all'].mean())} / "
+                     f"{_pct(d['unicycle.cover_theta_all'].mean())} | {_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | "
+                     f"{_f(d['unicycle.rmse_theta_all'].mean())} |")
+            T.add("5 CAN", f"{kind}", "RMS theta all [rad]", d["unicycle.rmse_theta_all"].mean(), "", "")
+        L.append("")
+    zb = F["zigbee"]
+    L += ["One run of `unicycle_zigbee.yaml` (nodes a few decimetres apart): mean message delay "
+          f"{_f(zb['net.radio.mean_delay_s'] * 1e3)} ms (max {_f(zb['net.radio.max_delay_s'] * 1e3)} ms, CSMA/CA "
+          f"backoffs and {q.i(zb['net.radio.retransmissions'])} retransmissions); {q.i(zb['control.ekf.filter.late'])} "
+          f"of {q.i(zb['control.ekf.filter.fused_front'] + zb['control.ekf.filter.fused_side'])} fused samples "
+          f"arrived after their sample's filter job and were fused at their sample time; "
+          f"{q.i(zb['net.radio.dropped'])} frames lost.", ""]
+    T.add("5 radio", "802.15.4 radio, one run", "late samples fused at their sample time",
+          zb["control.ekf.filter.late"], "", "")
+    # ------------------------------------------------------------ command delay
+    dm = F["delay_margin"]
+    L += [f"Command delay. On the linear error model with u = -K e' and the true error fed back, the loop loses "
+          f"stability at a delay of {q.i(dm[0.03], 'margin_samples')} samples = "
+          f"{q.g(dm[0.03] * TS * 1e3, 'margin_ms')} ms (v_ref = {q.g(0.03)}; {q.i(dm[0.015])} samples at "
+          f"{q.g(0.015)}).", ""]
+    rd = F.get("radio_delay")
+    if rd is not None and len(rd):
+        rd = rd.copy().assign(_ms=_ms(rd["delay"]))
+        L += ["On the radio (`unicycle_radio_delay.yaml`: the LQR law, the EKF node's pre_delay before the radio), "
+              "with the report's IR noise and with accurate sensors (the report's R read as cm^2, R / "
+              f"{q.g(1e4)}; the filter's R the same):", "",
+              "| sensors | delay | runs | RMS e1 [mm] | RMS e2 [mm] | RMS e3 [rad] | max e3 [rad] | runs with "
+              "max e3 > pi/2 | coverage y / theta |", "|---|---|---|---|---|---|---|---|---|"]
+        limits = {}
+        for sens in ("report", "accurate"):
+            d0 = rd[rd["sensors"] == sens]
+            if not len(d0):
+                continue
+            limits[sens] = stability_limits(d0)
+            for dv, d in d0.groupby("_ms", sort=True):
+                L.append(f"| {sens} | {q.g(dv)} ms | {q.i(len(d))} | {_f(d['unicycle.track_rms_e1'].mean() * 1e3)} | "
+                         f"{_f(d['unicycle.track_rms_e2'].mean() * 1e3)} | {_f(d['unicycle.track_rms_e3'].mean())} | "
+                         f"{_f(d['unicycle.track_max_e3'].mean())} | "
+                         f"{_pct(np.mean(d['unicycle.track_max_e3'] > LOST_E3))} | "
+                         f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} |")
+                T.add("5 delay radio", f"{sens} sensors, {dv:g} ms", "RMS e1 [m]", d["unicycle.track_rms_e1"].mean(),
+                      "", "")
+        L.append("")
+
+        def _lim(sens: str) -> str:
+            lim = limits.get(sens)
+            if lim is None:
+                return "not run"
+            deg = (f"from {q.g(lim['degrade_ms'], f'degrade_ms_{sens}')} ms" if not math.isnan(lim["degrade_ms"])
+                   else "at no delay of the sweep")
+            lost = (f"from {q.g(lim['lost_ms'], f'lost_ms_{sens}')} ms" if not math.isnan(lim["lost_ms"])
+                    else "at no delay of the sweep")
+            return f"the mean RMS e1 reaches {q.g(GROWTH)}x its no-delay value {deg}, and most runs lose the loop {lost}"
+
+        L += [f"- Accurate sensors: {_lim('accurate')} (a run has lost the loop when its heading error passes a "
+              f"quarter turn; the linear margin above: {q.g(dm[0.03] * TS * 1e3)} ms). With accurate readings the "
+              "filter follows the measurements, so the delayed response comes back into the loop.",
+              f"- The report's sensors: {_lim('report')}. The filter predicts with each command at once, so the law's "
+              "loop closes through the filter's model without delay; the measurements, which would carry the "
+              "delayed response back, get a tiny Kalman gain with the report's Q and R. The delay shows up as "
+              "estimation error (the estimate runs ahead of the cart, the theta coverage falls) rather than as "
+              "instability.", ""]
+        for sens, lim in limits.items():
+            T.add("5 delay radio", f"{sens} sensors", "delay at which RMS e1 grows 3x [ms]", lim["degrade_ms"],
+                  "", "linear margin: " + f"{dm[0.03] * TS * 1e3:g} ms")
+            T.add("5 delay radio", f"{sens} sensors", "delay at which most runs lose the loop [ms]", lim["lost_ms"],
+                  "", "")
+    dl = F.get("delay")
+    if dl is not None and len(dl):
+        dl = dl.copy().assign(_ms=_ms(dl["delay"])).sort_values("_ms")
+        L += ["On the CAN bus with the report's sensors (`unicycle_lqr_delay.yaml`):", "",
+              "| delay | runs | RMS e1 [mm] | RMS e2 [mm] | RMS e3 [rad] | max e3 [rad] | coverage y / theta |",
+              "|---|---|---|---|---|---|---|"]
+        for dv, d in dl.groupby("_ms", sort=True):
+            L.append(f"| {q.g(dv)} ms | {q.i(len(d))} | {_f(d['unicycle.track_rms_e1'].mean() * 1e3)} | "
+                     f"{_f(d['unicycle.track_rms_e2'].mean() * 1e3)} | {_f(d['unicycle.track_rms_e3'].mean())} | "
+                     f"{_f(d['unicycle.track_max_e3'].mean())} | {_pct(d['unicycle.cover_y_all'].mean())} / "
+                     f"{_pct(d['unicycle.cover_theta_all'].mean())} |")
+            T.add("5 delay CAN", f"command delay {dv:g} ms", "RMS e3 [rad]", d["unicycle.track_rms_e3"].mean(), "", "")
+        L.append("")
+    hist = F.get("history")
+    L += ["Late samples are fused at their own sample time by re-running the filter from the stored prior of that "
+          f"sample (up to {q.i(hist, 'history')} samples back); a sample is never fused twice "
+          "(`tests/models/unicycle/test_unicycle_scenario.py` checks both, and that a sensor stream delivered late "
+          "by random amounts ends in the same estimate as an on-time one).", ""]
+    sp = F.get("speed")
+    if sp:
+        L += ["## Speed", "",
+              f"One netsim run of `unicycle_lqr.yaml` takes {_f(sp['ratio'], 2, 'speed_ratio')}x the time of a "
+              "plain numpy loop of the same EKF and LQR (best of "
+              f"{q.i(sp['repeats'])} each: {_f(sp['netsim_s'] * 1e3)} ms against {_f(sp['numpy_s'] * 1e3)} ms; "
+              "`tests/models/unicycle/test_unicycle_bench.py`, which writes `speed.json`). "
+              f"{q.i(sp['pool_runs'], 'pool_runs')} Monte-Carlo runs of `unicycle_lqr.yaml` on the local pool took "
+              f"{_f(sp['pool_wall_s'], 3, 'pool_wall_s')} s on {q.i(sp['pool_workers'])} processes of this shared "
+              f"machine: {_f(sp['pool_runs'] / sp['pool_wall_s'], 3, 'pool_runs_per_s')} runs/s.", ""]
+    return L
