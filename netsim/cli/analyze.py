@@ -35,6 +35,7 @@ import pandas as pd
 
 from netsim.analysis.can import CanMessage, can_analysis
 from netsim.analysis.rta import RTATask, edf_schedulable, response_times, utilization
+from netsim.cli.analyze_sync import NodeSyncAnalysis
 
 __all__ = ["COLUMNS", "analyze_run"]
 
@@ -97,6 +98,7 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
         items: list[RTATask] = []
         notes: dict[str, str] = {}
         skipped: list[tuple[str, str]] = []
+        sync = NodeSyncAnalysis(node)  # monitors, mailboxes ...: blocking terms, self-suspension
         kernel = sim.kernels.get(node_name)
         loads = dict(getattr(kernel, "loads", {}) or {})
         for load in loads.values():  # periodic ISR loads, from the scenario or created by programs at build
@@ -119,7 +121,7 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
                 continue
             items.append(RTATask(h.name, c + int(h.latency or 0), period, priority=-1_000_000))
         for t in node.tasks:
-            c = _wcet_ns(t)
+            c = sync.timing(t, _wcet_ns(t))
             if blind:
                 skipped.append((t.name, f"handler {', '.join(blind)}: no period or execution time to analyse"))
                 continue
@@ -144,6 +146,7 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
             else:
                 prio = float(deadline)
             items.append(RTATask(t.name, c + 2 * cs, period, deadline=deadline, priority=prio))
+        items, skipped = sync.apply(items, skipped)
         task_names = {t.name for t in node.tasks}
         if policy in ("edf", "np_edf"):
             tasks = [it for it in items if it.name in task_names]
@@ -170,13 +173,13 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
             rts = response_times(items)
             how = f"{policy.upper()} RTA"
         for it in items:
-            if it.name not in task_names:
+            if it.name not in task_names or sync.no_bound(it.name):
                 continue
             bound = rts.get(it.name)
             js = _jobs_of(jobs, node_name, it.name)
             worst = js["response_s"].max()
             unfinished = int((js["response_s"].isna() & (js["outcome"] != "pending")).sum())
-            note = notes.get(it.name, how)
+            note = notes.get(it.name, how) + sync.note(it.name)
             if unfinished:
                 note += f"; {unfinished} jobs unfinished"
             if bound is None:

@@ -11,6 +11,10 @@
     and/or ``take(semaphore)``; ``execute(inside)`` (default: the task's ``execution``); ``give``/``exit``;
     ``execute(after)``; optionally ``notify`` ``notify_event`` (every waiter).
 
+Each declares its :class:`SyncTiming` (``timing(params, execution_ns, node)``) for ``netsim analyze``: its
+execution time, its critical sections (for the RTA blocking term) and the objects it may block on (a task
+that suspends has no RTA bound of its own).
+
 Their name parameters are typed :data:`~netsim.kernel.node_sync.MailboxName` (and ``MonitorName`` ...), so
 ``netsim validate`` checks each against the node's declarations; a plugin program does the same by typing its
 own parameters so.
@@ -18,6 +22,7 @@ own parameters so.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any, Generator
 
 from netsim.control.pid import PID, PIDParams
@@ -26,9 +31,34 @@ from netsim.programs.basic import ProgramContext
 from netsim.registry import register
 from netsim.units import StrictModel, Time
 
-__all__ = ["MailboxSampler", "MailboxController", "CriticalSectionProgram"]
+__all__ = ["SyncTiming", "MailboxSampler", "MailboxController", "CriticalSectionProgram"]
 
 Body = Generator[Any, Any, None]
+
+
+@dataclass(frozen=True)
+class SyncTiming:
+    """What the response-time analysis needs of a program that uses sync objects.
+
+    Attributes
+    ----------
+    wcet : int | None
+        Worst-case execution time of a job (ns); ``None``: unknown (an unbounded ``execution``).
+    sections : dict[str, int]
+        Monitor name -> longest execution inside it (ns).
+    suspends_on : tuple[str, ...]
+        The mailboxes, semaphores or events a job may block on (self-suspension: no RTA bound of its own).
+    """
+
+    wcet: int | None
+    sections: dict[str, int] = field(default_factory=dict)
+    suspends_on: tuple[str, ...] = ()
+
+
+def _capacity(node: Any, mailbox: str) -> int | None:
+    sync = getattr(node, "sync", None)
+    decl = None if sync is None else sync.mailboxes.get(mailbox)
+    return None if decl is None else decl.capacity
 
 
 @register("program", "mailbox_sampler", "analog_in(channel), execute, post the sample to `mailbox` (nodes.<n>.sync)")
@@ -40,6 +70,13 @@ class MailboxSampler:
         mailbox: MailboxName
         blocking: bool = True
         record_as: str | None = None
+
+    @staticmethod
+    def timing(params: Any, execution: int | None, node: Any) -> SyncTiming:
+        """The task's execution; it blocks only on a bounded mailbox with ``blocking: true``."""
+        full = params.blocking and _capacity(node, params.mailbox) is not None
+        return SyncTiming(execution, {},
+                          (f"mailbox '{params.mailbox}' (post while full)",) if full else ())
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
@@ -75,6 +112,12 @@ class MailboxController:
     """Consumer: a PID controller fed by a mailbox, computing inside a monitor."""
 
     Params = _MailboxControllerParams
+
+    @staticmethod
+    def timing(params: Any, execution: int | None, node: Any) -> SyncTiming:
+        """The task's execution, all of it inside the monitor; it blocks on the mailbox until a sample is there."""
+        sections = {params.monitor: execution or 0} if params.monitor is not None and execution is not None else {}
+        return SyncTiming(execution, sections, (f"mailbox '{params.mailbox}' (fetch while empty)",))
 
     def __init__(self, ctx: ProgramContext, params: _MailboxControllerParams) -> None:
         self.ctx = ctx
@@ -112,6 +155,17 @@ class CriticalSectionProgram:
         before: Time = 0
         inside: Time | None = None
         after: Time = 0
+
+    @staticmethod
+    def timing(params: Any, execution: int | None, node: Any) -> SyncTiming:
+        """``before + inside + after``; ``inside`` is a section of the monitor (and a wait on the semaphore)."""
+        inside = execution if params.inside is None else int(params.inside)
+        waits = tuple(f"{what} '{name}'" for what, name in (("semaphore", params.semaphore),
+                                                               ("event", params.wait_event)) if name is not None)
+        if inside is None:
+            return SyncTiming(None, {}, waits)
+        sections = {params.monitor: inside} if params.monitor is not None else {}
+        return SyncTiming(int(params.before) + inside + int(params.after), sections, waits)
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.p = params
