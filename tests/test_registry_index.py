@@ -178,3 +178,24 @@ def test_declarations_are_string_literals_and_anything_else_makes_the_module_opa
     assert declarations_in('register(kind="plant", name="x")(f)\n', kinds)[1] is True
     with pytest.raises(SyntaxError):
         declarations_in("def broken(:\n", kinds)
+
+
+def test_the_index_walks_the_same_modules_as_load_plugins_in_the_same_order():
+    # load_plugins imports with pkgutil.iter_modules; the index lists directories itself (no import, no pkgutil)
+    import importlib
+    import pkgutil
+
+    from netsim.registry.index import _walk
+
+    def walk(name: str, out: list[str]) -> None:
+        out.append(name)
+        module = importlib.import_module(name)
+        for info in sorted(pkgutil.iter_modules(getattr(module, "__path__", None) or []), key=lambda i: i.name):
+            if info.name != "__main__":
+                walk(f"{name}.{info.name}", out)
+
+    expected: list[str] = []
+    for root in registry.PLUGIN_MODULES:
+        walk(root, expected)
+    assert [m for root in registry.PLUGIN_MODULES for m, _ in _walk(root)] == expected
+    assert len(expected) > 100  # netsim's plugin packages and the case studies

@@ -25,7 +25,6 @@ import json
 import logging
 import os
 import sys
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator
@@ -122,8 +121,8 @@ def cache_path() -> Path:
     return Path(base) / f"plugin-index-{tag}.json"
 
 
-def _locate(dotted: str) -> tuple[Path | None, bool]:
-    """(source file or package directory, is_package) of ``dotted`` found without importing it.
+def _locate(dotted: str) -> tuple[str | None, bool]:
+    """(absolute source file or package directory, is_package) of ``dotted``, found without importing it.
 
     The top-level name is found by :func:`importlib.util.find_spec` (which imports nothing for a top-level
     name); the rest is looked up in the package directories. ``(None, False)`` when it does not exist.
@@ -135,51 +134,69 @@ def _locate(dotted: str) -> tuple[Path | None, bool]:
         return None, False
     if spec is None:
         return None, False
+    dirs = [os.path.abspath(p) for p in (spec.submodule_search_locations or [])]
     if not rest:
-        if spec.submodule_search_locations:
-            return Path(list(spec.submodule_search_locations)[0]), True
-        return (Path(spec.origin) if spec.origin and spec.origin.endswith(".py") else None), False
-    dirs = [Path(p) for p in (spec.submodule_search_locations or [])]
+        if dirs:
+            return dirs[0], True
+        return (os.path.abspath(spec.origin) if spec.origin and spec.origin.endswith(".py") else None), False
     for i, part in enumerate(rest):
-        last = i == len(rest) - 1
-        nxt: list[Path] = []
-        for d in dirs:
-            if (d / part).is_dir():
-                nxt.append(d / part)
-            elif last and (d / f"{part}.py").is_file():
-                return d / f"{part}.py", False
+        nxt = [os.path.join(d, part) for d in dirs if os.path.isdir(os.path.join(d, part))]
+        if i == len(rest) - 1:
+            for d in dirs:
+                if not nxt and os.path.isfile(os.path.join(d, part + ".py")):
+                    return os.path.join(d, part + ".py"), False
         if not nxt:
             return None, False
         dirs = nxt
     return dirs[0], True
 
 
-def _walk(dotted: str) -> Iterator[tuple[str, Path | None]]:
+def _walk(dotted: str) -> Iterator[tuple[str, Any]]:
     """``(module name, source file or None)`` of ``dotted`` and, for a package, every module below it, in the
-    order :func:`netsim.registry.load_plugins` imports them (sorted, ``__main__`` excepted)."""
+    order :func:`netsim.registry.load_plugins` imports them (sorted, ``__main__`` excepted). The source is a path
+    or an :class:`os.DirEntry`; a module without Python source (an extension module, a stray ``.pyc``) comes
+    with None: it must be imported to be known."""
     where, is_pkg = _locate(dotted)
-    if where is None:
-        yield dotted, None
-        return
-    if not is_pkg:
+    if where is None or not is_pkg:
         yield dotted, where
         return
     yield from _walk_dir(dotted, where)
 
 
-def _walk_dir(dotted: str, where: Path) -> Iterator[tuple[str, Path | None]]:
-    import pkgutil
+def _walk_dir(dotted: str, where: str) -> Iterator[tuple[str, Any]]:
+    from importlib.machinery import all_suffixes
 
-    init = where / "__init__.py"
-    yield dotted, init if init.is_file() else None
-    for info in sorted(pkgutil.iter_modules([str(where)]), key=lambda i: i.name):
-        if info.name == "__main__":
+    init = os.path.join(where, "__init__.py")
+    yield dotted, init if os.path.isfile(init) else None
+    children: dict[str, tuple[bool, Any]] = {}  # name -> (is_package, package path or source DirEntry)
+    try:
+        entries = list(os.scandir(where))
+    except OSError:
+        return
+    suffixes = sorted(all_suffixes(), key=len, reverse=True)
+    for entry in entries:
+        name = entry.name
+        if entry.is_dir():
+            if "." not in name and any(os.path.isfile(os.path.join(entry.path, "__init__" + x)) for x in suffixes):
+                children.setdefault(name, (True, entry.path))
             continue
-        if info.ispkg:
-            yield from _walk_dir(f"{dotted}.{info.name}", where / info.name)
+        suffix = next((x for x in suffixes if name.endswith(x)), None)
+        if suffix is None:
+            continue
+        stem = name[: -len(suffix)]
+        if stem in ("__init__", "__main__") or not stem.isidentifier():
+            continue
+        if suffix == ".py":
+            if not children.get(stem, (False, None))[0]:  # a package beats a module of the same name, as in import
+                children[stem] = (False, entry)
         else:
-            src = where / f"{info.name}.py"
-            yield f"{dotted}.{info.name}", src if src.is_file() else None
+            children.setdefault(stem, (False, None))
+    for name in sorted(children):
+        is_pkg, where_or_entry = children[name]
+        if is_pkg:
+            yield from _walk_dir(f"{dotted}.{name}", where_or_entry)
+        else:
+            yield f"{dotted}.{name}", where_or_entry
 
 
 def _read_cache(path: Path, kinds: tuple[str, ...]) -> dict[str, Any]:
@@ -194,6 +211,8 @@ def _read_cache(path: Path, kinds: tuple[str, ...]) -> dict[str, Any]:
 
 
 def _write_cache(path: Path, kinds: tuple[str, ...], files: dict[str, Any]) -> None:
+    import tempfile  # only when something changed: a start-up with a valid cache does not import it
+
     kept = {name: rec for name, rec in files.items() if os.path.exists(name)}  # files deleted since: dropped
     tmp = None
     try:
@@ -208,9 +227,10 @@ def _write_cache(path: Path, kinds: tuple[str, ...], files: dict[str, Any]) -> N
             os.unlink(tmp)
 
 
-def _file_record(src: Path, stat: os.stat_result, kinds: tuple[str, ...]) -> dict[str, Any]:
+def _file_record(src: str, stat: os.stat_result, kinds: tuple[str, ...]) -> dict[str, Any]:
     try:
-        found, opaque = declarations_in(src.read_text(encoding="utf-8"), kinds)
+        with open(src, encoding="utf-8") as fh:
+            found, opaque = declarations_in(fh.read(), kinds)
     except (SyntaxError, ValueError, UnicodeDecodeError, OSError):
         found, opaque = [], True  # imported on a miss, where its error is reported
     return {"mtime_ns": stat.st_mtime_ns, "size": stat.st_size, "decl": [list(d) for d in found], "opaque": opaque}
@@ -244,15 +264,15 @@ def plugin_index(roots: Iterable[str], kinds: Iterable[str], *, refresh: bool = 
             if src is None:
                 index.opaque.append(module)  # no source (missing, extension module): import to know
                 continue
-            fname = str(src.resolve())
+            fname = src if isinstance(src, str) else src.path
             try:
-                st = src.stat()
+                st = os.stat(src) if isinstance(src, str) else src.stat()  # a DirEntry's stat needs no path lookup
             except OSError:
                 index.opaque.append(module)
                 continue
             rec = files.get(fname)
             if not (isinstance(rec, dict) and rec.get("mtime_ns") == st.st_mtime_ns and rec.get("size") == st.st_size):
-                rec = _file_record(src, st, key[1])
+                rec = _file_record(fname, st, key[1])
                 files[fname] = rec
                 changed = True
             if rec["opaque"]:
