@@ -131,3 +131,22 @@ def test_a_node_whose_battery_ran_out_sends_nothing_more():
     assert 40 * MS < dead < 50 * MS
     assert len(got) == 5 and all(x < dead for x in got)
     assert meters["a"].metrics(100 * MS)["J"] == pytest.approx(2e-3, abs=1e-10)
+
+
+def test_80211b_radio_time_counts_the_frame_and_its_ack_at_both_ends():
+    env = SimEnv()
+    net = make_network(env, "w", "802.11b", {"nodes": ["a", "b"], "positions": {"a": [0, 0], "b": [10, 0]}})
+    for n in ("a", "b"):
+        net.attach(n, type("R", (), {"deliver": lambda self, x, m: None})())
+    power = {"tx": "1 W", "rx": "0.5 W", "idle": "0.1 W"}
+    meters = {n: EnergyMeter(env, n, Kernel(env, n), EnergyModel.model_validate({"radio": power}), [net])
+              for n in ("a", "b")}
+    env.sim.call_at(1 * MS, lambda: net.send(Message("a", "b", None, 1000)))
+    env.run(10 * MS)
+    # independent: the frame 192 us + (1000 + 272) bits at 11 Mbit/s, the ACK 192 us + 112 bits, SIFS apart
+    frame = (192e-6 + math.ceil((1000 + 272) * 1e9 / 11e6) / 1e9)
+    ack = (192e-6 + math.ceil(112 * 1e9 / 11e6) / 1e9)
+    a, b = meters["a"].metrics(10 * MS), meters["b"].metrics(10 * MS)
+    assert (a["radio_tx_s"], a["radio_rx_s"]) == (pytest.approx(frame), pytest.approx(ack))
+    assert (b["radio_tx_s"], b["radio_rx_s"]) == (pytest.approx(ack), pytest.approx(frame))
+    assert a["J"] == pytest.approx(1.0 * frame + 0.5 * ack + 0.1 * (0.010 - frame - ack))
