@@ -89,10 +89,15 @@ _Mo = Annotated[MonitorDecl, BeforeValidator(_empty_is_default)]
 class SyncSpec(_Decl):
     """The named synchronisation objects of a node, created on its kernel before its programs are built."""
 
-    mailboxes: dict[_Name, _M] = Field(default_factory=dict)
-    semaphores: dict[_Name, _S] = Field(default_factory=dict)
-    events: dict[_Name, _E] = Field(default_factory=dict)
-    monitors: dict[_Name, _Mo] = Field(default_factory=dict)
+    mailboxes: dict[_Name, _M] = Field(default_factory=dict, description=(
+        "name: {capacity: N} (a FIFO; a post blocks while N items wait; capacity omitted: unbounded)"))
+    semaphores: dict[_Name, _S] = Field(default_factory=dict, description=(
+        "name: {count: N, maximum: M} (counting; take blocks at 0; a give saturates at maximum)"))
+    events: dict[_Name, _E] = Field(default_factory=dict, description=(
+        "name: {} (wait blocks until the next notify; a notify with nobody waiting is lost)"))
+    monitors: dict[_Name, _Mo] = Field(default_factory=dict, description=(
+        "name: {protocol: inherit | ceiling | none, users: [tasks]} (priority inheritance, immediate priority "
+        "ceiling, or a plain mutex; the ceiling counts the tasks naming the monitor plus users)"))
 
 
 def _task_refs(node: Any) -> list[tuple[str, str, str, list[Any]]]:
