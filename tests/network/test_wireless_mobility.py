@@ -1,6 +1,7 @@
 """Node mobility on a radio channel (issue 20): piecewise-linear paths and constant velocities."""
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -98,3 +99,28 @@ def test_set_position_ends_a_nodes_motion():
     env.run(4 * S)
     assert net.position("b") == (3.0, 4.0)
     assert net.received_power_dbm("a", "b") == pytest.approx(20.0 - 35.0 * math.log10(5.0))
+
+
+@pytest.mark.parametrize("change, path, text", [
+    ({"mobility": {"sensor": {"path": {0: [1, 1]}}}}, "networks.bus.mobility.sensor", "after 0 s"),
+    ({"mobility": {"sensor": {"velocity": [1, "fast"]}}}, "networks.bus.mobility.sensor.velocity[1]", ""),
+    ({"mobility": {"ghost": {"velocity": [1, 0]}}}, "networks.bus", "mobility: ['ghost'] not in the network's nodes"),
+    ({"carrier_sense_dbm": "loud"}, "networks.bus.carrier_sense_dbm", ""),
+])
+def test_bad_radio_fields_in_a_scenario_are_refused_at_their_yaml_path_by_validate(tmp_path, change, path, text):
+    import yaml
+
+    from netsim.cli import main
+    from netsim.scenario import load_scenario
+    from netsim.scenario.problems import ScenarioError
+
+    root = Path(__file__).resolve().parents[2]
+    raw = yaml.safe_load((root / "scenarios" / "wireless_battery.yaml").read_text(encoding="utf-8"))
+    raw["networks"]["bus"].update(change)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(raw)
+    found = [(p.path, p.message) for p in info.value.problems]
+    assert any(p == path and text in m for p, m in found), found
+    file = tmp_path / "bad.yaml"
+    file.write_text(yaml.safe_dump(raw), encoding="utf-8")
+    assert main(["validate", str(file)]) == 1
