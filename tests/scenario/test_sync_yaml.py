@@ -133,3 +133,27 @@ def test_plugin_programs_name_sync_objects_too() -> None:
     sim = build(sc)
     assert sim.kernels["computer"].sync.mailbox("samples") is sim.programs["computer.plug"].mb
 
+
+
+def test_events_and_semaphores_from_yaml_at_run_time() -> None:
+    """waiter (prio 1, released at 0) waits for 'go'; notifier (prio 2, at 2 ms) executes 0.5 ms and notifies at
+    2.5 ms; the waiter then executes 1 ms: finish 3.5 ms. 'slot' (count 1) guards 2 ms of a and b (prio 3, 4; b
+    released first at 4 ms, a at 5 ms): a waits for b's give at 6 ms (b runs 4-6 inside), runs 6-8: response 3 ms."""
+    raw = _raw()
+    node = raw["nodes"]["computer"]
+    node["sync"] = {"events": {"go": None}, "semaphores": {"slot": {"count": 1, "maximum": 1}}}
+    node["tasks"] = [
+        {"name": "waiter", "program": "critical_section", "period": "20 ms", "priority": 1,
+         "params": {"wait_event": "go", "before": "1 ms"}},
+        {"name": "notifier", "program": "critical_section", "period": "20 ms", "offset": "2 ms", "priority": 2,
+         "params": {"notify_event": "go", "before": "0.5 ms"}},
+        {"name": "a", "program": "critical_section", "period": "20 ms", "offset": "5 ms", "priority": 3,
+         "params": {"semaphore": "slot", "inside": "2 ms"}},
+        {"name": "b", "program": "critical_section", "period": "20 ms", "offset": "4 ms", "priority": 4,
+         "params": {"semaphore": "slot", "inside": "2 ms"}}]
+    raw["metrics"] = []
+    result, _, failure = simulate(load_scenario(raw, {"duration": "0.1 s"}))
+    assert failure is None
+    jobs = result.jobs
+    worst = {t: round(jobs[jobs.task == t].response_s.max() * 1e9) for t in ("waiter", "a", "b")}
+    assert worst == {"waiter": 3_500_000, "a": 3_000_000, "b": 2_000_000}
