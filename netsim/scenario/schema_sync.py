@@ -184,4 +184,7 @@ def sync_ref_problems(node_name: str, node: dict[str, Any], params: Any, at: lis
         known = [k for k in declared if isinstance(k, str)] if isinstance(declared, dict) else []
         if name not in known:
             problems.append(Problem(format_path([*at, *sub]), unknown_sync_name(node_name, kind, name, known)))
+        elif kind == "monitors" and "handlers" in at:
+            problems.append(Problem(format_path([*at, *sub]), f"monitor '{name}': an interrupt handler cannot wait "
+                                    "for a monitor (the kernel refuses its enter); use it from a task"))
     return problems

@@ -83,6 +83,16 @@ def test_the_sync_section_is_validated_with_paths() -> None:
     assert any(p.startswith("nodes.computer.sync.monitors.state.protocol") for p in _errors(raw))
 
 
+def test_a_handler_cannot_use_a_monitor() -> None:
+    raw = _raw()
+    raw["nodes"]["computer"]["handlers"] = [{"name": "isr", "program": "critical_section",
+                                             "params": {"monitor": "state", "inside": "1 us"},
+                                             "trigger": {"timer": {"period": "10 ms"}}}]
+    assert _errors(raw) == {"nodes.computer.handlers[0].params.monitor": (
+        "monitor 'state': an interrupt handler cannot wait for a monitor (the kernel refuses its enter); use it "
+        "from a task")}
+
+
 def test_a_ceiling_needs_a_static_policy_and_known_users() -> None:
     raw = _raw()
     raw["nodes"]["computer"]["policy"] = "edf"
