@@ -8,7 +8,7 @@ Built-in policies (registered under kind ``"policy"``):
 
 ========== ==============================================================================
 ``fp``     fixed priority: key = the task's ``priority`` (required)
-``rm``     rate monotonic: key = period (aperiodic tasks last); deadlines must not exceed periods
+``rm``     rate monotonic: key = period (sporadic: min gap; aperiodic last); D <= T
 ``dm``     deadline monotonic: key = relative deadline (tasks without one last); D <= T
 ``edf``    earliest deadline first: key = absolute deadline of the job (none: last)
 ``np_fp``  ``fp`` without preemption between tasks (handlers still preempt)
@@ -18,6 +18,12 @@ Built-in policies (registered under kind ``"policy"``):
 Custom policies subclass :class:`Policy` and override :meth:`Policy.key` (and optionally
 :meth:`Policy.check` and :attr:`Policy.preemptive`); pass an instance to ``Kernel(policy=...)`` or name
 it as ``"module:Class"``.
+
+A key is a job's *own* urgency. While a job owns a monitor (:mod:`netsim.kernel.monitor`) the dispatcher orders it by
+its *effective* urgency instead: the most urgent of its own and those of the jobs waiting for its monitors
+(priority inheritance; under ``edf`` that is the earliest waiting deadline), or the monitor's ceiling (the
+immediate ceiling protocol, static policies only: ``fp``, ``rm``, ``dm``, ``np_fp``). Policies need not do
+anything for it: the effective urgency is a rank the monitor sets on the job, compared like any other key.
 
 Every policy name is resolved by :func:`find_policy` (the kernel, ``netsim validate`` and the scenario
 builder alike); :func:`resolve_policy` turns its result into the instance a kernel uses.
@@ -105,10 +111,12 @@ class _Constrained(Policy):
     """Shared check: relative deadline must not exceed the period (the policy's optimality assumption)."""
 
     def check(self, node: str, spec: TaskSpec) -> None:
-        if spec.period is not None and spec.deadline is not None and spec.deadline > spec.period:
+        period = spec.period if spec.period is not None else spec.min_interarrival  # sporadic: the minimum gap
+        if period is not None and spec.deadline is not None and spec.deadline > period:
+            what = "period" if spec.period is not None else "min_interarrival"
             raise task_error(
                 node, spec.name, "deadline",
-                f"{format_time(spec.deadline)} exceeds the period {format_time(spec.period)}, which policy "
+                f"{format_time(spec.deadline)} exceeds the {what} {format_time(period)}, which policy "
                 f"'{self.name}' does not allow; shorten the deadline or use policy 'fp' or 'edf'",
             )
 
@@ -121,7 +129,8 @@ class RateMonotonic(_Constrained):
     static = True
 
     def key(self, job: "Job") -> Any:
-        period = job.spec.period
+        spec = job.spec
+        period = spec.period if spec.period is not None else spec.min_interarrival  # sporadic: the minimum gap
         return math.inf if period is None else period
 
 
