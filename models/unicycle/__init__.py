@@ -2,10 +2,12 @@
 
 Modules: :mod:`~models.unicycle.model` (kinematics eqs 1-3, exact arcs, sensors eqs 4-9, Jacobians eqs
 12-17, the report's constants and our choices), :mod:`~models.unicycle.design` (trajectory, EKF, cart-frame
-LQR eqs 24-27), :mod:`~models.unicycle.plant` (plant ``unicycle``), :mod:`~models.unicycle.programs`
+LQR eqs 24-27), :mod:`~models.unicycle.ekf` (the same EKF on plain floats, used by the programs and the
+numpy loop), :mod:`~models.unicycle.plant` (plant ``unicycle``), :mod:`~models.unicycle.programs`
 (programs ``ir_sensor``, ``unicycle_ekf``, ``wheel_drive``), :mod:`~models.unicycle.reference` (a plain numpy
 loop of the same filter and law, for Monte-Carlo studies and the benchmark) and :mod:`~models.unicycle.report`
-(``netsim report unicycle``).
+(``netsim report unicycle``, with :mod:`~models.unicycle.readme`, :mod:`~models.unicycle.readme_net` and
+:mod:`~models.unicycle.quoting`).
 """
 
 from __future__ import annotations

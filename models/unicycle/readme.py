@@ -118,7 +118,7 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
     L += ["", f"The measurement-prediction bands (z_hat +- 1.96 sqrt(H P H' + R)) cover {_pct(F['zcover'])} of the "
           "actual noisy readings.", ""]
     T.add("1 bands", f"(Q, R), {n} runs", "coverage of readings by measurement bands", F["zcover"], "Fig. 3", "")
-    for net_name, key, scen in (("CAN", "qr_can", "unicycle_ekf.yaml"), ("802.15.4 radio", "qr_radio",
+    for net_name, key, scen in (("CAN bus", "qr_can", "unicycle_ekf.yaml"), ("802.15.4 radio", "qr_radio",
                                                                         "unicycle_zigbee.yaml")):
         d = F.get(key)
         if d is None or not len(d):
@@ -156,7 +156,10 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
           f"(P+ = A P A' + Q with det A = {q.i(1)} and Q > {q.i(0)} cannot shrink it); over the "
           f"{q.g(tu.duration)} s it grows by a factor "
           f"{_f(b['detP_ratio'])} (median). The report says the bands widen monotonically: confirmed, but with its Q "
-          "the widening is a few per cent of sigma, invisible next to the initial uncertainty.",
+          f"sigma grows by only {_pct(b['sd_x_end_turn'] / b['sd_x_end_straight'] - 1)} / "
+          f"{_pct(b['sd_y_end_turn'] / b['sd_y_end_straight'] - 1)} / "
+          f"{_pct(b['sd_theta_end_turn'] / b['sd_theta_end_straight'] - 1)} (x / y / theta) over the blackout, "
+          "little next to the initial uncertainty.",
           f"- Observability (rank of [C; CA; CA^2] at the reference poses): straight part with both sensors "
           f"rank {q.i(ob['straight']['rank_O'], 'rank_O_straight')} (C has rank "
           f"{q.i(ob['straight']['rank_C'])}; smallest singular "
@@ -184,8 +187,8 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
     T.add("2 blackout", "netsim baseline run", "recovery of sigma y after the turn [s]", bm["unicycle.recovery_y_s"], "", "")
     # ---------------------------------------------------------------- experiment 3
     q.section = "s3"
-    L += [f"## 3. The Q/R study ({q.i(n)} Monte-Carlo runs per setting, numpy loop and netsim on CAN and on the "
-          "radio; the truth keeps (Q, R))", "",
+    L += ["## 3. The Q/R study (Monte-Carlo runs of the numpy loop and of netsim on CAN and on the radio, the "
+          "number per setting in the table; the truth keeps (Q, R))", "",
           "Figure: `fig1_qr_rms.png` (Monte-Carlo RMS error against time per setting, numpy loop; the report's "
           "Fig. 1 shows single estimates). Roughness = RMS second difference of the estimate in the straight part "
           "(the reference's is zero there): the noise the filter lets through. The windows after the turn are "

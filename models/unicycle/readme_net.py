@@ -217,6 +217,8 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
           f"sample (up to {q.i(hist, 'history')} samples back); a sample is never fused twice "
           "(`tests/models/unicycle/test_unicycle_scenario.py` checks both, and that a sensor stream delivered late "
           "by random amounts ends in the same estimate as an on-time one).", ""]
+    L += ["Not tried: a filter told which wheel commands were lost (an acknowledgement from the drive node), which "
+          "would address the burst effect above.", ""]
     sp = F.get("speed")
     if sp:
         L += ["## Speed", "",
