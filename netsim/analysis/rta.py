@@ -12,15 +12,20 @@ its level-``i`` busy period (``q = 0, 1, ...``)::
     R(q) = w(q) + J_i - q T_i
 
 iterating while ``R(q) > T_i`` (the next job of ``i`` still falls in the busy window);
-``R_i = max_q R(q)``. ``hp(i)`` holds the tasks with a smaller priority value and, conservatively, the
+``R_i = max_q R(q)``. ``R`` counts from the job's **nominal** release (``J_i + w``: the job may arrive up to
+``J_i`` late); a sporadic task enters with ``T`` = its minimum inter-arrival time. netsim's kernel measures
+``response`` the same way (``JobRecord.response``, from the nominal release; ``response_from_arrival`` is at
+most ``w``). ``hp(i)`` holds the tasks with a smaller priority value and, conservatively, the
 other tasks of equal priority. The iteration diverges when the level-``i`` utilization reaches 1; the
 result is then ``None``.
 
 EDF (preemptive, one CPU)
 -------------------------
-The processor-demand test (Baruah, Rosier & Howell): with ``dbf(t) = sum_i max(0, floor((t - D_i)/T_i)
+The processor-demand test (Baruah, Rosier & Howell): with ``dbf(t) = sum_i max(0, floor((t + J_i - D_i)/T_i)
 + 1) C_i``, a synchronous periodic task set is EDF-schedulable iff ``U <= 1`` and ``dbf(t) <= t`` at
-every absolute deadline ``t`` within the first synchronous busy period.
+every absolute deadline ``t`` within the first synchronous busy period. Release jitter ``J_i`` (Spuri) shortens
+a task's deadline to ``D_i - J_i`` after its arrival, and the busy period grows with it
+(``w = sum ceil((w + J_i) / T_i) C_i``); without jitter the test is exact, with it, sufficient.
 
 Examples
 --------
@@ -35,23 +40,23 @@ True
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Iterable, Sequence
 
 from netsim.errors import ConfigError
 
 __all__ = [
     "RTATask",
-    "response_times",
-    "fp_schedulable",
-    "rate_monotonic",
-    "deadline_monotonic",
-    "utilization",
-    "hyperperiod",
     "busy_period",
+    "deadline_monotonic",
     "edf_demand",
     "edf_schedulable",
+    "fp_schedulable",
+    "hyperperiod",
+    "rate_monotonic",
+    "response_times",
+    "utilization",
 ]
 
 
@@ -200,17 +205,18 @@ def busy_period(tasks: Sequence[RTATask]) -> int | None:
     if w == 0:
         return 0
     while True:
-        nxt = sum(_ceil_div(w, t.period) * t.wcet for t in tasks)
+        nxt = sum(_ceil_div(w + t.jitter, t.period) * t.wcet for t in tasks)
         if nxt == w:
             return w
         w = nxt
 
 
 def edf_demand(tasks: Iterable[RTATask], t: int) -> int:
-    """Processor demand ``dbf(t)``: work of the jobs released and due within ``[0, t]``."""
+    """Processor demand ``dbf(t)``: work of the jobs arriving and due within ``[0, t]`` (a job with jitter ``J``
+    is due ``D - J`` after its latest arrival)."""
     total = 0
     for task in tasks:
-        d = task.relative_deadline
+        d = task.relative_deadline - task.jitter
         if t >= d:
             total += ((t - d) // task.period + 1) * task.wcet
     return total
@@ -226,7 +232,9 @@ def edf_schedulable(tasks: Sequence[RTATask]) -> bool:
     assert horizon is not None
     deadlines: set[int] = set()
     for task in tasks:
-        d = task.relative_deadline
+        d = task.relative_deadline - task.jitter
+        if d <= 0:
+            return False  # a job may arrive after its deadline
         while d <= horizon:
             deadlines.add(d)
             d += task.period

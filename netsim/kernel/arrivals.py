@@ -26,8 +26,9 @@ Semantics
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from heapq import heapify, heappush
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
 from netsim.errors import BuildError, SimulationError
 from netsim.kernel.events import NORMAL
@@ -54,20 +55,20 @@ class Arrivals:
     env: Any
     halted: bool
     policy: Any
-    tasks: dict[str, "Task"]
+    tasks: dict[str, Task]
     _sim: Any
     _queue: list[Any]
     _eid: Any
     _ready: list[Any]
-    _running: "Job | None"
+    _running: Job | None
     _get: Callable[..., Any]
-    _release: Callable[..., "Job"]
+    _release: Callable[..., Job]
     _request_dispatch: Callable[[], None]
     _request_dispatch_deferred: Callable[[], None]
     _on_periodic_release: Callable[[Any], None]
 
     # ================================================================= build
-    def _schedule_first_release(self, task: "Task") -> None:
+    def _schedule_first_release(self, task: Task) -> None:
         """Push the first self-release of ``task`` (periodic or sporadic) at its offset from now."""
         spec = task.spec
         now = self._sim.now
@@ -139,7 +140,7 @@ class Arrivals:
             heappush(self._queue, (when, NORMAL, next(self._eid), (callback, t)))
         self._rekey(t)
 
-    def set_priority(self, task: str, priority: int | float) -> None:
+    def set_priority(self, task: str, priority: float) -> None:
         """Change the priority of ``task`` (TrueTime's ``ttSetPriority``; lower is more urgent).
 
         Under a policy that ranks by priority (``fp``, ``np_fp``) the task's released jobs are re-ranked at
@@ -170,7 +171,7 @@ class Arrivals:
         self._rekey(t)
 
     # ================================================================= helpers
-    def _replace_spec(self, task: "Task", **changes: Any) -> None:
+    def _replace_spec(self, task: Task, **changes: Any) -> None:
         spec = dataclasses.replace(task.spec, **changes)
         try:
             self.policy.check(self.name, spec)
@@ -179,7 +180,7 @@ class Arrivals:
                                   f"{exc}") from None
         task.spec = spec
 
-    def _cancel_release(self, task: "Task") -> tuple[int, Any] | None:
+    def _cancel_release(self, task: Task) -> tuple[int, Any] | None:
         """Disable ``task``'s pending release entry; ``(time, callback)`` it had, or None if there is none.
 
         The entry keeps its place in the heap with a no-op callback (so the heap needs no re-ordering); a scan
@@ -194,7 +195,7 @@ class Arrivals:
                 return entry[0], item[0]
         return None
 
-    def _rekey(self, task: "Task") -> None:
+    def _rekey(self, task: Task) -> None:
         """Recompute the policy key of ``task`` and of its released jobs; re-dispatch if a rank changed."""
         policy = self.policy
         task.key = None

@@ -6,10 +6,11 @@ The schedule trace is a plain list of ``(task, state, t0, t1)`` tuples (``state`
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any
 
-__all__ = ["JobRecord", "busy_time", "deadline_verdict", "job_outcome", "has_arrivals", "ARRIVAL_COLUMNS", "OUTCOMES"]
+__all__ = ["ARRIVAL_COLUMNS", "OUTCOMES", "JobRecord", "busy_time", "deadline_verdict", "has_arrivals", "job_outcome"]
 
 #: The values of :func:`job_outcome` (the ``outcome`` column of ``jobs.csv``).
 OUTCOMES = ("met", "missed", "killed", "pending", "done")
@@ -108,21 +109,21 @@ class JobRecord:
     arrival: int | None = None
 
     @property
-    def release_jitter(self) -> int:
-        """``arrival - release``: how late the job arrived after its nominal release (0 without jitter)."""
-        return 0 if self.arrival is None else self.arrival - self.release
+    def release_jitter(self) -> int | None:
+        """``arrival - release``: how late the job arrived after its nominal release (``None`` without jitter)."""
+        return None if self.arrival is None else self.arrival - self.release
 
     @property
     def response_from_arrival(self) -> int | None:
-        """``finish - arrival`` (``response`` for a job without jitter; ``None`` when ``response`` is)."""
-        if self.response is None or self.finish is None:
+        """``finish - arrival`` (``None`` without jitter, or when the job has no ``response``)."""
+        if self.arrival is None or self.response is None or self.finish is None:
             return None
-        return self.response if self.arrival is None else self.finish - self.arrival
+        return self.finish - self.arrival
 
 
-#: The jobs table's columns for release jitter, ``(column, JobRecord attribute)``: only in the tables of runs
-#: with at least one jittered job (:func:`has_arrivals`), so other runs' tables keep their columns.
-ARRIVAL_COLUMNS: tuple[tuple[str, str], ...] = (("release_jitter_s", "release_jitter"),
+#: The jobs table's columns for release jitter, ``(column, JobRecord attribute)``, all times: empty for jobs of
+#: tasks without jitter, and left out of the tables of runs without any (:func:`has_arrivals`).
+ARRIVAL_COLUMNS: tuple[tuple[str, str], ...] = (("arrival_s", "arrival"), ("release_jitter_s", "release_jitter"),
                                                 ("response_from_arrival_s", "response_from_arrival"))
 
 
@@ -137,8 +138,8 @@ def busy_time(intervals: Iterable[tuple[str, str, int, int]], t0: int, t1: int) 
     for _, state, a, b in intervals:
         if state != "running":
             continue
-        lo = a if a > t0 else t0
-        hi = b if b < t1 else t1
+        lo = max(t0, a)
+        hi = min(t1, b)
         if hi > lo:
             total += hi - lo
     return total

@@ -15,13 +15,14 @@ import functools
 import inspect
 import numbers
 from collections import deque
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable
+from typing import Any
 
 from netsim.errors import BuildError
 from netsim.timebase import format_time
 
-__all__ = ["TaskSpec", "HandlerSpec", "Task", "Handler", "task_error", "check_body", "check_time", "did_you_mean"]
+__all__ = ["Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
 
 
 def did_you_mean(name: str, known: Iterable[str]) -> str:
@@ -216,7 +217,9 @@ def _distribution(node: str, task: str, field: str, value: Any) -> Any:
     """A distribution field of a task as an :class:`~netsim.kernel.exectime.ExecTime` (an int: constant ns)."""
     if value is None:
         return None
-    from netsim.kernel.exectime import ExecTime  # the run time (numpy) only for tasks that use the field
+    from netsim.kernel.exectime import (
+        ExecTime,  # the run time (numpy) only for tasks that use the field
+    )
 
     if isinstance(value, ExecTime):
         return value
@@ -265,8 +268,24 @@ class HandlerSpec:
 class Task:
     """Run-time state of a task: its body, its FIFO of released jobs and its counters."""
 
-    __slots__ = ("spec", "name", "body", "data", "wcet_handler", "deadline_handler", "queue", "active",
-                 "released", "key", "cpu", "trace_state", "trace_since", "watch_deadline", "rng", "first_release")
+    __slots__ = (
+        "active",
+        "body",
+        "cpu",
+        "data",
+        "deadline_handler",
+        "first_release",
+        "key",
+        "name",
+        "queue",
+        "released",
+        "rng",
+        "spec",
+        "trace_since",
+        "trace_state",
+        "watch_deadline",
+        "wcet_handler",
+    )
 
     def __init__(self, spec: TaskSpec, body: Callable[[Any], Any], data: Any) -> None:
         self.spec = spec
@@ -290,8 +309,18 @@ class Task:
 class Handler:
     """Run-time state of an interrupt handler: its body and its queue of pending invocations."""
 
-    __slots__ = ("spec", "name", "body", "data", "queue", "active", "invocations", "cpu",
-                 "trace_state", "trace_since")
+    __slots__ = (
+        "active",
+        "body",
+        "cpu",
+        "data",
+        "invocations",
+        "name",
+        "queue",
+        "spec",
+        "trace_since",
+        "trace_state",
+    )
 
     def __init__(self, spec: HandlerSpec, body: Callable[[Any], Any], data: Any) -> None:
         self.spec = spec

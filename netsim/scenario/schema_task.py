@@ -17,20 +17,20 @@ the task's own random stream ``kernel.<node>.release.<task>``.
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, ConfigDict, Field, model_validator
 
 from netsim.units import Duration, StrictModel, Time
 
 __all__ = [
-    "ConstantTime",
-    "UniformTime",
-    "NormalTime",
-    "ExponentialTime",
-    "EmpiricalTime",
-    "TimeDistribution",
     "TIME_DISTS",
+    "ConstantTime",
+    "EmpiricalTime",
+    "ExponentialTime",
+    "NormalTime",
+    "TimeDistribution",
+    "UniformTime",
     "kernel_fields",
     "upper_bound_ns",
     "without_unused_arrivals",
@@ -60,7 +60,7 @@ class UniformTime(_Dist):
     high: Time
 
     @model_validator(mode="after")
-    def _order(self) -> "UniformTime":
+    def _order(self) -> UniformTime:
         if self.low > self.high:
             raise ValueError("low must not exceed high")
         return self
@@ -76,7 +76,7 @@ class NormalTime(_Dist):
     max: Time | None = None
 
     @model_validator(mode="after")
-    def _order(self) -> "NormalTime":
+    def _order(self) -> NormalTime:
         if self.max is not None and self.max < self.min:
             raise ValueError("max must not be below min")
         return self
@@ -109,7 +109,7 @@ def _shorthand(value: Any) -> Any:
 
 #: A random time of a task's arrivals: a time (constant) or ``{dist: ..}`` (see the module notes).
 TimeDistribution = Annotated[
-    Union[ConstantTime, UniformTime, NormalTime, ExponentialTime, EmpiricalTime],
+    ConstantTime | UniformTime | NormalTime | ExponentialTime | EmpiricalTime,
     Field(discriminator="dist"),
     BeforeValidator(_shorthand),
 ]
