@@ -83,6 +83,9 @@ def test_bench_cli_start_up_against_numpy_scipy_import(tmp_path):
         "reference": [sys.executable, "-c", "import numpy, scipy.linalg"],
         "run": netsim_cmd + ["run", "scenarios/dc_servo_ideal.yaml", "--out", str(tmp_path / "run")],
         "validate": netsim_cmd + ["validate", "scenarios/dc_servo_can.yaml"],
+        # floors, for reading the ratios: what the run's tables (pandas) and validation's schema (pydantic) cost alone
+        "pandas": [sys.executable, "-c", "import pandas"],
+        "numpy+pydantic": [sys.executable, "-c", "import numpy, pydantic"],
     }
     times: dict[str, list[float]] = {k: [] for k in cmds}
     for _ in range(5):
@@ -93,6 +96,9 @@ def test_bench_cli_start_up_against_numpy_scipy_import(tmp_path):
         best, med = min(times[name]), statistics.median(times[name])
         print(f"\n[bench] netsim {name}: CPU best {best:.3f} s, median {med:.3f} s; reference best {ref_best:.3f} s "
               f"-> ratio {best / ref_best:.2f}x best, {med / ref_med:.2f}x median (target <= {target}x)")
+    for name in ("pandas", "numpy+pydantic"):
+        print(f"[bench] python -c 'import {name.replace('+', ', ')}': CPU best {min(times[name]):.3f} s "
+              f"-> {min(times[name]) / ref_best:.2f}x the reference")
     assert all(t > 0 for v in times.values() for t in v)
 
 
