@@ -1,0 +1,199 @@
+"""The pendulum report's sweeps: the shipped sweep files run by :func:`netsim.sweep.run.run_sweep`, and their tables.
+
+The report runs ``scenarios/pendulum_{kalman,poles,delay}_sweep.yaml`` exactly as ``netsim sweep`` does
+(same seeds, same points; output in ``reports/pendulum/runs/<sweep>/``, resumed when run again) and reads
+their ``summary.csv``:
+
+* :func:`tuning_table` -- the slides' "try Qn, Rn" and "try several pole sets": per setting the analytic
+  error radius (and its time constant) and held-still velocity noise, beside the simulated convergence time
+  of the estimates, chatter and costs (mean over the seeds);
+* :func:`delay_cost_table` -- per estimator and delay: the simulated stationary cost with its 95 % Monte-Carlo
+  interval over the seeds, beside the expected cost from :mod:`models.pendulum.analysis`;
+* :func:`noise_delay_margins` -- per estimator the largest delay with every seed stable and the first with a
+  failing one.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import sys
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+__all__ = ["SWEEPS", "run_sweeps", "point_values", "estimator_name", "tuning_table", "delay_cost_table",
+           "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS"]
+
+log = logging.getLogger("netsim.progress.pendulum")
+
+_SCEN = Path(__file__).resolve().parents[2] / "scenarios"
+SWEEPS = ("pendulum_kalman_sweep", "pendulum_poles_sweep", "pendulum_delay_sweep")
+#: Sample-to-actuation delay of pendulum_network.yaml without the act link: 0.5 ms offset + 0.5 ms execution
+#: + 0.1 ms actuator (read from the scenario in tests/models/test_pendulum_report.py).
+NETWORK_BASE_DELAY_MS = 1.1
+
+
+def run_sweeps(out: Path, workers: int | None = None) -> dict[str, Any]:
+    """Run (or resume) each shipped sweep into ``out/runs/<sweep>``; returns ``summary.csv`` as a DataFrame by name."""
+    from netsim.sweep.run import run_sweep
+
+    summaries = {}
+    for name in SWEEPS:
+        log.info("pendulum: sweep %s (scenarios/%s.yaml) ...", name, name)
+        res = run_sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers,
+                        progress=sys.stderr.isatty())
+        log.info("pendulum: %s", res.describe().splitlines()[0])
+        summaries[name] = res.summary
+    return summaries
+
+
+def point_values(name: str) -> list[dict[str, Any]]:
+    """The factor values of each run of sweep ``name``, by ``summary.csv`` index (as Python values)."""
+    from netsim.sweep.spec import load_sweep
+
+    return [p.values for p in load_sweep(_SCEN / f"{name}.yaml").points]
+
+
+def estimator_name(entry: dict[str, Any], estimators: Mapping[str, dict[str, Any]]) -> str:
+    """The study's name of an estimator entry: its key in ``estimators`` (``models.pendulum.report.ESTIMATORS``)."""
+    for key, value in estimators.items():
+        if value == entry:
+            return key
+    raise ValueError(f"estimator entry {entry!r} is none of the study's ({', '.join(estimators)})")
+
+
+def _with_values(summary: Any, name: str) -> Any:
+    s = summary.copy()
+    vals = point_values(name)
+    s["values"] = [vals[int(i)] for i in s["index"]]
+    return s
+
+
+def _kalman_gain(d: Any, scale_Q: float, scale_R: float) -> np.ndarray:
+    from netsim.control import KalmanFilter
+
+    return KalmanFilter(d.lin.Ad, d.lin.Bd, d.lin.C, d.Qn * scale_Q, d.Rn * scale_R, steady_state=True).K_ss
+
+
+def _error_stats(d: Any, L: np.ndarray) -> dict[str, float]:
+    """Error radius, its time constant (ms) and the held-still alpha_dot noise (Lyapunov) of ``(I - L C) A``."""
+    from scipy.linalg import solve_discrete_lyapunov
+
+    F = (np.eye(4) - L @ d.lin.C) @ d.lin.Ad
+    P = solve_discrete_lyapunov(F, L @ d.Rn @ L.T)
+    rho = float(np.max(np.abs(np.linalg.eigvals(F))))
+    return {"error_radius": rho, "error_tau_ms": -1e3 * d.lin.h / math.log(rho),
+            "alpha_dot_noise_lyap": float(np.sqrt(P[3, 3]))}
+
+
+def tuning_table(summaries: dict[str, Any]) -> Any:
+    """One row per Qn/Rn scaling and per pole set: analytic error dynamics and noise, simulated means over seeds."""
+    import pandas as pd
+
+    from models.pendulum.design import designs
+    from netsim.control.luenberger import observer_gain
+
+    d = designs()
+    rows = []
+    for name in ("pendulum_kalman_sweep", "pendulum_poles_sweep"):
+        s = _with_values(summaries[name], name)
+        keys = [str(v) for v in s["values"]]
+        for key in dict.fromkeys(keys):
+            g = s[[k == key for k in keys]]
+            v = g["values"].iloc[0]
+            if name == "pendulum_kalman_sweep":
+                sq, sr = float(v["scale_Q"]), float(v["scale_R"])
+                L = _kalman_gain(d, sq, sr)
+                r: dict[str, Any] = {"sweep": "kalman", "setting": f"Qn x {sq:g}, Rn x {sr:g}", "scale_Q": sq,
+                                     "scale_R": sr, "qr_ratio": sq / sr}
+            else:
+                poles = [complex(str(p)) for p in v["poles"]]
+                L = observer_gain(d.lin.Ad, d.lin.C, poles, "current")
+                slowest = max(abs(p) for p in poles)
+                r = {"sweep": "poles", "setting": f"poles up to {slowest:g}", "scale_Q": math.nan,
+                     "scale_R": math.nan, "qr_ratio": math.nan}
+            r.update(_error_stats(d, L))
+            ok = g["status"] == "ok"
+            r["seed_count"] = int(len(g))
+            r["stable_share"] = float((g["pendulum.stable"].where(ok, 0.0)).mean())
+            for col, src in (("est_converged_s", "pendulum.est_converged_s"), ("u_std", "pendulum.u_std"),
+                             ("rms_alpha", "pendulum.rms_alpha"), ("lqg_cost_per_step", "pendulum.lqg_cost_per_step"),
+                             ("lqg_cost_after_1s", "pendulum.lqg_cost_after_settle")):
+                r[col] = float(g.loc[ok, src].mean()) if ok.any() else math.nan
+            r["est_converged_s_max"] = float(g.loc[ok, "pendulum.est_converged_s"].max()) if ok.any() else math.nan
+            rows.append(r)
+    return pd.DataFrame(rows)
+
+
+def equal_ratio_gain_difference(table: Any) -> float:
+    """Largest difference between Kalman gains of grid points with the same Qn/Rn ratio (should be rounding)."""
+    from models.pendulum.design import designs
+
+    d = designs()
+    k = table[table.sweep == "kalman"]
+    worst = 0.0
+    for _, g in k.groupby("qr_ratio"):
+        gains = [_kalman_gain(d, a, b) for a, b in zip(g.scale_Q, g.scale_R)]
+        for G in gains[1:]:
+            worst = max(worst, float(np.max(np.abs(G - gains[0]))))
+    return worst
+
+
+def _delay_ms(text: Any) -> float:
+    value, unit = str(text).split()
+    if unit != "ms":
+        raise ValueError(f"expected a delay in ms, got {text!r}")
+    return float(value)
+
+
+def delay_cost_table(summaries: dict[str, Any], estimators: Mapping[str, dict[str, Any]]) -> Any:
+    """Per estimator and act delay: simulated stationary cost (mean, 95 % interval over the seeds) beside the
+    expected cost of :func:`models.pendulum.analysis.analytic_cost` at the same total delay (``estimators``: the
+    study's estimator entries by name, to name the sweep's)."""
+    import pandas as pd
+    from scipy import stats
+
+    from models.pendulum.analysis import analytic_cost
+    from models.pendulum.design import designs
+
+    d = designs()
+    name = "pendulum_delay_sweep"
+    s = _with_values(summaries[name], name)
+    s["estimator"] = [estimator_name(v["estimator"], estimators) for v in s["values"]]
+    s["act_delay_ms"] = [_delay_ms(v["act_delay"]) for v in s["values"]]
+    rows = []
+    for (e, dl), g in s.groupby(["estimator", "act_delay_ms"], sort=False):
+        total = dl + NETWORK_BASE_DELAY_MS
+        ana = analytic_cost(e, d, total * 1e-3)
+        ok = g["status"] == "ok"
+        stable = g["pendulum.stable"].where(ok, 0.0).astype(float)
+        cost = g["pendulum.lqg_cost_after_settle"].astype(float)
+        n = len(g)
+        r = {"estimator": e, "act_delay_ms": dl, "total_delay_ms": total, "seed_count": n,
+             "stable_share": float(stable.mean()), "analytic_cost": ana["per_sample"], "analytic_J": ana["J"],
+             "spectral_radius": ana["spectral_radius"]}
+        if stable.min() > 0.5:
+            m, sd = float(cost.mean()), float(cost.std(ddof=1))
+            half = float(stats.t.ppf(0.975, n - 1)) * sd / math.sqrt(n)
+            r.update({"sim_cost": m, "sim_ci_low": m - half, "sim_ci_high": m + half,
+                      "analytic_inside_ci": float(m - half <= ana["per_sample"] <= m + half),
+                      "rel_diff": m / ana["per_sample"] - 1.0 if math.isfinite(ana["per_sample"]) else math.nan})
+        else:
+            r.update({"sim_cost": math.nan, "sim_ci_low": math.nan, "sim_ci_high": math.nan,
+                      "analytic_inside_ci": math.nan, "rel_diff": math.nan})
+        rows.append(r)
+    return pd.DataFrame(rows)
+
+
+def noise_delay_margins(cost: Any) -> dict[str, tuple[float, float]]:
+    """Per estimator: (largest total delay with every seed stable below the first failure, first failing one)."""
+    out = {}
+    for e, g in cost.groupby("estimator", sort=False):
+        g = g.sort_values("total_delay_ms")
+        fails = g[g.stable_share < 1.0]
+        first = float(fails.total_delay_ms.iloc[0]) if len(fails) else math.nan
+        ok = g[(g.stable_share >= 1.0) & ((g.total_delay_ms < first) if len(fails) else True)]
+        out[str(e)] = (float(ok.total_delay_ms.max()) if len(ok) else math.nan, first)
+    return out
