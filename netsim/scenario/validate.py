@@ -22,7 +22,8 @@ What is checked
   network the node is on; ``to`` names a node on that network, or ``all`` to broadcast (netsim's own programs
   refuse a missing ``to``); a source of interfering traffic (program attribute ``interference_source``) whose
   frames reach a node that consumes that network's messages is a **warning**; ``channel``/``*_channel``
-  (and plurals) name an ``io`` channel; ``signal``, ``reference``, ``*_signal`` (and plurals) name a signal.
+  (and plurals) name an ``io`` channel; ``signal``, ``reference``, ``*_signal`` (and plurals) name a signal;
+  ``tasks``/``*_tasks`` name periodic tasks of the program's node (e.g. a feedback scheduler's).
 - I/O channel plant ports lie within the plant's inputs/outputs when the plant factory declares them
   (``ports(params) -> (input_names, output_names)``, or attributes ``input_names``/``output_names`` or
   ``n_inputs``/``n_outputs``); plant ``disturbances`` name plant inputs and scenario signals.
@@ -537,12 +538,26 @@ class _Checker:
                     self.name_ref(v, self.signals, "signal", [*where, i])
             elif key == "to":
                 self.to_ref(node, value, values.get("network"), where)
+            elif key == "tasks" or key.endswith("_tasks"):  # e.g. a feedback scheduler's controlled tasks
+                for i, v in enumerate(_l(value)):
+                    self.periodic_task_ref(node, v, [*where, i])
             elif isinstance(value, (dict, BaseModel)):  # nested parameters follow the same conventions
                 self.conventions(node, _values(value), where)
             elif isinstance(value, list):  # and so do lists of them (measurements: [{network: can, ...}])
                 for i, item in enumerate(value):
                     if isinstance(item, (dict, BaseModel)):
                         self.conventions(node, _values(item), [*where, i])
+
+    def periodic_task_ref(self, node: str, name: Any, at: list[PathPart]) -> None:
+        """A program parameter naming a periodic task of its own node (``tasks``, ``*_tasks``)."""
+        tasks = {t.get("name"): t for t in _l(_d(_d(self.raw.get("nodes")).get(node)).get("tasks")) if isinstance(t, dict)}
+        if not isinstance(name, str):
+            return
+        if name not in tasks:
+            known = [n for n in tasks if isinstance(n, str)]
+            self.error(at, f"node '{node}' has no task '{name}'{did_you_mean(name, known, what='tasks')}")
+        elif tasks[name].get("period") is None:
+            self.error(at, f"task '{name}' is not periodic (it has no period); name a periodic task of node '{node}'")
 
     def name_ref(self, value: Any, known: list[str], what: str, at: list[PathPart]) -> None:
         if isinstance(value, str) and value not in known:
