@@ -199,3 +199,33 @@ def test_the_index_walks_the_same_modules_as_load_plugins_in_the_same_order():
         walk(root, expected)
     assert [m for root in registry.PLUGIN_MODULES for m, _ in _walk(root)] == expected
     assert len(expected) > 100  # netsim's plugin packages and the case studies
+
+
+def test_two_threads_looking_up_a_name_whose_module_is_still_importing_both_find_it(tmp_path, monkeypatch):
+    # a threaded sweep: the second lookup must wait for the first one's import, not report an unknown name
+    import threading
+
+    (tmp_path / "zzt_idx_slow.py").write_text(
+        "import time\nfrom netsim.registry import register\n\ntime.sleep(0.3)\n\n"
+        "@register('metric', 'zzt_idx_slow')\ndef slow(r, p, b):\n    return {}\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv("NETSIM_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setattr(registry, "PLUGIN_MODULES", [*registry.PLUGIN_MODULES, "zzt_idx_slow"])
+    monkeypatch.setattr(registry, "_PLUGINS_LOADED", False)
+    monkeypatch.setitem(registry._REGISTRY, "metric", dict(registry._REGISTRY["metric"]))
+    registry._index(refresh=True)  # both threads then go straight to the import
+    found: list[object] = []
+
+    def look() -> None:
+        try:
+            found.append(registry.lookup("metric", "zzt_idx_slow").__name__)
+        except ConfigError as exc:
+            found.append(str(exc))
+
+    threads = [threading.Thread(target=look) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert found == ["slow", "slow"]
+    sys.modules.pop("zzt_idx_slow", None)

@@ -127,7 +127,7 @@ _log = logging.getLogger(__name__)
 #: Modules imported from installed packages' ``netsim.plugins`` entry points (filled by :func:`_load_entry_points`).
 _ENTRY_POINT_MODULES: list[str] = []
 _ENTRY_POINTS_LOADED = False
-#: Plugin modules a lazy lookup already imported (or tried to): never imported twice.
+#: Plugin modules a lazy lookup failed to import: not tried again (the failure is in _PLUGIN_FAILURES).
 _TRIED: set[str] = set()
 #: Plugin files already executed: resolved path -> module name.
 _PLUGIN_FILES: dict[str, str] = {}
@@ -258,13 +258,17 @@ def _index(refresh: bool = False) -> Any:
 
 
 def _import_once(module_name: str) -> None:
-    """Import one plugin module for a lookup (once per process; a failure is recorded, not raised)."""
-    if module_name in _TRIED or module_name in sys.modules:
+    """Import one plugin module for a lookup; a failure is recorded, not raised, and not tried again.
+
+    A module already imported costs a dictionary lookup; one that another thread is importing is waited for
+    (the import system's per-module lock), so concurrent first lookups (a threaded sweep) find the name.
+    """
+    if module_name in _TRIED:
         return
-    _TRIED.add(module_name)
     try:
         importlib.import_module(module_name)
     except Exception as exc:  # noqa: BLE001 - recorded and reported (a broken module must not hide the others)
+        _TRIED.add(module_name)
         _failed(module_name, exc)
 
 
