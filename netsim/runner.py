@@ -171,9 +171,9 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
     wall = time.perf_counter() - t0
     result = collect(sim, t_end)
     if failure is None:
-        from netsim.divergence import find_divergence
+        from netsim.results.divergence import find_divergence_chunked
 
-        hit = find_divergence(result, sim.env.recorder, scenario.metrics)
+        hit = find_divergence_chunked(result, sim.env.recorder, scenario.metrics)
         if hit is not None:  # unstable on its own scale though the plant's absolute bound was not reached
             status = f"diverged at t = {hit[0]:.9g} s"
             error = hit[1]
@@ -422,21 +422,21 @@ def _baseline_key(scenario: Any) -> str:
 def _metrics_view(result: RunResult) -> RunResult:
     """``result`` for the metrics: the same signals, metadata and records, with its unbuilt tables as their own
     :class:`~netsim.results.Lazy` builders, so a table a metric reads is built on the view, not on ``result``."""
-    return RunResult(signals=result.signals, jobs=_lazy_view(result, "jobs"), messages=_lazy_view(result, "messages"),
-                     metrics=result.metrics, meta=result.meta, scenario=result.scenario,
-                     schedule=_lazy_view(result, "schedule"), out_dir=result.out_dir, traces=result.traces,
-                     job_summary=result.job_summary, message_summary=result.message_summary,
-                     job_rows=result.job_rows, message_rows=result.message_rows)
+    return RunResult(signals=_lazy_view(result, "signals"), jobs=_lazy_view(result, "jobs"),
+                     messages=_lazy_view(result, "messages"), metrics=result.metrics, meta=result.meta,
+                     scenario=result.scenario, schedule=_lazy_view(result, "schedule"), out_dir=result.out_dir,
+                     traces=result.traces, job_summary=result.job_summary, message_summary=result.message_summary,
+                     job_rows=result.job_rows, message_rows=result.message_rows, signal_source=result.signal_source)
 
 
 def _shared(result: RunResult) -> RunResult:
     """A view of a cached result that a metric may modify without touching the cache (copy-on-write)."""
-    return RunResult(signals=result.signals.copy(deep=False), jobs=_lazy_view(result, "jobs"),
+    return RunResult(signals=_lazy_view(result, "signals"), jobs=_lazy_view(result, "jobs"),
                      messages=_lazy_view(result, "messages"), metrics=result.metrics.copy(deep=False),
                      meta=dict(result.meta), scenario=result.scenario,
                      schedule=_lazy_view(result, "schedule"), traces=dict(result.traces),
                      job_summary=result.job_summary, message_summary=result.message_summary,
-                     job_rows=result.job_rows, message_rows=result.message_rows)
+                     job_rows=result.job_rows, message_rows=result.message_rows, signal_source=result.signal_source)
 
 
 def _lazy_view(result: RunResult, name: str) -> Any:
@@ -462,6 +462,7 @@ def _baseline(base_sc: Any) -> RunResult:
 
     t_base = int(round(baseline.meta["t_end_s"] * S))
     baseline.metrics = pd.Series(generic_metrics(baseline, base_sim, t_base), dtype=float, name="value")
+    _ = baseline.signals  # built once for the cache (metrics read the baseline's signals at every point)
     slot = None if not base_sim.used_seed() else int(base_sc.seed)
     _BASELINES.setdefault(key, {})[slot] = baseline
     _BASELINES.move_to_end(key)

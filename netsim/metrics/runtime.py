@@ -6,6 +6,9 @@ Generic metrics (:func:`generic_metrics`, always added by the runner), named wit
     busy fraction of the node's CPU over the run (tasks, handlers and context switches, from the kernel).
 ``task.<node>.<task>.jobs`` / ``.deadline_misses`` / ``.max_response_s`` / ``.mean_response_s``
     from the jobs table (finished jobs; a job unfinished at the end whose deadline passed counts as a miss).
+    A task with release jitter also gets ``.max_release_jitter_s`` (arrival - nominal release) and
+    ``.max_response_from_arrival_s`` / ``.mean_response_from_arrival_s`` (``response_s`` counts from the
+    nominal release).
 ``net.<network>.messages`` / ``.utilization`` / ``.lost`` / ``.loss_rate`` / ``.mean_delay_s`` / ``.max_delay_s``
     from the messages table, plus everything the network's own ``metrics(t_end)`` reports (prefixed).
 ``energy.<node>.J`` / ``.cpu_J`` / ``.radio_J`` / ``.depleted_s`` ...
@@ -104,6 +107,11 @@ def _task_metrics(jobs: pd.DataFrame, t_end_s: float) -> dict[str, float]:
         out[f"{key}.pending"] = float(counts["pending"])
         out[f"{key}.max_response_s"] = float(resp.max()) if len(resp) else math.nan
         out[f"{key}.mean_response_s"] = float(resp.mean()) if len(resp) else math.nan
+        if "release_jitter_s" in grp:
+            from netsim.metrics.rows import arrival_metrics
+
+            out.update(arrival_metrics(key, grp["release_jitter_s"].to_numpy(dtype=float),
+                                        grp["response_from_arrival_s"].to_numpy(dtype=float)))
     return out
 
 
@@ -121,74 +129,6 @@ def _network_metrics(messages: pd.DataFrame) -> dict[str, float]:
         delays = delivered["delay_s"].astype(float)
         out[f"{key}.mean_delay_s"] = float(delays.mean()) if len(delays) else math.nan
         out[f"{key}.max_delay_s"] = float(delays.max()) if len(delays) else math.nan
-    return out
-
-
-def _rows(result: Any, name: str) -> Any:
-    """The records' columns of ``result``'s table ``name`` while its DataFrame is unbuilt
-    (:meth:`netsim.results.RunResult.table_rows`), else None (a result read back, or a table built)."""
-    fn = getattr(result, "table_rows", None)
-    return fn(name) if callable(fn) else None
-
-
-def _groups(*keys: list[Any]) -> dict[tuple[Any, ...], np.ndarray]:
-    """Row indices per distinct key tuple, each in table order, keys sorted (``groupby(..., sort=True)``)."""
-    index: dict[tuple[Any, ...], list[int]] = {}
-    for i, key in enumerate(zip(*keys)):
-        index.setdefault(key, []).append(i)
-    return {key: np.asarray(index[key], dtype=np.intp) for key in sorted(index)}
-
-
-def _mean_max(values: np.ndarray) -> tuple[float, float]:
-    """Mean and maximum of the non-NaN ``values`` as pandas' ``Series.mean``/``max`` give them (NaN when none):
-    the sum of every value with NaN counted as 0, divided by the count of the others."""
-    missing = np.isnan(values)
-    n = int(values.size - missing.sum())
-    if n == 0:
-        return math.nan, math.nan
-    kept = np.where(missing, 0.0, values) if missing.any() else values
-    return float(kept.sum() / n), float(np.max(values[~missing]))
-
-
-def _task_metrics_rows(rows: Any) -> dict[str, float]:
-    """:func:`_task_metrics` from the records' columns (:class:`netsim.results.rows.Rows`), no DataFrame."""
-    out: dict[str, float] = {}
-    if len(rows) == 0:
-        return out
-    outcome = rows.data["outcome"]
-    response = rows.array("response_s")
-    for (node, task), idx in _groups(rows.data["node"], rows.data["task"]).items():
-        labels = [outcome[i] for i in idx.tolist()]
-        killed = labels.count("killed")
-        resp = response[idx]
-        resp = resp[~np.isnan(resp)]  # killed and unfinished jobs have no response time
-        key = f"task.{node}.{task}"
-        out[f"{key}.jobs"] = float(len(idx))
-        out[f"{key}.deadline_misses"] = float(labels.count("missed") + killed)
-        out[f"{key}.killed"] = float(killed)
-        out[f"{key}.pending"] = float(labels.count("pending"))
-        out[f"{key}.max_response_s"] = float(resp.max()) if len(resp) else math.nan
-        out[f"{key}.mean_response_s"] = float(resp.sum() / len(resp)) if len(resp) else math.nan
-    return out
-
-
-def _network_metrics_rows(rows: Any) -> dict[str, float]:
-    """:func:`_network_metrics` from the records' columns (:class:`netsim.results.rows.Rows`), no DataFrame."""
-    out: dict[str, float] = {}
-    if len(rows) == 0:
-        return out
-    dropped_all = rows.array("dropped")
-    delivered_all = ~np.isnan(rows.array("delivered_s"))
-    delay_all = rows.array("delay_s")
-    for (net,), idx in _groups(rows.data["network"]).items():
-        dropped = dropped_all[idx]
-        lost = int(dropped.sum())
-        key = f"net.{net}"
-        out[f"{key}.messages"] = float(len(idx))
-        out[f"{key}.lost"] = float(lost)
-        out[f"{key}.loss_rate"] = float(lost / len(idx))
-        delays = delay_all[idx][~dropped & delivered_all[idx]]
-        out[f"{key}.mean_delay_s"], out[f"{key}.max_delay_s"] = _mean_max(delays)
     return out
 
 
@@ -234,15 +174,17 @@ def generic_metrics(result: Any, sim: Any | None = None, t_end_ns: int | None = 
     elif not result.jobs.empty and t_end_s > 0:
         for node, grp in result.jobs.groupby("node", sort=True):
             out[f"cpu.{node}.utilization"] = float(grp["cpu_time_s"].astype(float).sum() / t_end_s)
+    from netsim.metrics.rows import network_metrics_rows, table_rows, task_metrics_rows
+
     traces = getattr(result, "traces", None) or {}
-    rows = _rows(result, "jobs")
+    rows = table_rows(result, "jobs")
     if traces.get("jobs", "full") == "full":
-        out.update(_task_metrics_rows(rows) if rows is not None else _task_metrics(result.jobs, t_end_s))
+        out.update(task_metrics_rows(rows) if rows is not None else _task_metrics(result.jobs, t_end_s))
     else:
         out.update(_summary_metrics(getattr(result, "job_summary", None), "task", ("node", "task"), _JOB_SUMMARY_KEYS))
     if traces.get("messages", "full") == "full":
-        rows = _rows(result, "messages")
-        out.update(_network_metrics_rows(rows) if rows is not None else _network_metrics(result.messages))
+        rows = table_rows(result, "messages")
+        out.update(network_metrics_rows(rows) if rows is not None else _network_metrics(result.messages))
     else:
         out.update(_summary_metrics(getattr(result, "message_summary", None), "net", ("network",),
                                     _MESSAGE_SUMMARY_KEYS))
@@ -342,6 +284,11 @@ def held_integrals(t: np.ndarray, e: np.ndarray, t0: float, t1: float) -> tuple[
 def control_error(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
     """IAE/ISE of ``reference - output`` (reference 0 when not given) from the signals table."""
     p = validate_params(ControlErrorParams, params, "control_error")
+    from netsim.metrics.held import control_error_chunked
+
+    chunked = control_error_chunked(result, p)
+    if chunked is not None:
+        return chunked
     t = result.signals["time_s"].to_numpy(dtype=float)
     y = _column(result, p.output)
     r = _column(result, p.reference) if p.reference else np.zeros_like(y)

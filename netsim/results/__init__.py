@@ -140,6 +140,21 @@ class RunResult:
     job_rows: Any = None
     #: The messages table's columns straight from the records (as :attr:`job_rows`).
     message_rows: Any = None
+    #: The recorded samples (:class:`netsim.results.signals.SignalSource`): ``signals.csv`` and the metrics read
+    #: the table from them window by window, ``signals`` is built from them when read.
+    signal_source: Any = None
+
+    def signal_chunks(self, names: list[str]) -> Any:
+        """The signals table's rows in windows, ``(t_ns, [column of each name, ...])`` per window
+        (:meth:`netsim.results.signals.SignalSource.chunks`), while ``signals`` has not been built; else None
+        (read ``signals``). A name that was not recorded raises ``KeyError``."""
+        source = object.__getattribute__(self, "signal_source")
+        if source is None or type(object.__getattribute__(self, "signals")) is not Lazy:
+            return None
+        missing = [n for n in names if n not in source.names]
+        if missing:
+            raise KeyError(missing[0])
+        return source.chunks(names)
 
     def table_rows(self, name: str) -> Any:
         """The :class:`~netsim.results.rows.Rows` of table ``name`` (``"jobs"`` or ``"messages"``) while its
@@ -188,7 +203,11 @@ class RunResult:
             dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter: ~4x faster
             write_atomic(out / "scenario.yaml",
                          yaml.dump(self.scenario, Dumper=dumper, sort_keys=False, allow_unicode=True))
-        write_csv(self.signals, out / "signals.csv")
+        source = object.__getattribute__(self, "signal_source")
+        if source is not None and type(object.__getattribute__(self, "signals")) is Lazy and source.csv_plain():
+            write_atomic(out / "signals.csv", source.csv_chunks())  # window by window, never the whole table
+        else:
+            write_csv(self.signals, out / "signals.csv")
         for name, summary in (("jobs", self.job_summary), ("messages", self.message_summary)):
             if self.traces.get(name, "full") == "full":
                 rows = self.table_rows(name)

@@ -7,27 +7,27 @@ from typing import Any
 import pandas as pd
 
 from netsim.results import Lazy, RunResult
+from netsim.results.rows import Column, Rows, job_rows, message_rows
+from netsim.results.signals import SignalSource
 from netsim.results.tables import (
     JOB_SUMMARY_COLUMNS,
     MESSAGE_SUMMARY_COLUMNS,
     jobs_table,
     messages_table,
     schedule_table,
-    signals_table,
     summary_table,
 )
-from netsim.results.rows import Rows, job_rows, message_rows
 from netsim.results.traces import JobSummary, MessageSummary
 
 __all__ = ["collect"]
-
 
 def collect(sim: Any, t_end_ns: int) -> RunResult:
     """The tables of a (finished or aborted) simulation ``sim`` (a built :class:`~netsim.scenario.builder.Simulation`),
     without metrics: signals, jobs and messages (or their summaries, :mod:`netsim.results.traces`), and the
     schedule, built when first read."""
     rec = sim.env.recorder
-    signals = signals_table(rec.times, rec.values, order=sim.scenario.record)
+    source = SignalSource(rec.times, rec.values, order=sim.scenario.record)
+    signals = Lazy(source.table)  # built when read; signals.csv and the metrics read the source window by window
     output = sim.scenario.output
     job_stats = [row for k in sim.kernels.values() if isinstance(k.job_records, JobSummary)
                  for row in k.job_records.rows()]
@@ -36,7 +36,7 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
                     if not isinstance(k.job_records, JobSummary)]
     full_networks = [net.records for net in sim.networks.values() if not isinstance(net.records, MessageSummary)]
     try:  # columns straight from the records; a DataFrame only when result.jobs / .messages is read
-        job_cols: Rows | None = job_rows(full_kernels)
+        job_cols: Rows | None = job_rows(full_kernels, _arrival_columns(full_kernels))
         msg_cols: Rows | None = message_rows(full_networks)
         jobs: Any = Lazy(job_cols.frame)
         messages: Any = Lazy(msg_cols.frame)
@@ -52,10 +52,23 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
     schedule = Lazy(schedule_frame)
     traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
     return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
-                     job_rows=job_cols, message_rows=msg_cols,
+                     job_rows=job_cols, message_rows=msg_cols, signal_source=source,
                      job_summary=summary_table(job_stats, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
                      message_summary=summary_table(msg_stats, MESSAGE_SUMMARY_COLUMNS)
                      if output.messages == "summary" else None)
+
+
+def _arrival_columns(kernels: list[tuple[str, Any]]) -> tuple[Column, ...]:
+    """The jobs table's release-jitter columns (issue 20) when a job of the run has an arrival, else none (the
+    table of a run without jitter keeps its columns)."""
+    from netsim.kernel.records import (  # here: importing netsim.kernel loads simpy
+        ARRIVAL_COLUMNS,
+        has_arrivals,
+    )
+
+    if not any(has_arrivals(records) for _, records in kernels):
+        return ()
+    return tuple(Column(name, attr, "time") for name, attr in ARRIVAL_COLUMNS)
 
 
 def _jobs_frame(kernels: list[tuple[str, Any]]) -> pd.DataFrame:

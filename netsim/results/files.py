@@ -13,7 +13,7 @@ from typing import Any, Iterator
 import numpy as np
 import pandas as pd
 
-__all__ = ["FLOAT_FORMAT", "TIME_COLUMNS", "write_csv", "read_table", "JOB_TYPES", "MESSAGE_TYPES"]
+__all__ = ["FLOAT_FORMAT", "TIME_COLUMNS", "write_csv", "read_table", "float_block_text", "JOB_TYPES", "MESSAGE_TYPES"]
 
 #: Float format of the run folder's CSVs: None is Python's shortest round-trip text (``repr``), so a value read
 #: back is the same float (issue 21: ``%.12g`` moved values by ~5e-12 and wrote ``1.0`` as ``1``, read back as an
@@ -46,7 +46,8 @@ def write_csv(frame: pd.DataFrame, path: Path) -> None:
 #: Columns that hold times (integer ns / 1e9): written with full precision (see :func:`write_csv`).
 TIME_COLUMNS = frozenset({
     "time_s", "release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s", "sent_s",
-    "tx_start_s", "delivered_s", "delay_s", "tx_end_s", "end_s",
+    "tx_start_s", "delivered_s", "delay_s", "tx_end_s", "end_s", "arrival_s", "release_jitter_s",
+    "response_from_arrival_s",
 })
 
 
@@ -83,30 +84,35 @@ def _float_chunks(frame: pd.DataFrame, names: list[str]) -> Iterator[str]:
     yield ",".join(names) + "\n"
     columns = [frame[c].to_numpy(dtype=np.float64) for c in frame.columns]
     timed = [n in TIME_COLUMNS for n in names]
-
-    def value(v: float) -> str:
-        return "" if v != v else repr(v)
-
-    cells = [_time_text if t else value for t in timed]
-    first_only = timed[0] and not any(timed[1:])  # the signals table: time_s first, then values
     for a in range(0, len(frame), CHUNK_ROWS):
-        block = np.column_stack([c[a:a + CHUNK_ROWS] for c in columns])
-        t = block[:, 0]
-        if first_only and not np.isnan(t).any():  # the signals table: time_s first, then values
-            heads = _reprs(t.tolist())
-            whole = np.flatnonzero((t == np.floor(t)) & (np.abs(t) < 1e15))
-            for i in whole.tolist():  # whole seconds as integers (_time_text)
-                heads[i] = "%d" % t[i]
-            if block.shape[1] == 1:
-                lines = heads
-            else:
-                rest = _rows_text(block[:, 1:])
-                lines = [h + "," + r for h, r in zip(heads, rest)]
-        elif not any(timed):
-            lines = [",".join(["" if v != v else repr(v) for v in row]) for row in block.tolist()]
+        yield float_block_text(np.column_stack([c[a:a + CHUNK_ROWS] for c in columns]), timed)
+
+
+def float_block_text(block: np.ndarray, timed: list[bool]) -> str:
+    """The CSV lines (each ending in ``\n``) of a 2-D float array's rows, as pandas writes them: every value as
+    ``repr``, NaN as an empty cell, a time column (``timed``) with whole seconds as integers."""
+    if len(block) == 0:
+        return ""
+    t = block[:, 0]
+    if timed[0] and not any(timed[1:]) and not np.isnan(t).any():  # the signals table: time_s first, then values
+        heads = _reprs(t.tolist())
+        whole = np.flatnonzero((t == np.floor(t)) & (np.abs(t) < 1e15))
+        for i in whole.tolist():  # whole seconds as integers (_time_text)
+            heads[i] = "%d" % t[i]
+        if block.shape[1] == 1:
+            lines = heads
         else:
-            lines = [",".join([f(v) for f, v in zip(cells, row)]) for row in block.tolist()]
-        yield "\n".join(lines) + "\n"
+            rest = _rows_text(block[:, 1:])
+            lines = [h + "," + r for h, r in zip(heads, rest)]
+    elif not any(timed):
+        lines = [",".join(["" if v != v else repr(v) for v in row]) for row in block.tolist()]
+    else:
+        def value(v: float) -> str:
+            return "" if v != v else repr(v)
+
+        cells = [_time_text if tm else value for tm in timed]
+        lines = [",".join([f(v) for f, v in zip(cells, row)]) for row in block.tolist()]
+    return "\n".join(lines) + "\n"
 
 
 def _reprs(values: list[float]) -> list[str]:
@@ -138,7 +144,8 @@ def _rows_text(block: np.ndarray) -> list[str]:
 #: Column types of the jobs and messages tables (the columns :func:`jobs_table` and :func:`messages_table` make).
 JOB_TYPES: dict[str, str] = {
     "node": "str", "task": "str", "deadline_met": "boolean", "killed": "bool", "outcome": "str",
-    **dict.fromkeys(("release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s"), "float64"),
+    **dict.fromkeys(("release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s", "arrival_s",
+                     "release_jitter_s", "response_from_arrival_s"), "float64"),
 }
 MESSAGE_TYPES: dict[str, str] = {
     "network": "str", "sender": "str", "receiver": "str", "tag": "str", "dropped": "bool", "drop_reason": "str",

@@ -34,7 +34,7 @@ import numpy as np
 
 from netsim.timebase import S
 
-__all__ = ["Column", "Rows", "JOB_FIELDS", "MESSAGE_FIELDS", "job_rows", "message_rows"]
+__all__ = ["JOB_FIELDS", "MESSAGE_FIELDS", "Column", "Rows", "job_rows", "message_rows"]
 
 
 @dataclass(frozen=True)
@@ -107,7 +107,7 @@ class Rows:
         The column names of the table when it has no rows (the DataFrame of an empty table has every column).
     """
 
-    __slots__ = ("kinds", "data", "names", "_arrays")
+    __slots__ = ("_arrays", "data", "kinds", "names")
 
     def __init__(self, columns: Sequence[tuple[Column, list[Any]]], empty_columns: Sequence[str] | None = None) -> None:
         self.names: list[str] = [c.name for c, _ in columns] if columns else list(empty_columns or [])
@@ -232,7 +232,7 @@ def _time_cells(seconds: np.ndarray) -> list[str]:
     cells = str(values)[1:-1].split(", ") if values else []
     whole = np.flatnonzero((seconds == np.floor(seconds)) & (np.abs(seconds) < 1e15))
     for i in whole.tolist():
-        cells[i] = "%d" % values[i]
+        cells[i] = "%d" % values[i]  # noqa: UP031 - the text _time_text writes
     for i in np.flatnonzero(np.isnan(seconds)).tolist():
         cells[i] = ""
     return cells
@@ -268,17 +268,18 @@ def _ordered(fields: Sequence[Column], parts: list[dict[str, list[Any]]], key: A
 
 def _missing_last(v: Any) -> tuple[bool, Any]:
     """A sort key that puts None and NaN after every value (pandas' ``na_position='last'``)."""
-    return (True, 0) if v is None or v != v else (False, v)
+    return (True, 0) if v is None or v != v else (False, v)  # noqa: PLR0124 - NaN is not equal to itself
 
 
 def job_rows(kernels: Iterable[tuple[str, Iterable[Any]]], extra: Sequence[Column] = ()) -> Rows:
     """The jobs table of the kernels ``(name, records)``: sorted by release time, node, task and job id (stable,
     kernels in the given order), with the derived ``outcome`` column last.
 
-    ``extra`` columns (optional job fields) come after ``killed`` and before ``outcome``; one whose values are all
-    None (no record has the field set) is left out, so a run that does not use the field has the same table.
+    ``extra`` columns (optional job fields, e.g. release jitter's) come after ``killed`` and before ``outcome``.
     """
-    from netsim.kernel.records import job_outcome  # here: importing netsim.kernel loads simpy
+    from netsim.kernel.records import (
+        job_outcome,  # here: importing netsim.kernel loads simpy
+    )
 
     fields = tuple(JOB_FIELDS) + tuple(extra)
     parts = [_gather(recs, fields, fill={"node": name}) for name, recs in kernels]
@@ -292,7 +293,6 @@ def job_rows(kernels: Iterable[tuple[str, Iterable[Any]]], extra: Sequence[Colum
     if not parts:
         return Rows([], empty_columns=[c.name for c in fields] + ["outcome"])
     cols = _ordered(fields, parts, key)
-    fields = tuple(JOB_FIELDS) + tuple(c for c in extra if any(v is not None for v in cols[c.name]))
     outcome = Column("outcome", "outcome", "str")
     cols["outcome"] = [job_outcome(d, bool(k), m) for d, k, m in zip(cols["deadline_s"], cols["killed"],
                                                                       cols["deadline_met"])]

@@ -202,8 +202,11 @@ def jobs_table(records: Iterable[Any], node: str | None = None) -> pd.DataFrame:
         columns=JOB_COLUMNS[:-1],
     )
     # imported here: importing netsim.kernel loads simpy
-    from netsim.kernel.records import job_outcome
+    from netsim.kernel.records import ARRIVAL_COLUMNS, has_arrivals, job_outcome
 
+    if has_arrivals(recs):  # release jitter (issue 20): its columns only in runs that use it
+        for name, attr in ARRIVAL_COLUMNS:
+            frame[name] = _ns_column(col(attr))
     frame["outcome"] = [job_outcome(d, k, m) for d, k, m in zip(col("deadline"), frame["killed"], col("deadline_met"))]
     return frame
 
