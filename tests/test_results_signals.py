@@ -143,3 +143,18 @@ def test_a_run_keeps_its_signals_unbuilt_until_read(tmp_path: Path) -> None:
     assert isinstance(table, pd.DataFrame)
     write_csv(table, tmp_path / "s.csv")
     assert (tmp_path / "run" / "signals.csv").read_bytes() == (tmp_path / "s.csv").read_bytes()
+
+
+def test_metrics_csv_has_the_bytes_pandas_writes(tmp_path: Path) -> None:
+    from netsim.results.files import metrics_text
+
+    rng = np.random.default_rng(8)
+    values = [float(v) for v in rng.standard_normal(50) * np.exp(20 * rng.standard_normal(50))]
+    values += [np.nan, np.inf, -np.inf, -0.0, 0.0, 1.0, 1e16, 1e-5, 123456789.0, 0.1 + 0.2, 5e-324]
+    names = [f"m.{i}" for i in range(len(values))]
+    res = RunResult(metrics=pd.Series(values, index=names, dtype=float, name="value"))
+    write_csv(res.metrics_frame(), tmp_path / "m.csv")
+    assert metrics_text(names, values) == (tmp_path / "m.csv").read_text(encoding="utf-8")
+    write_csv(RunResult().metrics_frame(), tmp_path / "e.csv")
+    assert metrics_text([], []) == (tmp_path / "e.csv").read_text(encoding="utf-8")
+    assert metrics_text(["a,b"], [1.0]) is None  # needs quoting: pandas writes it

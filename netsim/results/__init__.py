@@ -221,7 +221,15 @@ class RunResult:
         from netsim.status import ERROR, INTERRUPTED, kind_of
 
         if kind_of(self.status) not in (ERROR, INTERRUPTED):  # a failed or cut run has no metrics: see meta.json
-            write_csv(self.metrics_frame(), out / "metrics.csv")
+            from netsim.results.files import metrics_text
+
+            names = [str(k) for k in self.metrics.index]
+            text = metrics_text(names, list(self.metrics.to_numpy(dtype=float))) if all(
+                isinstance(k, str) for k in self.metrics.index) else None
+            if text is not None:
+                write_atomic(out / "metrics.csv", text)
+            else:
+                write_csv(self.metrics_frame(), out / "metrics.csv")
         # meta.json last: its presence marks the folder complete (a folder without it is incomplete)
         write_atomic(out / "meta.json", json.dumps(self.meta, indent=2, sort_keys=True, default=_json_default) + "\n")
         self.out_dir = out

@@ -43,6 +43,16 @@ def write_csv(frame: pd.DataFrame, path: Path) -> None:
     write_atomic(path, text)
 
 
+def metrics_text(names: list[str], values: list[float]) -> str | None:
+    """``metrics.csv`` (``metric,value``) as pandas writes the two-column table, or None when a name needs
+    quoting or is empty (then write the table with :func:`write_csv`)."""
+    if any(not n or any(ch in n for ch in (",", '"', "\n", "\r")) for n in names):
+        return None
+    cells = _reprs([float(v) for v in values])  # repr of each value, in one C call
+    lines = [f"{n},{'' if c == 'nan' else c}\n" for n, c in zip(names, cells)]
+    return "metric,value\n" + "".join(lines)
+
+
 #: Columns that hold times (integer ns / 1e9): written with full precision (see :func:`write_csv`).
 TIME_COLUMNS = frozenset({
     "time_s", "release_s", "start_s", "finish_s", "response_s", "deadline_s", "cpu_time_s", "sent_s",
