@@ -80,10 +80,11 @@ class MonitorDecl(_Decl):
     users: list[_Name] = Field(default_factory=list)
 
 
-_M = Annotated[MailboxDecl, BeforeValidator(_empty_is_default)]
-_S = Annotated[SemaphoreDecl, BeforeValidator(_empty_is_default)]
-_E = Annotated[EventDecl, BeforeValidator(_empty_is_default)]
-_Mo = Annotated[MonitorDecl, BeforeValidator(_empty_is_default)]
+# `name:` with nothing after it is accepted (the defaults), and the JSON Schema for editors says so
+_M = Annotated[MailboxDecl, BeforeValidator(_empty_is_default, json_schema_input_type=MailboxDecl | None)]
+_S = Annotated[SemaphoreDecl, BeforeValidator(_empty_is_default, json_schema_input_type=SemaphoreDecl | None)]
+_E = Annotated[EventDecl, BeforeValidator(_empty_is_default, json_schema_input_type=EventDecl | None)]
+_Mo = Annotated[MonitorDecl, BeforeValidator(_empty_is_default, json_schema_input_type=MonitorDecl | None)]
 
 
 class SyncSpec(_Decl):

@@ -167,3 +167,20 @@ def test_events_and_semaphores_from_yaml_at_run_time() -> None:
     jobs = result.jobs
     worst = {t: round(jobs[jobs.task == t].response_s.max() * 1e9) for t in ("waiter", "a", "b")}
     assert worst == {"waiter": 3_500_000, "a": 3_000_000, "b": 2_000_000}
+
+
+def test_the_editor_schema_accepts_an_empty_entry_and_flags_a_typo() -> None:
+    """`netsim schema`: `go:` (null, the defaults) is accepted as the loader accepts it; a misspelt key is not."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+    from test_docs_and_schema import _problems  # the suite's minimal JSON Schema checker
+
+    from netsim.cli.docs import json_schema
+
+    schema = json_schema()
+    raw = _raw()
+    raw["nodes"]["computer"]["sync"]["events"] = {"go": None}
+    assert _problems(raw, schema, schema) == []
+    raw["nodes"]["computer"]["sync"]["mailboxes"]["samples"]["capacty"] = 1
+    assert _problems(raw, schema, schema) == [".nodes.computer.sync.mailboxes.samples.capacty: not allowed"]
