@@ -171,12 +171,8 @@ def test_events_and_semaphores_from_yaml_at_run_time() -> None:
 
 def test_the_editor_schema_accepts_an_empty_entry_and_flags_a_typo() -> None:
     """`netsim schema`: `go:` (null, the defaults) is accepted as the loader accepts it; a misspelt key is not."""
-    import sys
-
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
-    from test_docs_and_schema import _problems  # the suite's minimal JSON Schema checker
-
     from netsim.cli.docs import json_schema
+    from tests.cli.test_docs_and_schema import _problems  # the suite's minimal JSON Schema checker
 
     schema = json_schema()
     raw = _raw()
