@@ -180,3 +180,20 @@ def test_misuse_is_reported() -> None:
 
 def test_np_rank_copy_matches_the_dispatcher() -> None:
     assert _NP_RANK == NP_RANK
+
+
+def test_abort_on_miss_inside_a_monitor_hands_it_over() -> None:
+    """L (abort_on_miss, deadline 5 ms) holds the monitor for 10 ms; H waits from 1 ms. L is killed at its
+    deadline (5 ms) and H gets the monitor then: 1 ms inside, finish 6 ms."""
+    from netsim.kernel import TaskSpec
+
+    env = SimEnv(seed=1)
+    k = Kernel(env, "cpu", policy="fp")
+    mon = Monitor("res")
+    k.add_task(TaskSpec("L", period=100 * MS, deadline=5 * MS, priority=3, abort_on_miss=True),
+               section(0, 10, 0, mon))
+    k.create_task("H", section(0, 1, 0, mon), period=100 * MS, offset=1 * MS, priority=1)
+    env.run(20 * MS)
+    rec = {r.task: r for r in k.job_records}
+    assert rec["L"].killed and rec["L"].finish == 5 * MS
+    assert rec["H"].finish == 6 * MS
