@@ -126,7 +126,6 @@ _log = logging.getLogger(__name__)
 
 #: Modules imported from installed packages' ``netsim.plugins`` entry points (filled by :func:`_load_entry_points`).
 _ENTRY_POINT_MODULES: list[str] = []
-_ENTRY_POINTS_LOADED = False
 #: Plugin modules a lazy lookup failed to import: not tried again (the failure is in _PLUGIN_FAILURES).
 _TRIED: set[str] = set()
 #: Plugin files already executed: resolved path -> module name.
@@ -236,16 +235,19 @@ def load_plugins() -> list[tuple[str, str]]:
 
 
 def _load_entry_points() -> None:
-    """Import the modules of the installed packages' ``netsim.plugins`` entry points (once)."""
-    global _ENTRY_POINTS_LOADED
-    if _ENTRY_POINTS_LOADED:
-        return
-    _ENTRY_POINTS_LOADED = True
+    """Import the modules of the installed packages' ``netsim.plugins`` entry points not imported yet.
+
+    Called by :func:`load_plugins` and by a lookup of a name no netsim module declares (each such miss reads
+    the installed packages' metadata again: a few ms, on the path that ends in "unknown name" or imports a
+    package installed since)."""
     for mod in _entry_point_modules():
+        if mod in _ENTRY_POINT_MODULES or mod in _TRIED:
+            continue
         try:
             importlib.import_module(mod)
             _ENTRY_POINT_MODULES.append(mod)
         except Exception as exc:  # noqa: BLE001 - an installed plugin package that is broken: reported
+            _TRIED.add(mod)
             _failed(mod, exc, f" (entry point {ENTRY_POINT_GROUP})")
 
 

@@ -171,7 +171,7 @@ def _walk_dir(dotted: str, where: str) -> Iterator[tuple[str, Any]]:
     children: dict[str, tuple[bool, Any]] = {}  # name -> (is_package, package path or source DirEntry)
     try:
         entries = list(os.scandir(where))
-    except OSError:
+    except OSError:  # unreadable folder: its modules stay unknown here, and load_plugins reports their import
         return
     suffixes = sorted(all_suffixes(), key=len, reverse=True)
     for entry in entries:
