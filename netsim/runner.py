@@ -249,6 +249,7 @@ def run(
     write: bool = True,
     progress: Callable[[int, int], None] | None = None,
     allow_plugins: bool | None = None,
+    tables: bool = True,
 ) -> RunResult:
     """Run one scenario and (by default) write its run folder.
 
@@ -279,6 +280,9 @@ def run(
     allow_plugins
         Whether the Python files the scenario's ``plugins:`` list names may run (None: the user's settings,
         :mod:`netsim.trust`); a scenario naming files that are not allowed is refused (``ScenarioError``).
+    tables
+        False: the run folder holds ``metrics.csv`` and ``meta.json`` only (no scenario.yaml, signals, jobs,
+        messages, summaries or figures; a sweep's ``runs: metrics``). The result in memory is complete.
 
     Returns
     -------
@@ -368,11 +372,11 @@ def run(
     result.meta["wall_time_s"] = time.perf_counter() - wall0
     if folder is not None:
         try:
-            result.to_csv(folder)
+            result.to_csv(folder, tables=tables)
         except OSError as exc:
             _mark_folder(exc, folder)
             raise
-        if plot or scenario.output.plot:
+        if tables and (plot or scenario.output.plot):
             try:
                 result.plot(folder)
             except Exception:  # noqa: BLE001 - figures are a convenience; the tables are written
@@ -471,10 +475,11 @@ def _baseline(base_sc: Any) -> RunResult:
     return _shared(baseline)
 
 
-def run_point(raw: Mapping[str, Any], out: str | Path, seed: int) -> dict[str, float]:
-    """One sweep point in a worker process: run ``raw`` with ``seed``, write the run folder to ``out``.
+def run_point(raw: Mapping[str, Any], out: str | Path, seed: int, tables: bool = True) -> dict[str, float]:
+    """One sweep point in a worker process: run ``raw`` with ``seed``, write the run folder to ``out`` (with
+    ``tables`` False only ``metrics.csv`` and ``meta.json``: a sweep's ``runs: metrics``).
 
     Returns the metrics (an errored run raises; a diverged run returns its metrics, its ``meta.json`` says so).
     """
-    result = run(dict(raw), out=out, seed=seed, write=True)
+    result = run(dict(raw), out=out, seed=seed, write=True, tables=tables)
     return {str(k): float(v) for k, v in result.metrics.items()}

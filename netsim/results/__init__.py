@@ -88,6 +88,10 @@ def _json_default(obj: Any) -> Any:
     return str(obj)
 
 
+#: The files :meth:`RunResult.to_csv` writes besides ``metrics.csv`` and ``meta.json``.
+_TABLE_FILES = ("scenario.yaml", "signals.csv", "jobs.csv", "messages.csv", "jobs_summary.csv", "messages_summary.csv")
+
+
 class Lazy:
     """A table built on first access: a :class:`RunResult` field holding one calls ``build()`` when read, and
     keeps the table (issue 19: DataFrames only when asked for; the schedule trace, read only by the Gantt
@@ -183,8 +187,9 @@ class RunResult:
         """Metrics as a two-column table ``metric, value``."""
         return pd.DataFrame({"metric": list(self.metrics.index), "value": list(self.metrics.to_numpy(dtype=float))})
 
-    def to_csv(self, out_dir: str | Path) -> Path:
-        """Write the run folder into ``out_dir`` (created if needed); returns the folder.
+    def to_csv(self, out_dir: str | Path, tables: bool = True) -> Path:
+        """Write the run folder into ``out_dir`` (created if needed); returns the folder. With ``tables`` False,
+        only ``metrics.csv`` and ``meta.json`` (a sweep's ``runs: metrics``).
 
         Every file is written atomically (:func:`netsim.safe_write.write_atomic`) and ``meta.json`` last: a
         folder without ``meta.json`` is incomplete (a run killed while writing), and ``netsim report`` and
@@ -197,6 +202,32 @@ class RunResult:
         stale = out / "meta.json"
         if stale.exists() or stale.is_symlink():
             stale.unlink()  # rewriting a folder: it is incomplete until the new meta.json is written
+        if tables:
+            self._write_tables(out)
+        else:  # a folder written before with its tables: they are not this run's
+            for name in _TABLE_FILES:
+                (out / name).unlink(missing_ok=True)
+        from netsim.status import ERROR, INTERRUPTED, kind_of
+
+        if kind_of(self.status) not in (ERROR, INTERRUPTED):  # a failed or cut run has no metrics: see meta.json
+            from netsim.results.files import metrics_text
+
+            names = [str(k) for k in self.metrics.index]
+            text = metrics_text(names, list(self.metrics.to_numpy(dtype=float))) if all(
+                isinstance(k, str) for k in self.metrics.index) else None
+            if text is not None:
+                write_atomic(out / "metrics.csv", text)
+            else:
+                write_csv(self.metrics_frame(), out / "metrics.csv")
+        # meta.json last: its presence marks the folder complete (a folder without it is incomplete)
+        write_atomic(out / "meta.json", json.dumps(self.meta, indent=2, sort_keys=True, default=_json_default) + "\n")
+        self.out_dir = out
+        return out
+
+    def _write_tables(self, out: Path) -> None:
+        """``scenario.yaml``, ``signals.csv``, ``jobs.csv``/``messages.csv`` (or their summaries) into ``out``."""
+        from netsim.safe_write import write_atomic
+
         if self.scenario is not None:
             import yaml
 
@@ -218,22 +249,6 @@ class RunResult:
                     write_csv(getattr(self, name), out / f"{name}.csv")
             if summary is not None:
                 write_csv(summary, out / f"{name}_summary.csv")
-        from netsim.status import ERROR, INTERRUPTED, kind_of
-
-        if kind_of(self.status) not in (ERROR, INTERRUPTED):  # a failed or cut run has no metrics: see meta.json
-            from netsim.results.files import metrics_text
-
-            names = [str(k) for k in self.metrics.index]
-            text = metrics_text(names, list(self.metrics.to_numpy(dtype=float))) if all(
-                isinstance(k, str) for k in self.metrics.index) else None
-            if text is not None:
-                write_atomic(out / "metrics.csv", text)
-            else:
-                write_csv(self.metrics_frame(), out / "metrics.csv")
-        # meta.json last: its presence marks the folder complete (a folder without it is incomplete)
-        write_atomic(out / "meta.json", json.dumps(self.meta, indent=2, sort_keys=True, default=_json_default) + "\n")
-        self.out_dir = out
-        return out
 
     def plot(self, save: str | Path | None = None, *, window: Any = None) -> Any:
         """The responses figure (:func:`netsim.plotting.responses_figure`): a matplotlib ``Figure``.

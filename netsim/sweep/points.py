@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
 
-__all__ = ["PointFn", "RECORD_NAME", "default_point_fn", "run_chunk", "read_record", "point_hash"]
+__all__ = ["PointFn", "RECORD_NAME", "default_point_fn", "metrics_point_fn", "run_chunk", "read_record", "point_hash"]
 
 #: ``fn(raw_scenario, run_folder, seed) -> {metric: value}``
 PointFn = Callable[[Mapping[str, Any], Path, int], Mapping[str, float]]
@@ -33,6 +33,14 @@ def default_point_fn(raw: Mapping[str, Any], out: Path, seed: int) -> dict[str, 
     from netsim.runner import run_point
 
     return run_point(raw, out, seed)
+
+
+def metrics_point_fn(raw: Mapping[str, Any], out: Path, seed: int) -> dict[str, float]:
+    """The point function of a sweep with ``runs: metrics``: :func:`netsim.runner.run_point` writing only
+    ``metrics.csv`` and ``meta.json`` into the run folder."""
+    from netsim.runner import run_point
+
+    return run_point(raw, out, seed, tables=False)
 
 
 def _write_json(path: Path, data: Any) -> None:

@@ -36,7 +36,7 @@ from typing import Any, Mapping
 
 from netsim.errors import ConfigError
 from netsim.sweep.executor import SchedulerLost, open_executor, scheduler_lost
-from netsim.sweep.points import PointFn, default_point_fn, point_hash, read_record, run_chunk
+from netsim.sweep.points import PointFn, default_point_fn, metrics_point_fn, point_hash, read_record, run_chunk
 from netsim.sweep.spec import Point, Sweep, load_sweep
 from netsim.sweep.summary import write_summary
 
@@ -480,7 +480,7 @@ def run_sweep(
             sweep,
             todo,
             folder,
-            point_fn or default_point_fn,
+            point_fn or (metrics_point_fn if sweep.spec.runs == "metrics" else default_point_fn),
             workers=workers,
             scheduler=scheduler,
             local_dask=local_dask,
