@@ -16,7 +16,7 @@ import numpy as np
 from models.unicycle.model import TS
 from models.unicycle.quoting import Quotes
 
-__all__ = ["network_section", "loss_kind", "stability_limits", "GROWTH", "LOST_E3"]
+__all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference", "GROWTH", "LOST_E3"]
 
 #: A delay "degrades" the loop when the mean RMS longitudinal error e1 reaches this multiple of the no-delay one.
 GROWTH = 3.0
@@ -37,6 +37,15 @@ def _ms(values: Any) -> Any:
 
 def _tol(d: Any, col: str) -> float:
     return 1.96 * float(d[col].std(ddof=1)) / math.sqrt(len(d)) if len(d) > 1 else float("nan")
+
+
+def mean_difference(q: Quotes, x: Any, y: Any) -> tuple[str, bool]:
+    """``mean(x) - mean(y) +- 2 SE`` as quoted text (rad), and whether it exceeds two standard errors."""
+    if len(x) < 2 or len(y) < 2:
+        return "n/a", False
+    d = float(x.mean() - y.mean())
+    se = math.sqrt(float(x.var(ddof=1)) / len(x) + float(y.var(ddof=1)) / len(y))
+    return f"{q.f(d, 2)} +- {q.f(2 * se, 2)} rad", abs(d) > 2 * se
 
 
 def stability_limits(d: Any) -> dict[str, float]:
@@ -92,17 +101,31 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
         ry = rm.groupby(["_fp", "_kind"])["unicycle.rmse_y_front"].mean().to_dict()
         nan = float("nan")
         fps = sorted(rm["_fp"].unique())
+
+        def _diff(kind: str) -> tuple[str, bool]:
+            """Mean RMS theta of ``kind`` minus that without loss at the fastest rate, +- two standard errors, and
+            whether the difference exceeds them."""
+            x = rm[(rm["_fp"] == fps[0]) & (rm["_kind"] == kind)]["unicycle.rmse_theta_all"]
+            y = rm[(rm["_fp"] == fps[0]) & (rm["_kind"] == "none")]["unicycle.rmse_theta_all"]
+            return mean_difference(q, x, y)
+
+        ge_text, ge_sig = _diff("Gilbert-Elliott bursts")
+        be_text, be_sig = _diff("Bernoulli")
         L += [f"- Rate: from {q.g(1e3 / fps[0])} to {q.g(1e3 / fps[-1])} Hz without loss the RMS y error after the "
               f"turn goes from {_f(ry.get((fps[0], 'none'), nan) * 1e3)} to {_f(ry.get((fps[-1], 'none'), nan) * 1e3)} mm: fewer "
               "readings of a weak sensor; theta is hardly observed by either rate.",
               f"- Loss: independent loss of {_pct(rm[rm['_kind'] == 'Bernoulli']['net.radio.loss_rate'].mean())} "
               f"of the frames moves the theta error from {_f(m.get((fps[0], 'none'), nan))} to "
-              f"{_f(m.get((fps[0], 'Bernoulli'), nan))} rad (at {q.g(1e3 / fps[0])} Hz); the same share lost in bursts "
-              f"gives {_f(m.get((fps[0], 'Gilbert-Elliott bursts'), nan))} rad and theta coverage "
-              f"{_pct(c.get((fps[0], 'Gilbert-Elliott bursts'), nan))} (without loss {_pct(c.get((fps[0], 'none'), nan))}). A lost wheel "
-              "command matters where the command changes (the start and the end of the turn): the drive keeps the "
-              "old one, and a burst keeps it for several periods, so the cart turns late or too far while the "
-              "filter, which knows the command it sent but not whether it arrived, predicts with the new one.", ""]
+              f"{_f(m.get((fps[0], 'Bernoulli'), nan))} rad at {q.g(1e3 / fps[0])} Hz (difference {be_text}: "
+              f"{'beyond' if be_sig else 'within'} two standard errors); the same share lost in bursts gives "
+              f"{_f(m.get((fps[0], 'Gilbert-Elliott bursts'), nan))} rad (difference {ge_text}: "
+              f"{'beyond' if ge_sig else 'within'} two standard errors) and theta coverage "
+              f"{_pct(c.get((fps[0], 'Gilbert-Elliott bursts'), nan))} (without loss "
+              f"{_pct(c.get((fps[0], 'none'), nan))}). A lost wheel command matters where the command changes (the "
+              "start and the end of the turn): the drive keeps the old one, a burst keeps it for several periods, and "
+              "the filter, which knows the command it sent but not whether it arrived, predicts with the new one. "
+              + ("With these runs bursts raise the heading error measurably." if ge_sig else
+                 "With these runs that does not raise the mean heading error beyond the Monte-Carlo error."), ""]
     # ------------------------------------------------------------ CAN sweeps (fewer runs)
     net = F.get("net")
     if net is not None and len(net):
@@ -136,7 +159,11 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
                      f"{_pct(d['unicycle.cover_theta_all'].mean())} | {_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | "
                      f"{_f(d['unicycle.rmse_theta_all'].mean())} |")
             T.add("5 CAN", f"{kind}", "RMS theta all [rad]", d["unicycle.rmse_theta_all"].mean(), "", "")
-        L.append("")
+        x = bu[bu["_kind"] == "Gilbert-Elliott bursts"]["unicycle.rmse_theta_all"]
+        y = bu[bu["_kind"] == "Bernoulli"]["unicycle.rmse_theta_all"]
+        text, sig = mean_difference(q, x, y)
+        L += ["", f"RMS theta, bursts minus Bernoulli: {text} ({'beyond' if sig else 'within'} two standard errors "
+              f"with {q.i(min(len(x), len(y)))} runs each).", ""]
     zb = F["zigbee"]
     L += ["One run of `unicycle_zigbee.yaml` (nodes a few decimetres apart): mean message delay "
           f"{_f(zb['net.radio.mean_delay_s'] * 1e3)} ms (max {_f(zb['net.radio.max_delay_s'] * 1e3)} ms, CSMA/CA "
@@ -228,5 +255,7 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
               "`tests/models/unicycle/test_unicycle_bench.py`, which writes `speed.json`). "
               f"{q.i(sp['pool_runs'], 'pool_runs')} Monte-Carlo runs of `unicycle_lqr.yaml` on the local pool took "
               f"{_f(sp['pool_wall_s'], 3, 'pool_wall_s')} s on {q.i(sp['pool_workers'])} processes of this shared "
-              f"machine: {_f(sp['pool_runs'] / sp['pool_wall_s'], 3, 'pool_runs_per_s')} runs/s.", ""]
+              f"machine: {_f(sp['pool_runs'] / sp['pool_wall_s'], 3, 'pool_runs_per_s')} runs/s"
+              + (f" (load average {_f(sp['load_average'], 2)} at the end)" if "load_average" in sp else "")
+              + ". Both figures depend on the load of the machine, shared with other jobs.", ""]
     return L

@@ -98,6 +98,7 @@ def test_bench_single_run_against_numpy_and_pool():
     out = Path(__file__).resolve().parents[3] / "reports" / "unicycle" / "speed.json"
     if out.parent.is_dir():  # read by `netsim report unicycle` (its Speed section)
         out.write_text(json.dumps({"ratio": ratio, "repeats": repeats, "netsim_s": min(t_net), "numpy_s": min(t_np),
-                                   "pool_runs": n, "pool_wall_s": wall, "pool_workers": workers}, indent=1))
+                                   "pool_runs": n, "pool_wall_s": wall, "pool_workers": workers,
+                                   "load_average": os.getloadavg()[0]}, indent=1))
     assert all(s == "ok" for s in statuses)
     assert ratio < 10.0  # the numpy-heavy version of the programs was 10.4x-10.8x; the float one 3-6x
