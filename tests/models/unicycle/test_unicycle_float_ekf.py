@@ -11,8 +11,9 @@ import pytest
 import netsim  # noqa: F401  (pins BLAS before numpy work)
 from models.unicycle.design import PHASES, TrackingLaw, Trajectory, cart_frame_error, make_ekf
 from models.unicycle.ekf import CartEkf, matrix_to_sym, sym_to_matrix
-from models.unicycle.model import FRONT_OFFSET, P0, Q_REPORT, R_REPORT, WALL_FRONT, WALL_SIDE, measure, \
-    measure_jacobian, side_offset
+from models.unicycle.model import (
+    FRONT_OFFSET, P0, Q_REPORT, WALL_FRONT, WALL_SIDE, measure, measure_jacobian, side_offset,
+)
 
 
 @pytest.mark.parametrize("side", ["derived", "printed"])
