@@ -29,30 +29,49 @@ The task and handler programs that run these objects inside kernels live in :mod
 
 from __future__ import annotations
 
-from netsim.control.cascade import ControlSide, Decision
-from netsim.control.controller_trigger import ControllerTrigger
-from netsim.control.dob import DisturbanceObserver, DobDesign, design_dob
-from netsim.control.mrci import MrciController, MrciDesign, Section, computation_saving, decompose
-from netsim.control.numre import Numre, lifted_noise_cov
-from netsim.control.packets import ControlPacket, PlayoutBuffer
-from netsim.control.baselines import FiniteDifferenceVelocity
-from netsim.control.ekf import ExtendedKalmanFilter, MeasurementSource
-from netsim.control.interface import ControlLaw, OutputFeedback, StateEstimator, sample_index
-from netsim.control.kalman import KalmanFilter
-from netsim.control.lqr import LQR, StateFeedback, trajectory_feedforward
-from netsim.control.luenberger import LuenbergerObserver
-from netsim.control.mpc import LinearMPC
-from netsim.control.pid import PID, PIDLaw
-from netsim.control.reference_loop import LoopTrace, simulate_loop
-from netsim.control.triggers import (
-    AnyOf,
-    MaxIntervalTrigger,
-    MixedTrigger,
-    ReferenceChangeTrigger,
-    SendOnDelta,
-    TimeTriggered,
-    mtm_fires,
-)
+#: Exported name -> the module that defines it, imported at first use (issue 19: importing one medium or one
+#: control law must not import them all; the registry imports a plugin's own module).
+_EXPORTS = {
+    "ControlSide": "netsim.control.cascade",
+    "Decision": "netsim.control.cascade",
+    "ControllerTrigger": "netsim.control.controller_trigger",
+    "DisturbanceObserver": "netsim.control.dob",
+    "DobDesign": "netsim.control.dob",
+    "design_dob": "netsim.control.dob",
+    "MrciController": "netsim.control.mrci",
+    "MrciDesign": "netsim.control.mrci",
+    "Section": "netsim.control.mrci",
+    "computation_saving": "netsim.control.mrci",
+    "decompose": "netsim.control.mrci",
+    "Numre": "netsim.control.numre",
+    "lifted_noise_cov": "netsim.control.numre",
+    "ControlPacket": "netsim.control.packets",
+    "PlayoutBuffer": "netsim.control.packets",
+    "FiniteDifferenceVelocity": "netsim.control.baselines",
+    "ExtendedKalmanFilter": "netsim.control.ekf",
+    "MeasurementSource": "netsim.control.ekf",
+    "ControlLaw": "netsim.control.interface",
+    "OutputFeedback": "netsim.control.interface",
+    "StateEstimator": "netsim.control.interface",
+    "sample_index": "netsim.control.interface",
+    "KalmanFilter": "netsim.control.kalman",
+    "LQR": "netsim.control.lqr",
+    "StateFeedback": "netsim.control.lqr",
+    "trajectory_feedforward": "netsim.control.lqr",
+    "LuenbergerObserver": "netsim.control.luenberger",
+    "LinearMPC": "netsim.control.mpc",
+    "PID": "netsim.control.pid",
+    "PIDLaw": "netsim.control.pid",
+    "LoopTrace": "netsim.control.reference_loop",
+    "simulate_loop": "netsim.control.reference_loop",
+    "AnyOf": "netsim.control.triggers",
+    "MaxIntervalTrigger": "netsim.control.triggers",
+    "MixedTrigger": "netsim.control.triggers",
+    "ReferenceChangeTrigger": "netsim.control.triggers",
+    "SendOnDelta": "netsim.control.triggers",
+    "TimeTriggered": "netsim.control.triggers",
+    "mtm_fires": "netsim.control.triggers",
+}
 
 __all__ = [
     "ControlLaw",
@@ -95,3 +114,20 @@ __all__ = [
     "mtm_fires",
     "simulate_loop",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """The exported names, each imported from its module at first use (PEP 562)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The module's names and the exported names (tab completion)."""
+    return sorted(set(globals()) | set(_EXPORTS))

@@ -12,23 +12,34 @@ A new medium is one module here with a ``@register("network", NAME)`` class (cop
 package, so it registers without being imported below; export it here only if Python users need its class.
 """
 
-from netsim.network.can import CanBus, can_frame_bits
-from netsim.network.csma_cd import CsmaCdBus
-from netsim.network.delay import DelaySpec
-from netsim.network.ethernet import SwitchedEthernet
-from netsim.network.fdma import FdmaMedium
-from netsim.network.factory import make_network, network_class
-from netsim.network.link import Link
-from netsim.network.message import BROADCAST, Message, Receiver
-from netsim.network.params import NetworkParams, NodeDelays
-from netsim.network.pipeline import Frame, Network
-from netsim.network.loss import LossSpec
-from netsim.network.records import DROP_REASONS, MessageRecord
-from netsim.network.round_robin import RoundRobinBus
-from netsim.network.tdma import TdmaBus
-from netsim.network.ieee802154 import Ieee802154
-from netsim.network.ieee80211b import Ieee80211b
-from netsim.network.wireless import WirelessMedium
+#: Exported name -> the module that defines it, imported at first use (issue 19: importing one medium or one
+#: control law must not import them all; the registry imports a plugin's own module).
+_EXPORTS = {
+    "CanBus": "netsim.network.can",
+    "can_frame_bits": "netsim.network.can",
+    "CsmaCdBus": "netsim.network.csma_cd",
+    "DelaySpec": "netsim.network.delay",
+    "SwitchedEthernet": "netsim.network.ethernet",
+    "FdmaMedium": "netsim.network.fdma",
+    "make_network": "netsim.network.factory",
+    "network_class": "netsim.network.factory",
+    "Link": "netsim.network.link",
+    "BROADCAST": "netsim.network.message",
+    "Message": "netsim.network.message",
+    "Receiver": "netsim.network.message",
+    "NetworkParams": "netsim.network.params",
+    "NodeDelays": "netsim.network.params",
+    "Frame": "netsim.network.pipeline",
+    "Network": "netsim.network.pipeline",
+    "LossSpec": "netsim.network.loss",
+    "DROP_REASONS": "netsim.network.records",
+    "MessageRecord": "netsim.network.records",
+    "RoundRobinBus": "netsim.network.round_robin",
+    "TdmaBus": "netsim.network.tdma",
+    "Ieee802154": "netsim.network.ieee802154",
+    "Ieee80211b": "netsim.network.ieee80211b",
+    "WirelessMedium": "netsim.network.wireless",
+}
 
 __all__ = [
     "make_network",
@@ -56,3 +67,20 @@ __all__ = [
     "Ieee802154",
     "Ieee80211b",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """The exported names, each imported from its module at first use (PEP 562)."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The module's names and the exported names (tab completion)."""
+    return sorted(set(globals()) | set(_EXPORTS))

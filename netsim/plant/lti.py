@@ -30,7 +30,6 @@ from collections import OrderedDict
 from typing import Any, Sequence
 
 import numpy as np
-from scipy.linalg import expm
 
 from netsim.errors import ConfigError
 from netsim.plant.base import Plant
@@ -47,6 +46,8 @@ def zoh_transition(A: np.ndarray, B: np.ndarray, h_s: float) -> tuple[np.ndarray
     M = np.zeros((n + m, n + m))
     M[:n, :n] = A * h_s
     M[:n, n:] = B * h_s
+    from scipy.linalg import expm  # here, not at the top: validate builds plants and never discretises
+
     E = expm(M)
     return E[:n, :n], E[:n, n:]
 
@@ -62,6 +63,8 @@ def van_loan(A: np.ndarray, B: np.ndarray, Qc: np.ndarray, h_s: float) -> tuple[
     H[:n, n : 2 * n] = Qc * h0
     H[n : 2 * n, n : 2 * n] = A.T * h0
     H[2 * n :, n : 2 * n] = B.T * h0
+    from scipy.linalg import expm  # here, not at the top: validate builds plants and never discretises
+
     E = expm(H)
     Ad = E[n : 2 * n, n : 2 * n].T.copy()
     Bd = E[2 * n :, n : 2 * n].T.copy()
