@@ -129,6 +129,15 @@ class Friction:
         pr = self.params
         return (p + 0.5 * pr.speedup * p * p) / pr.wavelength
 
+    def __post_init__(self) -> None:
+        # one mode (the default preset): the level in plain floats, the same IEEE operations as the array form
+        # (2 pi f phi + phase, cos from the same libm, a one-term dot product is the product), issue 19's
+        # per-event cost of the cart (about a third of the level's time was numpy call overhead)
+        one = None
+        if self.freqs.shape == (1,) and self.params.variation != 0.0:
+            one = (2.0 * math.pi * float(self.freqs[0]), float(self.phases[0]), float(self.amps[0]))
+        object.__setattr__(self, "_one", one)
+
     def level(self, p: float) -> float:
         """Coulomb friction level ``F(p) >= 0`` in m/s^2."""
         pr = self.params
@@ -136,7 +145,12 @@ class Friction:
             return 0.0
         if pr.variation == 0.0:
             return pr.coulomb
-        g = float(np.dot(self.amps, np.cos(2.0 * math.pi * self.freqs * self.phase(p) + self.phases)))
+        one = self._one
+        if one is not None:
+            w, ph, amp = one
+            g = amp * math.cos(w * ((p + 0.5 * pr.speedup * p * p) / pr.wavelength) + ph)
+        else:
+            g = float(np.dot(self.amps, np.cos(2.0 * math.pi * self.freqs * self.phase(p) + self.phases)))
         return pr.coulomb * max(pr.floor, 1.0 + pr.variation * g)
 
     def levels(self, p: np.ndarray) -> np.ndarray:
