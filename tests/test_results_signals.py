@@ -158,3 +158,16 @@ def test_metrics_csv_has_the_bytes_pandas_writes(tmp_path: Path) -> None:
     write_csv(RunResult().metrics_frame(), tmp_path / "e.csv")
     assert metrics_text([], []) == (tmp_path / "e.csv").read_text(encoding="utf-8")
     assert metrics_text(["a,b"], [1.0]) is None  # needs quoting: pandas writes it
+
+
+def test_a_pickled_result_has_its_tables_built_and_leaves_the_samples_behind() -> None:
+    import pickle
+
+    import netsim
+
+    root = Path(__file__).resolve().parents[1]
+    res = netsim.run(root / "scenarios" / "dc_servo_can.yaml", write=False, overrides={"duration": "0.2 s"})
+    back = pickle.loads(pickle.dumps(res))
+    assert back.signal_source is None and back.job_rows is None and back.message_rows is None
+    assert back.signals.equals(res.signals) and back.jobs.equals(res.jobs) and back.messages.equals(res.messages)
+    assert len(back.jobs) > 0 and len(back.signals) > 0

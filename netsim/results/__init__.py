@@ -118,8 +118,11 @@ class RunResult:
         return value
 
     def __getstate__(self) -> dict[str, Any]:
-        """Pickled and copied with every table built (a :class:`Lazy` holds a closure, which does not pickle)."""
-        return {name: getattr(self, name) for name in object.__getattribute__(self, "__dict__")}
+        """Pickled and copied with every table built (a :class:`Lazy` holds a closure, which does not pickle); the
+        records and samples the tables were built from are left behind."""
+        state = {name: getattr(self, name) for name in object.__getattribute__(self, "__dict__")}
+        state.update(job_rows=None, message_rows=None, signal_source=None)
+        return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         object.__getattribute__(self, "__dict__").update(state)

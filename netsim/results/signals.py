@@ -41,7 +41,7 @@ def _as_array(samples: Any, dtype: Any) -> np.ndarray:
         got = np.frombuffer(samples, dtype=dtype)
         if len(got) == len(samples):
             return got
-    except (TypeError, ValueError, BufferError):
+    except (TypeError, ValueError, BufferError):  # not a typed array of that type (a list): copied below
         pass
     return np.asarray(samples, dtype=dtype)
 
