@@ -50,10 +50,14 @@ def _noop(_ev: Any) -> None:
 class Arrivals:
     """Jittered and sporadic releases and run-time task parameters (mixed into :class:`Kernel`)."""
 
+    #: ``(task, job_id) -> arrival`` of the jittered jobs (None until the first one)
+    _arrivals: "dict[tuple[str, int], int] | None" = None
+
     # provided by Kernel
     name: str
     env: Any
     halted: bool
+    job_records: Any
     policy: Any
     tasks: dict[str, Task]
     _sim: Any
@@ -97,7 +101,10 @@ class Arrivals:
         jitter = spec.release_jitter
         delay = 0 if jitter is None else jitter.draw(task.rng)
         if delay <= 0:
-            self._release(task, None, now) if jitter is not None else self._release(task, None)
+            if jitter is None:
+                self._release(task, None)
+            else:
+                self._arrived(self._release(task, None, now))
             self._request_dispatch()
         else:
             heappush(self._queue, (now + delay, NORMAL, next(self._eid), (self._on_jittered_arrival, (task, now))))
@@ -106,8 +113,26 @@ class Arrivals:
         if self.halted:
             return
         task, nominal = ev[1]
-        self._release(task, None, nominal)
+        self._arrived(self._release(task, None, nominal))
         self._request_dispatch()
+
+    def _arrived(self, job: "Job") -> None:
+        """Keep a jittered job's arrival for its record (filled in when the run ends: no work for other jobs)."""
+        if self._arrivals is None:
+            self._arrivals = {}
+        self._arrivals[(job.task_name, job.job_id)] = job.arrival  # type: ignore[assignment]
+
+    def _fill_arrivals(self) -> None:
+        """Set ``arrival`` on the records of the jittered jobs (called by ``_finalize`` at the end of a run)."""
+        arrivals = self._arrivals
+        records = self.job_records
+        if not arrivals or not isinstance(records, list):  # a JobSummary keeps no per-job records
+            return
+        for rec in records:
+            if rec.arrival is None:
+                got = arrivals.get((rec.task, rec.job_id))
+                if got is not None:
+                    rec.arrival = got
 
     # ================================================================= run-time parameters
     def set_period(self, task: str, period: int) -> None:

@@ -282,10 +282,12 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         spec = task.spec
         jid = task.released
         task.released = jid + 1
-        release = now if nominal is None else nominal
-        deadline = None if spec.deadline is None else release + spec.deadline
-        job = Job(self._ctx, task, jid, task.data if data is None else data, release, deadline)
-        if nominal is not None:
+        if nominal is None:
+            deadline = None if spec.deadline is None else now + spec.deadline
+            job = Job(self._ctx, task, jid, task.data if data is None else data, now, deadline)
+        else:  # a jittered arrival: release and deadline count from the nominal release
+            deadline = None if spec.deadline is None else nominal + spec.deadline
+            job = Job(self._ctx, task, jid, task.data if data is None else data, nominal, deadline)
             job.arrival = now
         key = task.key
         if key is None:
@@ -296,8 +298,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         job._np = not (spec.preemptible and self.policy.preemptive)
         job._budget = spec.wcet
         if task.watch_deadline and deadline is not None:  # a deadline handler or abort_on_miss
-            heappush(self._queue, (deadline if deadline > now else now, DEADLINE, next(self._eid),
-                                   (self._on_deadline, job)))
+            at = deadline if nominal is None or deadline > now else now  # a jitter may pass the deadline
+            heappush(self._queue, (at, DEADLINE, next(self._eid), (self._on_deadline, job)))
         if task.active is None:
             task.active = job
             self._make_ready(job, now)
@@ -406,15 +408,16 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         task = job._task
         if not job.is_handler:
             deadline = job.deadline
+            # a jittered job's arrival is added to its record by Arrivals._fill_arrivals (end of the run): no
+            # work here for the jobs of other tasks
             if killed:  # never completed: no response time, and a miss (deadline_verdict)
                 self.job_records.append(JobRecord(
                     task.name, self.name, job.job_id, job.release, job.start, now, None, deadline, False,
-                    job.preemptions, job.cpu_time, True, job.arrival))
+                    job.preemptions, job.cpu_time, True))
             else:  # deadline_verdict(deadline, now, False), inlined on the hot path
                 self.job_records.append(JobRecord(
                     task.name, self.name, job.job_id, job.release, job.start, now, now - job.release, deadline,
-                    True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, False,
-                    job.arrival))
+                    True if deadline is None else now <= deadline, job.preemptions, job.cpu_time, False))
         if task.queue:
             nxt = task.queue.popleft()
             task.active = nxt
@@ -449,7 +452,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
             if not job.is_handler:
                 self.job_records.append(JobRecord(
                     job.task_name, self.name, job.job_id, job.release, None, now, None,
-                    job.deadline, deadline_verdict(job.deadline, now, True), 0, 0, True, job.arrival))
+                    job.deadline, deadline_verdict(job.deadline, now, True), 0, 0, True))
             return
         job._wake = None
         gen = job._gen

@@ -91,7 +91,8 @@ class JobRecord:
         Ended by ``kill`` rather than by returning.
     arrival
         The actual arrival of a job of a task with release jitter (``release`` is its nominal release, and
-        ``response`` counts from it); ``None`` for every other job (it arrived at ``release``).
+        ``response`` counts from it), set when the run ends (``env.run``); ``None`` for every other job (it
+        arrived at ``release``).
     """
 
     task: str

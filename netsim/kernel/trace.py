@@ -31,6 +31,8 @@ class Tracing:
     trace: bool
     schedule: list[tuple[str, str, int, int]]
     job_records: list[JobRecord]
+    _arrivals: Any  # Arrivals
+    _fill_arrivals: Any
     tasks: dict[str, "Task"]
     handlers: dict[str, "Handler"]
     _sim: Any
@@ -103,6 +105,8 @@ class Tracing:
     def _finalize(self, t_end: int) -> None:
         """Close open trace intervals and add records of the jobs unfinished at ``t_end``."""
         self._t_end = t_end
+        if self._arrivals:
+            self._fill_arrivals()
         if self._unfinished:
             stale = {id(r) for r in self._unfinished}
             self.job_records[:] = [r for r in self.job_records if id(r) not in stale]
