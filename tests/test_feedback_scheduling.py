@@ -81,3 +81,15 @@ def test_validate_names_the_controlled_tasks(tasks, index, words):
     raw["nodes"]["cpu"]["tasks"].append({"name": "bg", "program": "idle", "release": "aperiodic", "priority": 9})
     errors = {p.path: p.message for p in check_scenario(raw) if p.severity == "error"}
     assert words in errors[f"nodes.cpu.tasks[0].params.tasks[{index}]"]
+
+
+def test_analyze_says_its_bound_is_for_the_nominal_period():
+    from netsim.cli.analyze import analyze_run
+
+    scenario = load_scenario(_raw(_servo_tasks("1 ms", 0.5), duration="200 ms"))
+    table = analyze_run(scenario, netsim.run(scenario)).set_index(["kind", "name"])
+    # C = 1 ms at the nominal periods 6, 5, 4 ms: pid3 alone above pid2 and pid1, R = 1, 2, 3 ms (the scheduler's
+    # zero execution adds nothing)
+    assert [table.loc[("task", f"cpu.pid{i}"), "analysis"] for i in (3, 2, 1)] == [1.0, 2.0, 3.0]
+    assert "at the nominal period (set at run time by scheduler)" in table.loc[("task", "cpu.pid1"), "note"]
+    assert "nominal period" not in table.loc[("task", "cpu.scheduler"), "note"]

@@ -115,6 +115,9 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
                 blind.append(h.name)
                 continue
             items.append(RTATask(h.name, c + int(h.latency or 0), period, priority=-1_000_000))
+        how = "non-preemptive FP RTA" if policy == "np_fp" else f"{policy.upper()} RTA"
+        retimed = {name: t.name for t in node.tasks if t.program == "feedback_scheduler"
+                   for name in t.params.get("tasks", []) if isinstance(name, str)}
         for t in node.tasks:
             c = sync.timing(t, _wcet_ns(t))
             if blind:
@@ -135,9 +138,10 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
                 skipped.append((t.name, "release jitter unbounded (exponential, or normal without max): no bound"))
                 continue
             if jitter:
-                how = "non-preemptive FP RTA" if policy == "np_fp" else f"{policy.upper()} RTA"
                 notes[t.name] = (f"{notes.get(t.name, how)}; R = J + w from the nominal release "
                                  f"(J = {_ms(jitter * NS):g} ms; response_from_arrival_s <= w)")
+            if t.name in retimed:  # kernel.set_period at run time: the analysis knows the nominal periods only
+                notes[t.name] = f"{notes.get(t.name, how)}; at the nominal period (set at run time by {retimed[t.name]})"
             if period is None:
                 period = _min_gap_ns(_jobs_of(jobs, node_name, t.name)["release_s"])
                 notes[t.name] = f"{t.release_kind}: sporadic, T = shortest gap in the run"
