@@ -95,13 +95,14 @@ class CartPlant(Plant):
 
     def _step(self, t: int) -> bool:
         td = self.params.td
+        x = self._x
         while self._t < t:
             end = min(t, self._f_next)
-            p, v = propagate1(float(self._x[0]), float(self._x[1]), self._u_acc, self._f, self._fs,
-                              (end - self._t) * 1e-9, td)
-            self._x[0], self._x[1] = p, v
-            if not (abs(self._x[0]) < self.divergence_bound and abs(self._x[1]) < self.divergence_bound):
-                self._diverged(end, self._x)
+            p, v = propagate1(float(x[0]), float(x[1]), self._u_acc, self._f, self._fs, (end - self._t) * 1e-9, td)
+            x[0] = p
+            x[1] = v
+            if not (abs(p) < self.divergence_bound and abs(v) < self.divergence_bound):
+                self._diverged(end, x)
             self._t = end
             if end == self._f_next:
                 self._eval_friction(end)
@@ -221,24 +222,25 @@ def first_exit(p0: float, v0: float, u: float, f: float, fs: float, off: int, ti
     for first, end, p, v, a, t_from in pieces:
         if first >= end:
             continue
-
-        def bad(j: int) -> bool:
-            x = (off + j * tick) * 1e-9
-            if t_from:
-                x = x - t_from
-            y = p + v * x + 0.5 * a * x * x if output == 0 else v + a * x
-            q = y / step
-            return not (lo_q <= q < hi_q)
-
-        if bad(first):
+        ha = 0.5 * a
+        # y at tick `first` (the IEEE operations of propagate: p + v x + 0.5 a x x, or v + a x)
+        x = (off + first * tick) * 1e-9
+        if t_from:
+            x = x - t_from
+        q = (p + v * x + ha * x * x if output == 0 else v + a * x) / step
+        if not (lo_q <= q < hi_q):
             return first
-        good, worse = first, end  # bad(good) is False; the first bad tick, if any, is in (good, end)
+        good, worse = first, end  # tick `good` is in the band; the first tick out of it, if any, in (good, end)
         while worse - good > 1:
             mid = (good + worse) // 2
-            if bad(mid):
-                worse = mid
-            else:
+            x = (off + mid * tick) * 1e-9
+            if t_from:
+                x = x - t_from
+            q = (p + v * x + ha * x * x if output == 0 else v + a * x) / step
+            if lo_q <= q < hi_q:
                 good = mid
+            else:
+                worse = mid
         if worse < end:
             return worse
     return -1
