@@ -226,6 +226,7 @@ class Arrivals:
         task.key = None
         jobs = ([task.active] if task.active is not None else []) + list(task.queue)
         changed = False
+        key = None
         for job in jobs:
             key = policy.key(job)
             rank = (1, key)
@@ -241,7 +242,7 @@ class Arrivals:
             if not lent:
                 job._rank = rank
         if jobs and policy.static:
-            task.key = jobs[0]._base_rank[1]
+            task.key = key  # the task's own key (a job's rank may be lent by a monitor)
         if changed:
             ready = self._ready
             ready[:] = [(j._rank, seq, j) for _, seq, j in ready if j._state == READY]

@@ -232,3 +232,16 @@ def test_task_spec_refuses_inconsistent_arrival_fields(fields, field):
     with pytest.raises(BuildError) as info:
         k.add_task(TaskSpec("a", priority=1, **fields), _body(MS))
     assert info.value.field == field
+
+
+def test_a_new_priority_holds_for_later_jobs_of_a_periodic_task():
+    env = SimEnv(seed=0)
+    k = Kernel(env, "n", policy="fp")
+    k.add_task(TaskSpec("a", period=10 * MS, priority=1), _body(2 * MS))
+    k.add_task(TaskSpec("b", period=10 * MS, priority=2), _body(2 * MS))
+    env.run(5 * MS)  # a ran first (0-2 ms), then b (2-4 ms)
+    k.set_priority("a", 3)  # from now on b is the more urgent
+    env.run(25 * MS)
+    a, b = _records(k, "a"), _records(k, "b")
+    assert [(r.start, r.finish) for r in a] == [(0, 2 * MS), (12 * MS, 14 * MS), (22 * MS, 24 * MS)]
+    assert [(r.start, r.finish) for r in b] == [(2 * MS, 4 * MS), (10 * MS, 12 * MS), (20 * MS, 22 * MS)]
