@@ -85,28 +85,25 @@ class SwitchedEthernet(Network):
         else:
             self._store(frame)
 
-    def _fits(self, port: str, bits: int) -> bool:
-        if self._cap_total is None:
-            return True
-        if self._common:
-            return self._used + bits <= self._cap_total
-        return self._used_port[port] + bits <= (self._cap_port or 0)
-
     def _store(self, frame: Frame) -> None:
         bits = frame.wire_bits
         copies = frame.copies
         failed: list[Copy] = []
         unicast = len(copies) == 1
+        cap = self._cap_total
+        used_port = self._used_port
         for copy in copies:
             port = copy[0].receiver
             assert port is not None
-            if not self._fits(port, bits):
+            # does the frame fit the switch memory (common, or this output's share)?
+            if cap is not None and (self._used + bits > cap if self._common
+                                    else used_port[port] + bits > (self._cap_port or 0)):
                 failed.append(copy)
                 continue
-            self._used += bits
-            self._used_port[port] += bits
-            if self._used > self.memory_max:
-                self.memory_max = self._used
+            used = self._used = self._used + bits
+            used_port[port] += bits
+            if used > self.memory_max:
+                self.memory_max = used
             # a unicast frame goes on as it is (it carries exactly this copy); a broadcast is split per port
             cf = frame if unicast else Frame(copy[0], [copy], frame.sender, frame.priority, bits, frame.tx_ns,
                                              frame.order, tx_start_ns=frame.tx_start_ns)
