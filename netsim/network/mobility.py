@@ -21,9 +21,15 @@ import math
 from bisect import bisect_right
 from typing import Any
 
-from pydantic import Field, field_serializer, model_serializer, model_validator
+from pydantic import (
+    Field,
+    field_serializer,
+    field_validator,
+    model_serializer,
+    model_validator,
+)
 
-from netsim.timebase import S, format_time
+from netsim.timebase import S, TimeParseError, format_time, parse_time
 from netsim.units import NUMBER_LIMIT, StrictModel, Time
 
 __all__ = ["Motion", "Track"]
@@ -35,7 +41,28 @@ def _point(value: Any, what: str) -> tuple[float, float]:
         x, y = float(value[0]), float(value[1])
         if all(math.isfinite(v) and abs(v) <= NUMBER_LIMIT for v in (x, y)):
             return x, y
-    raise ValueError(f"{what}: expected [x, y] (two finite numbers, metres), got {value!r}")
+    raise ValueError(f"{what}: expected [x, y] (two finite numbers of at most {NUMBER_LIMIT:g}, metres), "
+                     f"got {value!r}")
+
+
+def _waypoints(path: Any) -> Any:
+    """Check ``path``'s waypoints one by one, so that a problem names its waypoint at the ``path`` key (a time
+    such as ``"8 s"`` is not a path part a message can point into) and two keys that are the same time
+    (``"1 s"`` and ``"1000 ms"``) are refused instead of one silently replacing the other."""
+    if not isinstance(path, dict):
+        return path  # the field's type reports it
+    seen: dict[int, Any] = {}
+    for key, point in path.items():
+        try:
+            t = parse_time(key)
+        except (TimeParseError, TypeError) as exc:
+            raise ValueError(f"waypoint {key!r}: {exc}") from None
+        if t in seen:
+            raise ValueError(f"waypoints {seen[t]!r} and {key!r} are the same time ({format_time(t)}); "
+                             "remove one of them")
+        seen[t] = key
+        _point(point, f"waypoint {key!r}")
+    return path
 
 
 class Motion(StrictModel):
@@ -45,6 +72,11 @@ class Motion(StrictModel):
         None, description="time -> [x, y] (m): waypoints after 0 s, reached in straight lines from the node's "
                           "position at 0; it stays at the last")
     velocity: tuple[float, float] | None = Field(None, description="[vx, vy] in m/s from the node's position at 0 s")
+
+    @field_validator("path", mode="before")
+    @classmethod
+    def _path_points(cls, value: Any) -> Any:
+        return _waypoints(value)
 
     @model_validator(mode="after")
     def _check(self) -> "Motion":

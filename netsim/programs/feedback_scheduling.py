@@ -100,8 +100,10 @@ class FeedbackScheduler:
         def _scales(self) -> "FeedbackScheduler.Params":
             if self.min_scale > self.max_scale:
                 raise ValueError("min_scale must not exceed max_scale")
-            if len(set(self.tasks)) != len(self.tasks):
-                raise ValueError("tasks lists a task twice")
+            twice = sorted({t for t in self.tasks if self.tasks.count(t) > 1})
+            if twice:
+                raise ValueError(f"tasks lists {', '.join(repr(t) for t in twice)} more than once; remove the "
+                                 "repeats")
             return self
 
     def __init__(self, ctx: Any, params: Params) -> None:

@@ -61,7 +61,8 @@ class SemaphoreDecl(_Decl):
     @model_validator(mode="after")
     def _max(self) -> "SemaphoreDecl":
         if self.maximum is not None and self.maximum < self.count:
-            raise ValueError(f"maximum {self.maximum} is below the initial count {self.count}")
+            raise ValueError(f"maximum {self.maximum} is below the initial count {self.count}; raise 'maximum' "
+                             "or lower 'count'")
         return self
 
 
@@ -155,8 +156,9 @@ def create_sync(kernel: Any, node: Any, path: str) -> None:
                                  f"node uses '{kernel.policy.name}'; use 'inherit' (the owner then inherits the "
                                  "waiter's deadline)", path=f"{mpath}.protocol")
             if not users[name]:
-                raise BuildError(f"monitor '{name}' has protocol 'ceiling' but no task uses it; name it in a task's "
-                                 "parameters or list the tasks in 'users'", path=f"{mpath}.users")
+                raise BuildError(f"monitor '{name}' has protocol 'ceiling' but no task uses it; add it to the "
+                                 "parameters of the tasks that enter it, or list them in 'users'",
+                                 path=f"{mpath}.users")
         sync.add(Monitor(name, protocol=mon.protocol, users=tuple(users[name])))
 
 

@@ -528,6 +528,8 @@ class _Checker:
                     self.network_ref(node, v, [*where, i])
             elif key == "channel" or key.endswith("_channel"):
                 self.name_ref(value, self.io, "io channel", where)
+                if key.endswith("output_channel"):  # a program writes it: job.analog_out needs a DAC
+                    self.dac_ref(value, where)
             elif key == "channels" or key.endswith("_channels"):
                 for i, v in enumerate(_l(value)):
                     self.name_ref(v, self.io, "io channel", [*where, i])
@@ -548,16 +550,32 @@ class _Checker:
                     if isinstance(item, (dict, BaseModel)):
                         self.conventions(node, _values(item), [*where, i])
 
+    def dac_ref(self, value: Any, at: list[PathPart]) -> None:
+        """An ``*output_channel`` parameter names an io channel of type ``dac`` (what ``analog_out`` writes)."""
+        channel = _d(self.raw.get("io")).get(value) if isinstance(value, str) else None
+        kind = _d(channel).get("type")
+        if isinstance(kind, str) and kind != "dac":
+            dacs = [n for n, c in _d(self.raw.get("io")).items() if _d(c).get("type") == "dac"]
+            self.error(at, f"io channel '{value}' is an {kind}, and a program writes its output to a dac; use one "
+                           f"of the dac channels ({', '.join(map(str, dacs)) or 'none: add one under io'})")
+
     def periodic_task_ref(self, node: str, name: Any, at: list[PathPart]) -> None:
-        """A program parameter naming a periodic task of its own node (``tasks``, ``*_tasks``)."""
-        tasks = {t.get("name"): t for t in _l(_d(_d(self.raw.get("nodes")).get(node)).get("tasks")) if isinstance(t, dict)}
+        """A program parameter naming a periodic task of its own node (``tasks``, ``*_tasks``), not the task
+        whose parameters these are."""
+        items = _l(_d(_d(self.raw.get("nodes")).get(node)).get("tasks"))
+        tasks = {t["name"]: t for t in items if isinstance(t, dict) and isinstance(t.get("name"), str)}
         if not isinstance(name, str):
             return
+        # at: nodes.<node>.tasks[i].params...: the task whose parameters these are
+        owner = items[at[3]] if len(at) > 3 and at[2] == "tasks" and isinstance(at[3], int) else None
         if name not in tasks:
-            known = [n for n in tasks if isinstance(n, str)]
-            self.error(at, f"node '{node}' has no task '{name}'{did_you_mean(name, known, what='tasks')}")
+            self.error(at, f"node '{node}' has no task '{name}'{did_you_mean(name, list(tasks), what='tasks')}")
+        elif owner is tasks[name]:
+            self.error(at, f"task '{name}' is the task these parameters belong to; remove it (name other periodic "
+                           f"tasks of node '{node}')")
         elif tasks[name].get("period") is None:
-            self.error(at, f"task '{name}' is not periodic (it has no period); name a periodic task of node '{node}'")
+            self.error(at, f"task '{name}' is not periodic (it has no period); give it a period or list a "
+                           f"periodic task of node '{node}'")
 
     def name_ref(self, value: Any, known: list[str], what: str, at: list[PathPart]) -> None:
         if isinstance(value, str) and value not in known:
