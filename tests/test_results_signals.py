@@ -171,3 +171,15 @@ def test_a_pickled_result_has_its_tables_built_and_leaves_the_samples_behind() -
     assert back.signal_source is None and back.job_rows is None and back.message_rows is None
     assert back.signals.equals(res.signals) and back.jobs.equals(res.jobs) and back.messages.equals(res.messages)
     assert len(back.jobs) > 0 and len(back.signals) > 0
+
+
+def test_a_sample_cut_in_half_by_an_interrupt_is_left_out_of_windows_and_table() -> None:
+    # Ctrl-C / SIGTERM can land between appending a sample's time and its value: one more time than values
+    times = {"a": array("q", [0, 10, 20]), "b": array("q", [0, 15])}
+    values = {"a": array("d", [1.0, 2.0]), "b": array("d", [5.0, 6.0])}
+    table = signals_table(times, values)
+    # the rows are the complete samples' instants (0, 10 of a; 0, 15 of b); a's cut sample at 20 is not one
+    np.testing.assert_allclose(table["time_s"] * 1e9, [0.0, 10.0, 15.0])
+    assert list(table["a"]) == [1.0, 2.0, 2.0]
+    rows = [np.column_stack([at, *cols]) for at, cols in SignalSource(times, values).chunks()]
+    np.testing.assert_allclose(np.vstack(rows), table[["time_s", "a", "b"]].to_numpy() * [1e9, 1, 1])

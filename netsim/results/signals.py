@@ -81,6 +81,9 @@ class SignalSource:
             return got
         t = _as_array(self._times[name], np.int64)
         v = _as_array(self._values[name], np.float64)
+        if len(t) != len(v):  # a run interrupted (Ctrl-C, SIGTERM) between a sample's time and its value
+            n = min(len(t), len(v))
+            t, v = t[:n], v[:n]
         missing = np.isnan(v)
         ordered = len(t) < 2 or bool(np.all(t[1:] >= t[:-1]))
         if not ordered or (missing.any() and not bool(np.all(t[1:] > t[:-1]))):  # rare: sort, one per instant

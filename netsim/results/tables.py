@@ -138,6 +138,8 @@ def signals_table(
     for n in ordered:
         t = np.asarray(times[n], dtype=np.int64)
         v = np.asarray(values[n], dtype=float)
+        if len(t) != len(v):  # a run interrupted (Ctrl-C, SIGTERM) between a sample's time and its value
+            t, v = t[: len(v)], v[: len(t)]
         if len(t) > 1 and not bool(np.all(t[1:] > t[:-1])):  # out of order or repeated instants (rare)
             order = np.argsort(t, kind="stable")
             t, v = t[order], v[order]
