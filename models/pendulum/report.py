@@ -365,7 +365,7 @@ TEXT: dict[str, str] = {
               "the loop holds up to {dl_fd_ok} ms with raw FD, {dl_lu_ok} ms with Luenberger (fails at "
               "{dl_lu_fail}) and {dl_kal_ok} ms with Kalman (fails at {dl_kal_fail})."),
     "delay_cost": ("Cost under delay (delay_cost.csv): the stationary cost per sample of the runs from upright "
-                   "(after the first second, mean over the seeds with its 95 % Monte-Carlo interval) beside the "
+                   "(after the first second, mean over the seeds with its {ci_pct} % Monte-Carlo interval) beside the "
                    "expected cost from `netsim.analysis.lqg` (models/pendulum/analysis.py: the linearised loop, "
                    "the input disturbance as white process noise, the encoder noise, the delay as a delay line "
                    "plus a fraction of a period). At the smallest delay ({dc_min_delay} ms): raw FD {dc_fd_sim} "
@@ -436,7 +436,7 @@ TEXT: dict[str, str] = {
                "over the whole run from the tilt: {best_lqg} (Kalman {ord_kal_whole} times it); after the first "
                "second: {best_lqg1} (the next estimator's best seed {ord_lqg1_margin} times its worst); stationary, "
                "analytic: {best_ana} (next {ord_ana_margin} times); stationary, simulated from upright: {best_stat} "
-               "(lower end of the next one's 95 % interval over upper end of its own: {ord_stat_margin}) | holds in "
+               "(lower end of the next one's {ci_pct} % interval over upper end of its own: {ord_stat_margin}) | holds in "
                "stationary operation (the design's setting); over the whole run it does not: from a zero initial "
                "estimate the Kalman filter is the slowest to converge |"),
     "quantised": ("Encoder quantisation as the noise instead of Gaussian noise of the same variance: u std "
@@ -546,6 +546,9 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     q.append(("dn_bracket", float(inside.sum()), "each prediction lies in its bracket" if inside.all() else
               f"the prediction lies in its bracket for {int(inside.sum())} of {len(dl)} estimators",
               "delay: noise_stable_up_to_ms <= lqg_margin_ms < noise_fails_at_ms"))
+    from models.pendulum.report_sweeps import CI_LEVEL
+
+    add("ci_pct", 100 * CI_LEVEL, "report_sweeps: CI_LEVEL", f"{100 * CI_LEVEL:g}")
     pm_diff = float(np.max(np.abs(dl.lqg_margin_ms - dl.predicted_margin_ms)))
     add("dq_pm_diff", pm_diff, "delay: max |lqg_margin_ms - predicted_margin_ms|", f"{pm_diff:.1g}")
     add("dsw_seeds", dc.seed_count.max(), "delay_cost: seed_count", str(int(dc.seed_count.max())))
@@ -689,7 +692,7 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
     L += ["### Cost under delay: analysis beside simulation (delay_cost.csv)", "", render("delay_cost", texts), ""]
     L += _md_table(tables["delay_cost"][DELAY_COST_COLUMNS]) + [""]
     if (out / "delay_cost.png").exists():
-        L += ["![stationary cost against delay: runs (95 % intervals) and analysis](delay_cost.png)", ""]
+        L += [f"![stationary cost against delay: runs ({texts['ci_pct']} % intervals) and analysis](delay_cost.png)", ""]
     L += ["### Loss, solve time, quantisation", "",
           "- " + render("loss", texts), "", "- " + render("mpc_timing", texts), "", "- " + render("quantised", texts),
           "", "## Differences from the slides, and why", "",
@@ -738,6 +741,8 @@ def render_readme(out: Path) -> pd.DataFrame:
 def _delay_figure(out: Path, dc: pd.DataFrame) -> None:
     import matplotlib
 
+    from models.pendulum.report_sweeps import CI_LEVEL
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -748,7 +753,7 @@ def _delay_figure(out: Path, dc: pd.DataFrame) -> None:
         ax.plot(fin.total_delay_ms, fin.analytic_cost, "-", color=c, label=f"{e}: analysis")
         ok = g[g.sim_cost.notna()]
         ax.errorbar(ok.total_delay_ms, ok.sim_cost, yerr=[ok.sim_cost - ok.sim_ci_low, ok.sim_ci_high - ok.sim_cost],
-                    fmt="o", color=c, ms=4, capsize=3, label=f"{e}: runs (95 %)")
+                    fmt="o", color=c, ms=4, capsize=3, label=f"{e}: runs ({100 * CI_LEVEL:g} %)")
     ax.set_yscale("log")
     ax.set_xlabel("total sample-to-actuation delay [ms]")
     ax.set_ylabel("stationary cost per sample")

@@ -24,7 +24,7 @@ from typing import Any, Mapping
 import numpy as np
 
 __all__ = ["SWEEPS", "run_sweeps", "point_values", "estimator_name", "tuning_table", "delay_cost_table",
-           "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS"]
+           "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS", "CI_LEVEL"]
 
 log = logging.getLogger("netsim.progress.pendulum")
 
@@ -33,6 +33,8 @@ SWEEPS = ("pendulum_kalman_sweep", "pendulum_poles_sweep", "pendulum_delay_sweep
 #: Sample-to-actuation delay of pendulum_network.yaml without the act link: 0.5 ms offset + 0.5 ms execution
 #: + 0.1 ms actuator (read from the scenario in tests/models/test_pendulum_report.py).
 NETWORK_BASE_DELAY_MS = 1.1
+#: Confidence level of the Monte-Carlo intervals (Student t over the seeds).
+CI_LEVEL = 0.95
 
 
 def run_sweeps(out: Path, workers: int | None = None) -> dict[str, Any]:
@@ -176,7 +178,7 @@ def delay_cost_table(summaries: dict[str, Any], estimators: Mapping[str, dict[st
              "spectral_radius": ana["spectral_radius"]}
         if stable.min() > 0.5:
             m, sd = float(cost.mean()), float(cost.std(ddof=1))
-            half = float(stats.t.ppf(0.975, n - 1)) * sd / math.sqrt(n)
+            half = float(stats.t.ppf(0.5 + CI_LEVEL / 2, n - 1)) * sd / math.sqrt(n)
             r.update({"sim_cost": m, "sim_ci_low": m - half, "sim_ci_high": m + half,
                       "analytic_inside_ci": float(m - half <= ana["per_sample"] <= m + half),
                       "rel_diff": m / ana["per_sample"] - 1.0 if math.isfinite(ana["per_sample"]) else math.nan})
