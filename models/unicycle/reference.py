@@ -9,7 +9,6 @@ hundreds of runs per setting use it (and the benchmark compares a netsim run aga
 
 from __future__ import annotations
 
-import math
 from typing import Any, Literal, Sequence
 
 import numpy as np
