@@ -21,7 +21,7 @@ from __future__ import annotations
 from typing import Any
 
 from netsim.energy.params import EnergyModel
-from netsim.timebase import S
+from netsim.timebase import MAX_TIME, S
 
 __all__ = ["EnergyMeter"]
 
@@ -111,7 +111,10 @@ class EnergyMeter:
         self.checks += 1
         now = self.env.sim.now
         left = self._capacity - self.energy(now)
-        dt = int(left / self._p_max * S)  # the battery cannot run out before now + dt
+        later = left / self._p_max * S  # the battery cannot run out before now + later
+        if later > MAX_TIME - now:  # nor before the last time netsim represents (a tiny power: inf here)
+            return
+        dt = int(later)
         if dt >= 1:
             self.env.sim.call_at(now + dt, self._check)
             return
