@@ -130,8 +130,10 @@ class ModelEKF(KalmanFilter):
         if out.shape != shape:
             raise err(f"ekf: the model's {name} gives shape {out.shape}, expected {shape} ({where})")
         if not np.all(np.isfinite(out)):
+            fix = ("check x0, and raise 'substeps' (Runge-Kutta steps per period) if the period is long for the "
+                   "model's dynamics" if name == "f" else "check x0")
             raise err(f"ekf: the model's {name} gave NaN or infinite values ({where}); the estimate diverged "
-                      "or the model is wrong")
+                      f"or the model is wrong: {fix}")
         return out
 
     @property
