@@ -126,7 +126,7 @@ class CartEncoderIsr:
             if c != old:
                 self._store(c, 1 if c > old else -1, now)
         if self.ctx.execution is not None:
-            yield job.execute(self.ctx.execution)
+            yield self.ctx.execute_request  # job.execute(self.ctx.execution), built once
 
 
 @register("program", "cart_controller", "cart velocity controller: event estimator or PI at 1 kHz, uV to the DAC")
@@ -174,7 +174,7 @@ class CartControllerProgram:
         rec("cart.v_hat", self.ctrl.v_hat, now)
         rec("cart.u_bias_hat", self.ctrl.u_bias_hat, now)
         if self.ctx.execution is not None:
-            yield job.execute(self.ctx.execution)
+            yield self.ctx.execute_request  # job.execute(self.ctx.execution), built once
         yield job.analog_out(p.output_channel, uv)
         rec("cart.uV", uv, job.now)
         rec("cart.accel", self.ctrl.u, job.now)

@@ -167,9 +167,11 @@ class Dispatcher:
                     heappop(ready)  # killed while ready
                 cur = self._running
                 if load is not None:
-                    we = load.window_end(now)
-                    if we and self._held_by_window(cur, now, we):
-                        return
+                    d = now - load.start  # we = load.window_end(now), inlined (one dispatch per job)
+                    if d >= 0:
+                        d %= load.period
+                        if d < load.execution and self._held_by_window(cur, now, now - d + load.execution):
+                            return
                 if cur is not None:
                     if ready and ready[0][0] < cur._rank:
                         self._preempt(cur, now)
