@@ -253,7 +253,9 @@ class SerialExecutor(Executor):
 
 
 def _init_worker() -> None:
-    """Pool worker start: single-threaded BLAS, ignore Ctrl-C (the parent stops the sweep cleanly)."""
+    """Pool worker start: single-threaded BLAS, ignore Ctrl-C (the parent stops the sweep cleanly), and die at
+    SIGTERM (the handler the forked worker inherits from the CLI would turn it into an interrupted run that
+    writes its folder and goes on with its chunk: the parent's stop would wait for that)."""
     os.environ.update(_SINGLE_THREAD_ENV)
     os.environ.setdefault("MPLBACKEND", "Agg")
     with contextlib.suppress(ImportError):
@@ -262,6 +264,7 @@ def _init_worker() -> None:
         threadpool_limits(1)
     with contextlib.suppress(ValueError):  # not the main thread
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _probe_scheduler(address: str, timeout: float) -> None:
@@ -379,8 +382,25 @@ def open_executor(
     pool = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init_worker)
     try:
         yield pool, n, f"process pool ({n} workers)"
+    except BaseException:  # Ctrl-C / SIGTERM: the runs in flight are lost anyway, do not wait for them to end
+        _stop_workers(pool)
+        raise
     finally:
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's worker processes (an interrupted sweep stops at once; resuming redoes their runs).
+
+    ``ProcessPoolExecutor.terminate_workers`` exists from Python 3.14; before, the pool's process table.
+    """
+    stop = getattr(pool, "terminate_workers", None)
+    if callable(stop):
+        stop()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.terminate()
 
 
 def scheduler_lost_client(client: Any) -> bool:
