@@ -17,6 +17,7 @@ from pydantic import BaseModel, ValidationError
 from netsim.scenario.paths import PathPart, did_you_mean, format_path
 from netsim.scenario.problems import Problem, shorten
 from netsim.scenario.schema import EXEC_DISTS, IO_TYPES, TAG_MARK
+from netsim.scenario.schema_task import TIME_DISTS
 
 __all__ = ["problems_from_validation_error", "show_value", "shorten", "shorten_problem", "path_at_line"]
 
@@ -196,6 +197,16 @@ def _message(err: dict[str, Any], root: type[BaseModel] | None) -> tuple[list[Pa
                 return path, f"missing required key 'dist' (one of {', '.join(EXEC_DISTS)})"
             return [*path, "dist"], f"unknown distribution {show_value(d)}{did_you_mean(str(d), EXEC_DISTS, what='distributions')}"
         return path, f"expected a time such as '0.5 ms' or {{dist: uniform, low: .., high: ..}}, got {show_value(value)}"
+    if kind == "time_distribution":  # netsim.scenario.schema_task.TimeDistribution (release_jitter, ...)
+        if not isinstance(value, dict):
+            return path, (f"expected a time such as '1 ms' or {{dist: uniform, low: .., high: ..}}, got "
+                          f"{show_value(value)}")
+        d = value.get("dist")
+        if d is None:
+            return path, (f"missing required key 'dist' (one of {', '.join(TIME_DISTS)}), or write a time such "
+                          "as '1 ms'")
+        hint = did_you_mean(str(d), TIME_DISTS, what="distributions")
+        return [*path, "dist"], f"unknown distribution {show_value(d)}{hint}"
     if kind == "literal_error":
         options = _expected_values(str(ctx.get("expected", "")))
         hint = did_you_mean(str(value), options) if isinstance(value, str) else ""

@@ -19,7 +19,14 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import (
+    BeforeValidator,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    model_validator,
+)
 
 from netsim.units import Duration, StrictModel, Time
 
@@ -107,10 +114,25 @@ def _shorthand(value: Any) -> Any:
     return value
 
 
+#: The mark of a union member's tag in a validation error's location (``netsim.scenario.schema.TAG_MARK``,
+#: which imports this module): messages drop such parts, so a problem's path is the YAML one
+#: (``release_jitter.value``, not ``release_jitter.constant.value``).
+_TAG = "§"
+
+
+def _dist_tag(value: Any) -> str | None:
+    """The member of :data:`TimeDistribution` for ``value`` (None: a bad or missing ``dist``, reported as
+    ``time_distribution`` with the known names by :mod:`netsim.scenario.messages`)."""
+    dist = value.get("dist") if isinstance(value, dict) else getattr(value, "dist", None)
+    return f"{_TAG}{dist}" if dist in TIME_DISTS else None
+
+
 #: A random time of a task's arrivals: a time (constant) or ``{dist: ..}`` (see the module notes).
 TimeDistribution = Annotated[
-    ConstantTime | UniformTime | NormalTime | ExponentialTime | EmpiricalTime,
-    Field(discriminator="dist"),
+    Annotated[ConstantTime, Tag(f"{_TAG}constant")] | Annotated[UniformTime, Tag(f"{_TAG}uniform")]
+    | Annotated[NormalTime, Tag(f"{_TAG}normal")] | Annotated[ExponentialTime, Tag(f"{_TAG}exponential")]
+    | Annotated[EmpiricalTime, Tag(f"{_TAG}empirical")],
+    Discriminator(_dist_tag, custom_error_type="time_distribution", custom_error_message="bad time distribution"),
     BeforeValidator(_shorthand),
 ]
 

@@ -118,3 +118,29 @@ def test_the_sync_messages_say_what_to_change(edit: Any, at: str, fix: str) -> N
     edit(raw["nodes"]["computer"]["sync"])
     errors = _errors(raw)
     assert at in errors and fix in errors[at]
+
+
+# ------------------------------------------------------------------------------------- arrival distributions
+JITTER = "nodes.computer.tasks[0].release_jitter"
+
+
+@pytest.mark.parametrize(("value", "at", "words"), [
+    ("-1 ms", f"{JITTER}.value", "must not be negative"),              # was at '.constant.value'
+    ({"dist": "uniform", "low": "0 ms"}, f"{JITTER}.high", "add 'high: ...'"),  # was '.uniform.high'
+    ({"dist": "constant", "value": "1 ms", "x": 1}, f"{JITTER}.x", "known keys: dist, value"),  # no hint before
+    ({"value": "1 ms"}, JITTER, "missing required key 'dist'"),        # was "unable to extract tag"
+    ({"dist": "gauss"}, f"{JITTER}.dist", "unknown distribution 'gauss'"),
+    ([1], JITTER, "expected a time such as '1 ms'"),
+])
+def test_a_bad_time_distribution_is_named_at_its_yaml_path(value: Any, at: str, words: str) -> None:
+    raw = _raw("sync_servo.yaml")
+    raw["nodes"]["computer"]["tasks"][0]["release_jitter"] = value
+    errors = _errors(raw)
+    assert at in errors and words in errors[at], errors
+
+
+def test_the_distribution_tags_use_the_schema_s_tag_mark() -> None:
+    """schema_task cannot import schema (which imports it); the mark messages strip must be the same one."""
+    from netsim.scenario import schema, schema_task
+
+    assert schema_task._TAG == schema.TAG_MARK
