@@ -27,8 +27,10 @@ With process noise the noise enters at the plant's propagation instants, which d
 from __future__ import annotations
 
 import math
+from heapq import heappush
 from typing import Any, Callable
 
+from netsim.env import NORMAL
 from netsim.errors import ConfigError
 
 __all__ = ["Encoder", "encoder_step"]
@@ -116,7 +118,8 @@ class Encoder:
         self.wakeups = 0
         self.env: Any = None
         self._on_edge: EdgeCallback | None = None
-        self._gen = 0
+        self._sim: Any = None
+        self._pending: tuple | None = None  # the call item of the live wake-up (older ones are skipped)
         self._next_tick = 0
         self._cand: int | None = None
         self._examined = 0
@@ -149,6 +152,7 @@ class Encoder:
     def start(self, env: Any, on_edge: EdgeCallback | None = None) -> "Encoder":
         """Read the initial count now and start detecting edges; ``on_edge(count, direction, stamp_ns)``."""
         self.env = env
+        self._sim = env.sim
         self._on_edge = on_edge
         now = int(env.now)
         self.count = self._quantize(now)
@@ -174,8 +178,8 @@ class Encoder:
             t += self.tick_ns
 
     def _predict(self) -> None:
-        env = self.env
-        now = int(env.now)
+        sim = self._sim
+        now = sim.now
         self._busy = True  # a noisy advance notifies listeners: do not re-enter
         try:
             self.plant.advance_to(now)
@@ -184,20 +188,19 @@ class Encoder:
         cand, examined, wake = self.plant.predict_exit(
             self.output, self.delta, self.count, self._next_tick, self.tick_ns, self.horizon_ticks
         )
-        self._gen += 1
-        gen = self._gen
         self._cand, self._examined = cand, examined
         at = cand if cand is not None else wake
-        at = max(at, now)
+        if at < now:
+            at = now
         self._wake_at = at
-        ev = env.sim.timeout(at - now)
-        ev.callbacks.append(lambda _ev, g=gen: self._wake(g))
+        # one call item per prediction (netsim.env): the (time, priority, id) a simpy timeout would get, so the
+        # same order; a superseded wake-up is told by identity and skipped
+        self._pending = item = (_wake, self)
+        heappush(sim._queue, (at, NORMAL, next(sim._eid), item))
 
-    def _wake(self, gen: int) -> None:
-        if gen != self._gen:
-            return
+    def _wake(self) -> None:
         self.wakeups += 1
-        now = int(self.env.now)
+        now = self._sim.now
         self._busy = True
         try:
             if self._cand is not None and now == self._cand:
@@ -215,8 +218,15 @@ class Encoder:
     def _changed(self, t: int) -> None:
         if self._busy or self.env is None:
             return  # the running wake-up predicts again when it is done
-        now = int(self.env.now)
+        now = self._sim.now
         if self._wake_at <= now:
             return  # a wake-up at this instant is pending and will predict with the new inputs
         self._next_tick = self._first_tick_after(now)
         self._predict()
+
+
+def _wake(item: tuple[Any, Encoder]) -> None:
+    """The exact encoder's wake-up (a call item ``(_wake, encoder)``); a superseded one does nothing."""
+    enc = item[1]
+    if item is enc._pending:
+        enc._wake()
