@@ -66,7 +66,18 @@ class PeriodicLoad:
 
     def free(self, a: int, b: int) -> int:
         """CPU time left to the rest of the node in ``[a, b)``: ``(b - a) - stolen(a, b)``."""
-        return (b - a) - self.stolen_until(b) + self.stolen_until(a)
+        # stolen_until(b) and stolen_until(a) inlined (the kernel asks this for every charged segment)
+        start, period, e = self.start, self.period, self.execution
+        out = b - a
+        d = b - start
+        if d > 0:
+            n, r = divmod(d, period)
+            out -= n * e + (r if r < e else e)
+        d = a - start
+        if d > 0:
+            n, r = divmod(d, period)
+            out += n * e + (r if r < e else e)
+        return out
 
     def finish(self, a: int, demand: int) -> int:
         """Smallest ``t >= a`` with ``free(a, t) == demand``: the end of a segment needing ``demand`` ns.
@@ -77,7 +88,12 @@ class PeriodicLoad:
         if demand <= 0:
             return a
         start = self.start
-        g = a - self.stolen_until(a) + demand - start  # target of F(t) = t - stolen_until(t), minus F(start)
+        g = a + demand - start  # target of F(t) = t - stolen_until(t), minus F(start)
+        d = a - start
+        if d > 0:  # minus stolen_until(a), inlined
+            n, r = divmod(d, self.period)
+            e = self.execution
+            g -= n * e + (r if r < e else e)
         if g <= 0:
             return start + g
         n, rem = divmod(g, self._free)
@@ -105,7 +121,15 @@ class PeriodicLoad:
 
     def ticks_in(self, a: int, b: int) -> int:
         """Number of ticks in ``[a, b)``."""
-        return self.ticks_before(b) - self.ticks_before(a) if b > a else 0
+        if b <= a:
+            return 0
+        start, period = self.start, self.period  # ticks_before(b) - ticks_before(a), inlined
+        d = b - start
+        if d <= 0:
+            return 0
+        n = (d + period - 1) // period
+        d = a - start
+        return n - (d + period - 1) // period if d > 0 else n
 
     def preempted_until(self, seg_start: int, t: int) -> bool:
         """True if the last tick before ``t`` fell at or after ``seg_start`` and its window ends at or after ``t``.
