@@ -123,7 +123,9 @@ class Encoder:
         self._next_tick = 0
         self._cand: int | None = None
         self._examined = 0
-        self._wake_at = -1
+        self._wake_at = -1  # the time of the live wake-up's heap entry
+        self._wake_id = -1  # the id an entry pushed by the latest prediction would have (see _predict)
+        self._entry_id = -1  # the id of the live wake-up's heap entry
         self._busy = False
 
     # ---------------------------------------------------------------- helpers
@@ -192,11 +194,17 @@ class Encoder:
         at = cand if cand is not None else wake
         if at < now:
             at = now
+        # one call item per prediction (netsim.env), pushed with the (time, priority, id) a simpy timeout got, so
+        # the same order; a superseded wake-up is told by identity and skipped
+        self._wake_id = rid = next(sim._eid)
+        if at == self._wake_at and at > now and self._pending is not None:
+            # the live entry is due at this very instant (most re-predictions after an input change find the
+            # same tick): keep it; it stands for an entry (at, NORMAL, rid) and takes that place when it fires
+            return
         self._wake_at = at
-        # one call item per prediction (netsim.env): the (time, priority, id) a simpy timeout would get, so the
-        # same order; a superseded wake-up is told by identity and skipped
+        self._entry_id = rid
         self._pending = item = (_wake, self)
-        heappush(sim._queue, (at, NORMAL, next(sim._eid), item))
+        heappush(sim._queue, (at, NORMAL, rid, item))
 
     def _wake(self) -> None:
         self.wakeups += 1
@@ -226,7 +234,24 @@ class Encoder:
 
 
 def _wake(item: tuple[Any, Encoder]) -> None:
-    """The exact encoder's wake-up (a call item ``(_wake, encoder)``); a superseded one does nothing."""
+    """The exact encoder's wake-up (a call item ``(_wake, encoder)``); a superseded one does nothing.
+
+    A kept entry (see :meth:`Encoder._predict`) has an older id than the prediction it serves: when an entry
+    due now at NORMAL priority lies between the two ids (the heap's head, since this entry came first), it
+    is pushed again with the prediction's id and runs after that entry, as the entry of the prediction would;
+    otherwise nothing can run in between and it runs now.
+    """
     enc = item[1]
-    if item is enc._pending:
-        enc._wake()
+    if item is not enc._pending:
+        return
+    rid = enc._wake_id
+    if enc._entry_id != rid:
+        sim = enc._sim
+        queue = sim._queue
+        if queue:
+            head = queue[0]
+            if head[0] == sim.now and head[1] == NORMAL and head[2] < rid:
+                enc._entry_id = rid
+                heappush(queue, (head[0], NORMAL, rid, item))
+                return
+    enc._wake()
