@@ -180,13 +180,10 @@ class Encoder:
             t += self.tick_ns
 
     def _predict(self) -> None:
+        """Predict the next edge from the plant's state, which is at the current time (its callers see to it),
+        and make sure a wake-up is due then."""
         sim = self._sim
         now = sim.now
-        self._busy = True  # a noisy advance notifies listeners: do not re-enter
-        try:
-            self.plant.advance_to(now)
-        finally:
-            self._busy = False
         cand, examined, wake = self.plant.predict_exit(
             self.output, self.delta, self.count, self._next_tick, self.tick_ns, self.horizon_ticks
         )
@@ -229,7 +226,13 @@ class Encoder:
         now = self._sim.now
         if self._wake_at <= now:
             return  # a wake-up at this instant is pending and will predict with the new inputs
-        self._next_tick = self._first_tick_after(now)
+        self._next_tick = self.offset_ns + ((now - self.offset_ns) // self.tick_ns + 1) * self.tick_ns
+        if t != now:  # the plant notifies at its own time t: bring it to now (an input change at now is there)
+            self._busy = True  # a noisy advance notifies listeners: do not re-enter
+            try:
+                self.plant.advance_to(now)
+            finally:
+                self._busy = False
         self._predict()
 
 
