@@ -232,7 +232,7 @@ class _ControllerParams(PIDParams):
     to: Destination
     output_channel: str | None = None
     key: str = "y"
-    bits: int = 80
+    bits: int = Field(80, ge=1, le=10**9)
     priority: int = 0
     tag: str = "u"
     record_as: str | None = None

@@ -209,6 +209,8 @@ def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]
             task = _d(task)
             if task.get("release", "periodic") == "periodic":
                 add(["nodes", str(node_name), "tasks", i, "period"], task.get("period"))
+            elif task.get("release") == "sporadic":  # at most one job per min_interarrival
+                add(["nodes", str(node_name), "tasks", i, "min_interarrival"], task.get("min_interarrival"))
         for i, handler in enumerate(_l(_d(node).get("handlers"))):
             timer = _d(_d(_d(handler).get("trigger")).get("timer"))
             if timer.get("period") is not None:

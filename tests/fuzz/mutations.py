@@ -327,7 +327,7 @@ FIX_WORDS = ("add ", "remove", "write", "use ", "set ", "did you mean", "expecte
              "e.g.", "between", "at most", "at least", "rename", "needs", "only ", "one of", "change", "put ",
              "input should", "field required", "shorten", "lower", "raise", "choose", "send ", "attach",
              "not allowed", "extra inputs", "valid", "fix ", "replace", "refused", "make ", "define ",
-             "measure ", "(known ", "(known: ")  # a list of the known names says what may be written
+             "measure ", "declare ", "(known ", "(known: ")  # a list of the known names says what may be written
 
 
 def message_has_path(line: str, file_name: str) -> bool:

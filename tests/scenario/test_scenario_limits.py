@@ -284,3 +284,16 @@ def test_a_5000_digit_integer_from_python_gets_the_same_message_as_from_a_file(b
     errors = _errors(raw)
     assert "over 4000 digits" in errors["io.y.output"] and "write a smaller value" in errors["io.y.output"]
     assert "seed" in errors
+
+
+def test_a_sporadic_task_counts_one_job_per_min_interarrival(base):
+    raw = base()
+    raw["duration"] = "1000 s"
+    task = raw["nodes"]["sensor"]["tasks"][0]
+    del task["period"]
+    task["release"] = "sporadic"
+    task["min_interarrival"] = "10 us"
+    total, parts = expected_events(raw)
+    # at most 1000 s / 10 us = 1e8 jobs: the sporadic task's bound, as a 10 us period would give
+    assert total == pytest.approx(1000 * S / 10_000)
+    assert parts[0][0] == "nodes.sensor.tasks[0].min_interarrival"

@@ -83,6 +83,11 @@ CASES = [
      [("program: actuator\n        params: {network: can, channel: u}",
        "program: controller\n        params: {channel: y, output_channel: u, K: 1.0}")],
      "nodes.m.tasks[0].params", "params: {channel: y, output_channel: u", "has no sampling period; add 'h: 10 ms'"),
+    ("controller_sending_a_negative_number_of_bits",  # run: "send bits must be a non-negative int"
+     [("program: actuator\n        params: {network: can, channel: u}",
+       "program: controller\n        params: {channel: y, output_channel: u, K: 1.0, h: 100 ms, network: can, to: n, "
+       "bits: -81}")],
+     "nodes.m.tasks[0].params.bits", "bits: -81", "greater than or equal to 1"),
     ("network_task_without_to",
      [("network: can, to: m, bits: 80", "network: can, bits: 80")],
      f"{TASK}.params.to", "network: can, bits: 80", "'to' is missing"),
