@@ -142,7 +142,15 @@ class DAC:
 
     def write(self, t_ns: int, value: float) -> None:
         """Advance the plant to ``t_ns`` and hold the converted ``value`` from then on."""
-        # an exact, unlimited converter puts out float(value), as convert() does then
-        v = float(value) if self.limits is None and self.resolution is None else self.convert(value)
+        # convert(value), inlined (a DAC write per control job)
+        v = float(value)
+        limits = self.limits
+        if limits is not None and math.isfinite(v):
+            if v < limits[0]:  # min(max(v, low), high) with low < high
+                v = limits[0]
+            elif v > limits[1]:
+                v = limits[1]
+        if self.resolution is not None:
+            v = quantize(v, self.resolution)
         self.plant.set_input(self.input, v, t_ns)
         self.last = v
