@@ -159,7 +159,7 @@ class _EKFParams(StrictModel):
     R: Weight = Field(description="measurement noise covariance (p x p, positive definite)")
     x0: list[float] | None = Field(None, description="initial estimate (default zeros)")
     P0: Weight = Field(None, description="initial covariance (default identity)")
-    substeps: int = Field(4, ge=1, le=10_000, description="Runge-Kutta 4 steps per period for the prediction")
+    substeps: int = Field(4, ge=1, le=1000, description="Runge-Kutta 4 steps per period for the prediction")
     history: int = Field(20, ge=0, le=10_000,
                          description="samples back a delayed measurement is fused at its sample time")
 
