@@ -75,24 +75,34 @@ def pendulum_measures(signals: pd.DataFrame, ok: bool, p: PendulumMetricParams |
     finite = bool(np.all(np.isfinite(alpha)))
     max_last = float(np.max(np.abs(alpha[last]))) if finite else float("inf")
     out = {
-        "u_std": float(np.std(u[late])),
+        "u_std": _std(u[late]),
         "saturated_share": float(np.mean(np.abs(u) >= p.u_limit - 1e-9)),
         "rms_theta": float(np.sqrt(np.mean(theta**2))),
         "rms_alpha": float(np.sqrt(np.mean(alpha**2))),
-        "rms_alpha_after_settle": float(np.sqrt(np.mean(alpha[late] ** 2))),
+        "rms_alpha_after_settle": float(np.sqrt(_mean(alpha[late] ** 2))),
         "lqg_cost_per_step": float(np.mean(cost)),
-        "lqg_cost_after_settle": float(np.mean(cost[late])),
+        "lqg_cost_after_settle": _mean(cost[late]),
         "max_alpha_last_s": max_last,
         "stable": float(ok and finite and max_last < p.stable_alpha),
     }
     for i, name in ((1, "theta_dot_est_std"), (3, "alpha_dot_est_std")):
         col = f"x_hat[{i}]"
         if col in s.columns:
-            out[name] = float(np.std(_at(s, col, tk)[late]))
+            out[name] = _std(_at(s, col, tk)[late])
     if "x_hat[0]" in s.columns and "x_hat[2]" in s.columns:
         err = np.maximum(np.abs(_at(s, "x_hat[0]", tk + h - 1e-9) - theta), np.abs(_at(s, "x_hat[2]", tk + h - 1e-9) - alpha))
         out["est_converged_s"] = _converged(tk, err, p.est_tol, h)
     return out
+
+
+def _mean(x: np.ndarray) -> float:
+    """The mean, NaN for a run that ends before ``settle`` (no samples; numpy would warn)."""
+    return float(np.mean(x)) if len(x) else float("nan")
+
+
+def _std(x: np.ndarray) -> float:
+    """The standard deviation, NaN for a run that ends before ``settle`` (no samples; numpy would warn)."""
+    return float(np.std(x)) if len(x) else float("nan")
 
 
 def _converged(tk: np.ndarray, err: np.ndarray, tol: float, h: float) -> float:

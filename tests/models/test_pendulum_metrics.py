@@ -1,6 +1,7 @@
 """The ``pendulum`` metric on hand-made signals (expected values computed by hand in each test)."""
 
 import math
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -60,3 +61,13 @@ def test_estimate_convergence_time():
     assert pendulum_measures(s, ok=True)["est_converged_s"] == 0.0
     s["x_hat[0]"] = s["theta"] + np.where(t > 2.0, 0.02, 0.0)  # leaves the bound for good: the run's end
     assert pendulum_measures(s, ok=True)["est_converged_s"] == pytest.approx(t[-2] + 0.005)
+
+
+def test_a_run_shorter_than_settle_gives_nan_after_settle_and_no_numpy_warning():
+    s = _signals()
+    short = s[s["time_s"] <= 0.03].copy()  # 30 ms: nothing from settle = 1 s on
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        m = pendulum_measures(short, ok=True)
+    assert all(math.isnan(m[k]) for k in ("u_std", "rms_alpha_after_settle", "lqg_cost_after_settle"))
+    assert math.isfinite(m["rms_alpha"])  # the whole-run measures still have samples
