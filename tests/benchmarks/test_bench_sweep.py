@@ -68,19 +68,18 @@ def _cpu_s() -> float:
 @pytest.mark.benchmark
 @pytest.mark.parametrize("runs", ["full", "metrics"])
 def test_bench_hdd_gpi_sweep_local_pool(tmp_path: Path, runs: str) -> None:
-    """The GPI sweep as shipped (``runs: full``) and with ``runs: metrics`` (each point writes metrics.csv and
-    meta.json only). Besides the wall rate it prints the CPU seconds per point (workers included) and the rate two
+    """The GPI sweep with ``runs: full`` (each point writes its whole run folder) and as shipped, ``runs: metrics``
+    (each point writes metrics.csv and meta.json only). Besides the wall rate it prints the CPU seconds per point (workers included) and the rate two
     idle cores would give, ``2 / CPU per point``: on a machine shared with other work the wall rate measures the
     load as much as the sweep."""
     from functools import partial
 
     from netsim.runner import run_point
 
-    path = SWEEP
-    if runs != "full":
-        text = SWEEP.read_text(encoding="utf-8").replace("base: hdd_case3.yaml", f"base: {SWEEP.parent / 'hdd_case3.yaml'}")
-        path = tmp_path / "gpi.yaml"
-        path.write_text(text + f"runs: {runs}\n", encoding="utf-8")
+    text = SWEEP.read_text(encoding="utf-8").replace("base: hdd_case3.yaml", f"base: {SWEEP.parent / 'hdd_case3.yaml'}")
+    text = "\n".join(line for line in text.splitlines() if not line.startswith("runs:"))
+    path = tmp_path / "gpi.yaml"
+    path.write_text(text + f"\nruns: {runs}\n", encoding="utf-8")
     sweep = load_sweep(path)
     n = len(sweep.points)
     sample = [sweep.points[i] for i in (0, n // 2, n - 1)]
