@@ -119,6 +119,8 @@ class Encoder:
         self.env: Any = None
         self._on_edge: EdgeCallback | None = None
         self._sim: Any = None
+        self._heap: list = []  # the event loop's heap and id counter (netsim.env: EventLoop.scheduler)
+        self._ids: Any = None
         self._pending: tuple | None = None  # the call item of the live wake-up (older ones are skipped)
         self._next_tick = 0
         self._cand: int | None = None
@@ -155,6 +157,7 @@ class Encoder:
         """Read the initial count now and start detecting edges; ``on_edge(count, direction, stamp_ns)``."""
         self.env = env
         self._sim = env.sim
+        _, self._heap, self._ids = env.sim.scheduler()
         self._on_edge = on_edge
         now = int(env.now)
         self.count = self._quantize(now)
@@ -182,8 +185,7 @@ class Encoder:
     def _predict(self) -> None:
         """Predict the next edge from the plant's state, which is at the current time (its callers see to it),
         and make sure a wake-up is due then."""
-        sim = self._sim
-        now = sim.now
+        now = self._sim.now
         cand, examined, wake = self.plant.predict_exit(
             self.output, self.delta, self.count, self._next_tick, self.tick_ns, self.horizon_ticks
         )
@@ -193,7 +195,7 @@ class Encoder:
             at = now
         # one call item per prediction (netsim.env), pushed with the (time, priority, id) a simpy timeout got, so
         # the same order; a superseded wake-up is told by identity and skipped
-        self._wake_id = rid = next(sim._eid)
+        self._wake_id = rid = next(self._ids)
         if at == self._wake_at and at > now and self._pending is not None:
             # the live entry is due at this very instant (most re-predictions after an input change find the
             # same tick): keep it; it stands for an entry (at, NORMAL, rid) and takes that place when it fires
@@ -201,7 +203,7 @@ class Encoder:
         self._wake_at = at
         self._entry_id = rid
         self._pending = item = (_wake, self)
-        heappush(sim._queue, (at, NORMAL, rid, item))
+        heappush(self._heap, (at, NORMAL, rid, item))
 
     def _wake(self) -> None:
         self.wakeups += 1
@@ -249,11 +251,10 @@ def _wake(item: tuple[Any, Encoder]) -> None:
         return
     rid = enc._wake_id
     if enc._entry_id != rid:
-        sim = enc._sim
-        queue = sim._queue
+        queue = enc._heap
         if queue:
             head = queue[0]
-            if head[0] == sim.now and head[1] == NORMAL and head[2] < rid:
+            if head[0] == enc._sim.now and head[1] == NORMAL and head[2] < rid:
                 enc._entry_id = rid
                 heappush(queue, (head[0], NORMAL, rid, item))
                 return
