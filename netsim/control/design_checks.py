@@ -133,7 +133,11 @@ def check_weight(name: str, value: Any, size: int, *, definite: bool) -> np.ndar
     ConfigError
         Wrong size, not symmetric, or an eigenvalue below zero (or at zero when ``definite``).
     """
-    arr = np.array(value, dtype=float) if not isinstance(value, np.ndarray) else value.astype(float)
+    try:
+        arr = np.array(value, dtype=float) if not isinstance(value, np.ndarray) else value.astype(float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a number (times the identity), a list (the diagonal) or a {size}x{size} "
+                          f"matrix of numbers, got {str(value)[:60]!r}") from None
     if arr.ndim == 0:
         W = float(arr) * np.eye(size)
     elif arr.ndim == 1:
