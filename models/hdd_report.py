@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import logging
 import re
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -615,4 +614,4 @@ def hdd_report(out_dir: Path | None = None, plots: bool = True) -> dict[str, pd.
                 _gpi_figure(df, out, f"{name}.png")
     figs = _figures(results, out) if plots else []
     (out / "README.md").write_text(_readme(table, readings, texts, figs, gdf is not None))
-    return {"table": table, "paper": PAPER, "readings": readings, "quoted": q.frame()}
+    return {"table": table, "paper": __getattr__("PAPER"), "readings": readings, "quoted": q.frame()}
