@@ -144,19 +144,25 @@ class CartPlant(Plant):
         f, fs, f_next = self._f, self._fs, self._f_next
         lo_band, hi_band = count * step, (count + 1) * step
         tk = t_first
+        level = self.friction.level
+        stiction = self.friction.params.stiction
         while tk <= t_end:
             if v0 == 0.0 and abs(u) <= fs:
                 if output == 1 or lo_band <= p0 < hi_band:
                     tk = t_end + tick  # at rest and stuck: nothing moves until an input changes
                     break
-            seg_end = min(f_next, t_end)
+            seg_end = f_next if f_next < t_end else t_end
             # cheap test first: the position range over the segment (at most two monotone pieces)
             dt_seg = (f_next - t0) * 1e-9
-            ts = stop_time(v0, u - math.copysign(f, v0), td) if v0 != 0.0 else math.inf
-            pe, ve = propagate1(p0, v0, u, f, fs, dt_seg, td)  # state at the segment's end
-            lo_p, hi_p = min(p0, pe), max(p0, pe)
+            if td is None:  # propagate1 and stop_time in one call: the same IEEE operations (issue 19)
+                pe, ve, ts, p_ts = _segment_end(p0, v0, u, f, fs, dt_seg)
+            else:
+                ts = stop_time(v0, u - math.copysign(f, v0), td) if v0 != 0.0 else math.inf
+                pe, ve = propagate1(p0, v0, u, f, fs, dt_seg, td)  # state at the segment's end
+                p_ts = propagate1(p0, v0, u, f, fs, ts, td)[0] if ts < dt_seg else 0.0
+            lo_p = pe if pe < p0 else p0  # min(p0, pe), max(p0, pe)
+            hi_p = pe if pe > p0 else p0
             if ts < dt_seg:  # the motion reverses or stops inside: the turning point bounds the range too
-                p_ts = propagate1(p0, v0, u, f, fs, ts, td)[0]
                 lo_p, hi_p = min(lo_p, p_ts), max(hi_p, p_ts)
             if output == 0:
                 leaves = lo_p < lo_band or hi_p >= hi_band
@@ -181,11 +187,37 @@ class CartPlant(Plant):
             if f_next > t_end:
                 break
             t0, p0, v0 = f_next, pe, ve
-            f = self.friction.level(p0)
-            fs = self.friction.params.stiction * f
+            f = level(p0)
+            fs = stiction * f
             f_next += self._grid
         last = min(tk - tick, t_end)
         return None, last, last if barrier >= _NEVER else min(barrier, last)
+
+
+def _segment_end(p0: float, v0: float, u: float, f: float, fs: float,
+                 tau: float) -> tuple[float, float, float, float]:
+    """``(p, v, ts, p_ts)``: ``(p, v) = propagate1(p0, v0, u, f, fs, tau)`` (``Td`` off), ``ts`` the stop time
+    ``stop_time(v0, u - copysign(f, v0), None)`` of its first piece (``inf`` at rest), and, when ``ts < tau``,
+    ``p_ts = propagate1(p0, v0, u, f, fs, ts)[0]`` (else 0.0): computed together with the same IEEE operations
+    as those calls (one call instead of four per friction segment of :meth:`CartPlant.predict_exit`;
+    tests/models/cart/test_cart_segment_end.py compares them on random states)."""
+    if v0 == 0.0:
+        if abs(u) <= fs:
+            return p0, 0.0, math.inf, 0.0
+        a = u - math.copysign(f, u)
+        return p0 + 0.0 * tau + 0.5 * a * tau * tau, 0.0 + a * tau, math.inf, 0.0
+    a = u - math.copysign(f, v0)
+    if a == 0.0 or (a > 0.0) == (v0 > 0.0):
+        return p0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau, math.inf, 0.0
+    ts = -v0 / a
+    if ts >= tau:
+        return p0 + v0 * tau + 0.5 * a * tau * tau, v0 + a * tau, ts, 0.0
+    p_stop = p0 + v0 * ts + 0.5 * a * ts * ts
+    if abs(u) <= fs:
+        return p_stop, 0.0, ts, p_stop
+    a2 = u - math.copysign(f, u)
+    dt = tau - ts
+    return p_stop + 0.0 * dt + 0.5 * a2 * dt * dt, 0.0 + a2 * dt, ts, p_stop
 
 
 def first_exit(p0: float, v0: float, u: float, f: float, fs: float, off: int, tick: int, n: int, output: int,
