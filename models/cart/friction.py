@@ -133,24 +133,27 @@ class Friction:
         # one mode (the default preset): the level in plain floats, the same IEEE operations as the array form
         # (2 pi f phi + phase, cos from the same libm, a one-term dot product is the product), issue 19's
         # per-event cost of the cart (about a third of the level's time was numpy call overhead)
+        # (the parameters are read once here too: a realization's params are not changed after it is drawn)
         one = None
-        if self.freqs.shape == (1,) and self.params.variation != 0.0:
-            one = (2.0 * math.pi * float(self.freqs[0]), float(self.phases[0]), float(self.amps[0]))
+        pr = self.params
+        if self.freqs.shape == (1,) and pr.variation != 0.0 and pr.coulomb != 0.0:
+            one = (2.0 * math.pi * float(self.freqs[0]), float(self.phases[0]), float(self.amps[0]),
+                   0.5 * pr.speedup, pr.wavelength, pr.coulomb, pr.floor, pr.variation)
         object.__setattr__(self, "_one", one)
 
     def level(self, p: float) -> float:
         """Coulomb friction level ``F(p) >= 0`` in m/s^2."""
+        one = self._one
+        if one is not None:  # `0.5 * speedup * p * p` multiplies left to right: hs = 0.5 * speedup is its first step
+            w, ph, amp, hs, wl, c, fl, var = one
+            r = 1.0 + var * (amp * math.cos(w * ((p + hs * p * p) / wl) + ph))
+            return c * (r if r > fl else fl)  # max(floor, r)
         pr = self.params
         if pr.coulomb == 0.0:
             return 0.0
         if pr.variation == 0.0:
             return pr.coulomb
-        one = self._one
-        if one is not None:
-            w, ph, amp = one
-            g = amp * math.cos(w * ((p + 0.5 * pr.speedup * p * p) / pr.wavelength) + ph)
-        else:
-            g = float(np.dot(self.amps, np.cos(2.0 * math.pi * self.freqs * self.phase(p) + self.phases)))
+        g = float(np.dot(self.amps, np.cos(2.0 * math.pi * self.freqs * self.phase(p) + self.phases)))
         return pr.coulomb * max(pr.floor, 1.0 + pr.variation * g)
 
     def levels(self, p: np.ndarray) -> np.ndarray:

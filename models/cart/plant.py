@@ -97,8 +97,13 @@ class CartPlant(Plant):
         td = self.params.td
         x = self._x
         while self._t < t:
-            end = min(t, self._f_next)
-            p, v = propagate1(float(x[0]), float(x[1]), self._u_acc, self._f, self._fs, (end - self._t) * 1e-9, td)
+            end = t if t < self._f_next else self._f_next
+            if td is None:  # propagate1 without its stop_time call (the same IEEE operations)
+                p, v = _segment_end(float(x[0]), float(x[1]), self._u_acc, self._f, self._fs,
+                                    (end - self._t) * 1e-9)[:2]
+            else:
+                p, v = propagate1(float(x[0]), float(x[1]), self._u_acc, self._f, self._fs,
+                                  (end - self._t) * 1e-9, td)
             x[0] = p
             x[1] = v
             if not (abs(p) < self.divergence_bound and abs(v) < self.divergence_bound):
