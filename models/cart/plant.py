@@ -268,6 +268,37 @@ def first_exit(p0: float, v0: float, u: float, f: float, fs: float, off: int, ti
         if not (lo_q <= q < hi_q):
             return first
         good, worse = first, end  # tick `good` is in the band; the first tick out of it, if any, in (good, end)
+        if end - first > 3:
+            # first probes: the piece's last tick, then where the band edge falls between the bracket's ends by
+            # linear interpolation (a friction segment's motion is nearly linear) and its neighbour; then
+            # bisection. Any probe inside (good, worse) keeps the bracket, so the result is the bisection's.
+            x = (off + (end - 1) * tick) * 1e-9
+            if t_from:
+                x = x - t_from
+            q1 = (p + v * x + ha * x * x if output == 0 else v + a * x) / step
+            if lo_q <= q1 < hi_q:
+                continue  # the last tick is in the band: no tick of this piece leaves it
+            worse = end - 1
+            g = first + int((((hi_q if q1 >= hi_q else lo_q) - q) / (q1 - q)) * (worse - first))
+            g = first + 1 if g <= first else (worse - 1 if g >= worse else g)
+            x = (off + g * tick) * 1e-9
+            if t_from:
+                x = x - t_from
+            q1 = (p + v * x + ha * x * x if output == 0 else v + a * x) / step
+            g2 = g + 1 if lo_q <= q1 < hi_q else g - 1
+            if lo_q <= q1 < hi_q:
+                good = g
+            else:
+                worse = g
+            if good < g2 < worse:
+                x = (off + g2 * tick) * 1e-9
+                if t_from:
+                    x = x - t_from
+                q1 = (p + v * x + ha * x * x if output == 0 else v + a * x) / step
+                if lo_q <= q1 < hi_q:
+                    good = g2
+                else:
+                    worse = g2
         while worse - good > 1:
             mid = (good + worse) // 2
             x = (off + mid * tick) * 1e-9
