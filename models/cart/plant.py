@@ -98,11 +98,12 @@ class CartPlant(Plant):
         x = self._x
         while self._t < t:
             end = t if t < self._f_next else self._f_next
+            p0, v0 = x.tolist()  # Python floats, as float(x[0]), float(x[1])
             if td is None:  # propagate1 without its stop_time call (the same IEEE operations)
-                p, v = _segment_end(float(x[0]), float(x[1]), self._u_acc, self._f, self._fs,
+                p, v = _segment_end(p0, v0, self._u_acc, self._f, self._fs,
                                     (end - self._t) * 1e-9)[:2]
             else:
-                p, v = propagate1(float(x[0]), float(x[1]), self._u_acc, self._f, self._fs,
+                p, v = propagate1(p0, v0, self._u_acc, self._f, self._fs,
                                   (end - self._t) * 1e-9, td)
             x[0] = p
             x[1] = v
@@ -145,7 +146,8 @@ class CartPlant(Plant):
             t_end = t_first + (n_ok - 1) * tick
         td = self.params.td
         u = self._u_acc
-        t0, p0, v0 = self._t, float(self._x[0]), float(self._x[1])
+        t0 = self._t
+        p0, v0 = self._x.tolist()
         f, fs, f_next = self._f, self._fs, self._f_next
         lo_band, hi_band = count * step, (count + 1) * step
         tk = t_first
