@@ -9,10 +9,11 @@ does not use). Annotations are unaffected under ``from __future__ import annotat
 from __future__ import annotations
 
 import importlib
+from collections.abc import Callable, Mapping
 from types import ModuleType
 from typing import Any
 
-__all__ = ["lazy_module"]
+__all__ = ["lazy_exports", "lazy_module"]
 
 
 class _LazyModule:
@@ -45,3 +46,38 @@ def lazy_module(name: str) -> ModuleType:
     2.0
     """
     return _LazyModule(name)  # type: ignore[return-value]  # duck-typed: attribute access is all it offers
+
+
+def lazy_exports(package: str, where: Mapping[str, str]) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """A package's ``__getattr__`` and ``__dir__`` (PEP 562) for names imported from their modules at first use.
+
+    Importing one submodule runs its package's ``__init__``; with these, that ``__init__`` imports nothing, and
+    ``package.Name`` still works (issue 19: importing one control law or one medium must not import them all).
+
+    Parameters
+    ----------
+    package
+        The package's ``__name__``.
+    where
+        Exported name -> the dotted name of the module that defines it.
+
+    Returns
+    -------
+    tuple
+        ``(__getattr__, __dir__)``: assign them in the package (``__getattr__, __dir__ = lazy_exports(...)``).
+        A name read once is stored in the package, so later reads are plain attribute reads.
+    """
+    import sys
+
+    def __getattr__(name: str) -> Any:
+        module = where.get(name)
+        if module is None:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        value = getattr(importlib.import_module(module), name)
+        setattr(sys.modules[package], name, value)
+        return value
+
+    def __dir__() -> list[str]:
+        return sorted(set(vars(sys.modules[package])) | set(where))
+
+    return __getattr__, __dir__

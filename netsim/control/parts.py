@@ -154,14 +154,8 @@ class SteadyStateKalmanPart(KalmanPart):
     steady_state = True
 
 
-class _EKFParams(StrictModel):
-    Q: Weight = Field(description="process noise covariance over one period (n x n, PSD)")
-    R: Weight = Field(description="measurement noise covariance (p x p, positive definite)")
-    x0: list[float] | None = Field(None, description="initial estimate (default zeros)")
-    P0: Weight = Field(None, description="initial covariance (default identity)")
+class _EKFParams(_KalmanParams):
     substeps: int = Field(4, ge=1, le=1000, description="Runge-Kutta 4 steps per period for the prediction")
-    history: int = Field(20, ge=0, le=10_000,
-                         description="samples back a delayed measurement is fused at its sample time")
 
 
 @register("estimator", "ekf", "extended Kalman filter on the plant's own nonlinear model (f, h), RK4 per period")

@@ -19,8 +19,9 @@ The names below are imported on first use (PEP 562), so a module that needs only
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from netsim.lazy_import import lazy_exports
 
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.exectime import ExecTime
@@ -90,14 +91,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    home = _HOMES.get(name)
-    if home is None:
-        raise AttributeError(f"module 'netsim.kernel' has no attribute '{name}'")
-    value = getattr(importlib.import_module(f"netsim.kernel.{home}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_HOMES])
+__getattr__, __dir__ = lazy_exports(__name__, {name: f"netsim.kernel.{home}" for name, home in _HOMES.items()})

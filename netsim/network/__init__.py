@@ -12,6 +12,8 @@ A new medium is one module here with a ``@register("network", NAME)`` class (cop
 package, so it registers without being imported below; export it here only if Python users need its class.
 """
 
+from netsim.lazy_import import lazy_exports
+
 #: Exported name -> the module that defines it, imported at first use (issue 19: importing one medium or one
 #: control law must not import them all; the registry imports a plugin's own module).
 _EXPORTS = {
@@ -69,18 +71,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> object:
-    """The exported names, each imported from its module at first use (PEP 562)."""
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import importlib
-
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    """The module's names and the exported names (tab completion)."""
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

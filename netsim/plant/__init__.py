@@ -41,8 +41,7 @@ are imported on first use (``scipy.integrate`` is not needed to build an LTI pla
 
 from __future__ import annotations
 
-from typing import Any
-
+from netsim.lazy_import import lazy_exports
 from netsim.plant.base import Plant
 from netsim.plant.disturbance import LTIDisturbance
 from netsim.plant.shared import NEVER, as_matrix, matvec
@@ -69,14 +68,4 @@ _LAZY = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'netsim.plant' has no attribute {name!r}")
-    import importlib
-
-    return getattr(importlib.import_module(module), name)
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)

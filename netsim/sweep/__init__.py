@@ -14,8 +14,9 @@ the ``summary.csv`` columns in :mod:`netsim.sweep.summary`; the GPI surface and 
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from netsim.lazy_import import lazy_exports
 
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.sweep.executor import SchedulerLost, SchedulerUnreachable
@@ -31,13 +32,7 @@ _WHERE = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    where = _WHERE.get(name)
-    if where is None:
-        raise AttributeError(f"module 'netsim.sweep' has no attribute '{name}'")
-    value = getattr(importlib.import_module(f"netsim.sweep.{where}"), name)
-    globals()[name] = value
-    return value
+__getattr__, __dir__ = lazy_exports(__name__, {name: f"netsim.sweep.{where}" for name, where in _WHERE.items()})
 
 __all__ = [
     "run_sweep",
