@@ -36,7 +36,7 @@ from netsim.control.design_checks import (
 )
 from netsim.errors import ConfigError, SimulationError
 
-__all__ = ["StateFeedback", "LQR", "dlqr_gain", "reference_gains", "trajectory_feedforward"]
+__all__ = ["StateFeedback", "LQR", "dlqr_gain", "output_weighted", "reference_gains", "trajectory_feedforward"]
 
 
 def _model(A: Any, B: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -54,6 +54,31 @@ def _limits(name: str, value: Any, m: int) -> np.ndarray | None:
     if v.size != m:
         raise ConfigError(f"{name} must be one number or {m} numbers (one per input), got {v.size}")
     return v
+
+
+def output_weighted(Q: Any, Qy: Any, C: Any, n: int) -> np.ndarray:
+    """The state weight ``Q + C' Qy C``: a state weight ``Q`` plus an output weight ``Qy`` on ``y = C x``.
+
+    Either may be ``None`` (taken as zero), not both. ``Qy`` is ``p x p`` for the ``p`` rows of ``C`` (a number
+    is a multiple of the identity, a list the diagonal), so an output can be weighted without knowing the
+    state realisation (a ``tf`` plant's, for instance).
+
+    Raises
+    ------
+    ConfigError
+        Neither weight given, ``Qy`` without ``C``, or a weight of the wrong size or not positive semidefinite.
+    """
+    if Q is None and Qy is None:
+        raise ConfigError("Q: give a state weight Q, an output weight Qy (on y = C x), or both")
+    W = np.zeros((n, n)) if Q is None else check_weight("Q", Q, n, definite=False)
+    if Qy is None:
+        return W
+    if C is None:
+        raise ConfigError("Qy: an output weight needs the output matrix C (y = C x)")
+    C = as_matrix("C", C, (None, n))
+    Wy = check_weight("Qy", Qy, C.shape[0], definite=False)
+    W = W + C.T @ Wy @ C
+    return 0.5 * (W + W.T)
 
 
 def dlqr_gain(A: Any, B: Any, Q: Any, R: Any, N: Any = None) -> tuple[np.ndarray, np.ndarray]:
@@ -239,7 +264,8 @@ class StateFeedback:
 class LQR(StateFeedback):
     """Discrete LQR state feedback: gain from python-control's ``dlqr`` at construction.
 
-    Minimises ``sum x'Q x + u'R u + 2 x'N u`` for ``x[k+1] = A x[k] + B u[k]``. With ``integral=True`` the
+    Minimises ``sum x'Q x + u'R u + 2 x'N u`` for ``x[k+1] = A x[k] + B u[k]``, where an output weight ``Qy``
+    on ``y = C x`` adds ``C' Qy C`` to ``Q`` (:func:`output_weighted`). With ``integral=True`` the
     design is on the model augmented with the integral of ``r - Cr x`` (weight ``Qi``, default the identity),
     and :attr:`K`, :attr:`Ki` are the two blocks of the augmented gain.
 
@@ -247,6 +273,10 @@ class LQR(StateFeedback):
     ----------
     A, B, Q, R, N
         Model and weights (``Q`` positive semidefinite, ``R`` positive definite, ``N`` cross weight or ``None``).
+        ``Q`` may be ``None`` when ``Qy`` is given.
+    Qy, C
+        Optional output weight (``p x p``, positive semidefinite) on ``y = C x``; the state weight of the design
+        is ``Q + C' Qy C``.
     Cr, feedforward, u_min, u_max
         As in :class:`StateFeedback`.
     integral
@@ -274,9 +304,12 @@ class LQR(StateFeedback):
         feedforward: bool = True,
         u_min: Any = None,
         u_max: Any = None,
+        Qy: Any = None,
+        C: Any = None,
     ) -> None:
         A_, B_ = _model(A, B)
         n, m = B_.shape
+        Q = output_weighted(Q, Qy, C, n)
         Ki = None
         if integral:
             if Cr is None:

@@ -6,7 +6,8 @@ Model ``x[k+1] = A x[k] + B u[k]``; at each sample the law solves, over the hori
     subject to u_min <= u_k <= u_max,  du_min <= u_k - u_{k-1} <= du_max (u_{-1}: the input applied last),
                x_min <= x_k <= x_max   for k = 1 .. N,     x_0 = x_hat,
 
-and applies ``u_0``. ``(x_s, u_s)`` is the steady state of the reference (as in :mod:`netsim.control.lqr`:
+and applies ``u_0``. ``Q`` is the state weight plus ``C' Qy C`` when an output weight ``Qy`` on ``y = C x`` is
+given. ``(x_s, u_s)`` is the steady state of the reference (as in :mod:`netsim.control.lqr`:
 an output reference through ``Cr``, or a state reference ``x_ref`` / ``[x_ref, u_ref]``). The terminal weight
 ``P`` defaults to the LQR Riccati solution, so without active constraints ``u_0`` is exactly the LQR law
 ``u_s - K (x_hat - x_s)`` (dynamic programming).
@@ -38,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from netsim.control.design_checks import as_matrix, as_vector, check_weight
-from netsim.control.lqr import _limits, _model, dlqr_gain, reference_gains
+from netsim.control.lqr import _limits, _model, dlqr_gain, output_weighted, reference_gains
 from netsim.control.qp_backends import Backend, make_backend
 from netsim.errors import ConfigError, SimulationError
 from netsim.lazy_import import lazy_module
@@ -60,6 +61,7 @@ class LinearMPC:
         Discrete model (``n x n``, ``n x m``).
     Q, R
         Stage weights (``Q`` positive semidefinite, ``R`` positive definite; scalar or diagonal accepted).
+        ``Q`` may be ``None`` when ``Qy`` is given.
     horizon
         Prediction horizon ``N`` (samples, >= 1).
     P
@@ -78,6 +80,9 @@ class LinearMPC:
         Initial state, when known at construction: checked against the state limits and for feasibility.
     u0
         Input applied before the first sample (reference of the first rate limit; default zeros).
+    Qy, C
+        Optional output weight (``p x p``, positive semidefinite) on ``y = C x``: the stage weight is
+        ``Q + C' Qy C`` (:func:`~netsim.control.lqr.output_weighted`), and so is the default terminal weight's.
 
     Attributes
     ----------
@@ -112,6 +117,8 @@ class LinearMPC:
         tol: float = 1e-9,
         x0: Any = None,
         u0: Any = None,
+        Qy: Any = None,
+        C: Any = None,
     ) -> None:
         A, B = _model(A, B)
         n, m = B.shape
@@ -121,7 +128,7 @@ class LinearMPC:
         N = self.N = int(horizon)
         if solver not in SOLVERS:
             raise ConfigError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
-        self.Q = check_weight("Q", Q, n, definite=False)
+        self.Q = output_weighted(Q, Qy, C, n)
         self.R = check_weight("R", R, m, definite=True)
         self.K, P_lqr = dlqr_gain(A, B, self.Q, self.R)
         self.P = P_lqr if P is None else check_weight("P", P, n, definite=False)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from netsim.errors import ConfigError
 from netsim.registry import register
@@ -124,12 +124,18 @@ class DirectState:
 
 # --------------------------------------------------------------------------------------------- estimators
 class _KalmanParams(StrictModel):
-    Q: Weight = Field(description="process noise covariance of the discrete model (n x n, PSD)")
-    R: Weight = Field(description="measurement noise covariance (p x p, positive definite)")
-    x0: list[float] | None = Field(None, description="initial estimate (default zeros)")
-    P0: Weight = Field(None, description="initial covariance (default identity; ignored in steady state)")
+    Q: Weight = Field(description="covariance of the process noise w[k] of the discrete model at the task period, "
+                                  "x[k+1] = A x[k] + B u[k] + w[k] (n x n, PSD, state units squared; a number: "
+                                  "times I, a list: the diagonal)")
+    R: Weight = Field(description="covariance of the measurement noise v[k], y[k] = C x[k] + v[k] (p x p, positive "
+                                  "definite, measured outputs' units squared)")
+    x0: list[float] | None = Field(None, description="initial estimate x_hat[0|-1], the prior of the first sample "
+                                                     "(n numbers, state units; default zeros)")
+    P0: Weight = Field(None, description="covariance of x0 (n x n; default identity; ignored by steady_state_kalman, "
+                                         "which starts from the DARE prior)")
     history: int = Field(20, ge=0, le=10_000,
-                         description="samples back a delayed measurement is fused at its sample time")
+                         description="samples back a delayed measurement is fused at its own sample time (re-filtered "
+                                     "from the stored priors); older ones are stale")
 
 
 @register("estimator", "kalman", "time-varying Kalman filter; delayed measurements fused at their sample time")
@@ -155,7 +161,8 @@ class SteadyStateKalmanPart(KalmanPart):
 
 
 class _EKFParams(_KalmanParams):
-    substeps: int = Field(4, ge=1, le=1000, description="Runge-Kutta 4 steps per period for the prediction")
+    substeps: int = Field(4, ge=1, le=1000, description="classic Runge-Kutta 4 steps per task period in the "
+                                                        "prediction x[k+1] = phi(x[k], u[k])")
 
 
 @register("estimator", "ekf", "extended Kalman filter on the plant's own nonlinear model (f, h), RK4 per period")
@@ -181,9 +188,13 @@ class ModelEKFPart:
 
 
 class _LuenbergerParams(StrictModel):
-    poles: list[Any] = Field(description="n discrete observer poles, inside the unit circle (complex as '0.5+0.1j')")
-    form: Literal["predictor", "current"] = Field("current", description="predictor (y[k-1]) or current (y[k])")
-    x0: list[float] | None = Field(None, description="initial estimate (default zeros)")
+    poles: list[Any] = Field(description="n discrete eigenvalues of the estimation error (of A - L C in the predictor "
+                                         "form, of (I - L C) A in the current form), inside the unit circle "
+                                         "(complex as '0.5+0.1j', in conjugate pairs)")
+    form: Literal["predictor", "current"] = Field("current", description="current: x_hat[k] uses y[k] (corrects the "
+                                                  "prediction); predictor: x_hat[k] uses y up to y[k-1]")
+    x0: list[float] | None = Field(None, description="initial estimate x_hat[0] (n numbers, state units; default "
+                                                     "zeros)")
 
 
 @register("estimator", "luenberger", "Luenberger observer, gain by pole placement, predictor or current form")
@@ -220,17 +231,38 @@ class NoEstimatorPart:
 
 # --------------------------------------------------------------------------------------------- laws
 class _Limits(StrictModel):
-    u_min: float | list[float] | None = Field(None, description="input lower limit (one, or one per input)")
-    u_max: float | list[float] | None = Field(None, description="input upper limit (one, or one per input)")
+    u_min: float | list[float] | None = Field(None, description="input lower limit in the plant input's units (one "
+                                                                "number, or one per input); u is clipped to it")
+    u_max: float | list[float] | None = Field(None, description="input upper limit in the plant input's units (one "
+                                                                "number, or one per input); u is clipped to it")
+
+
+_Q_TEXT = ("state weight of the discrete design (n x n, PSD; a number: times I, a list: the diagonal); may be left "
+           "out when Qy is given")
+_QY_TEXT = ("weight on the measured outputs y = C x (p x p, PSD, in the order of the task's measured outputs); the "
+            "design's state weight is Q + C' Qy C, so a tf plant can be weighted without knowing its realisation")
+
+
+def _weighted(params: Any) -> Any:
+    if params.Q is None and params.Qy is None:
+        raise ValueError("give a state weight Q, an output weight Qy (on y = C x), or both")
+    return params
 
 
 class _LQRParams(_Limits):
-    Q: Weight = Field(description="state weight (n x n, PSD)")
-    R: Weight = Field(description="input weight (m x m, positive definite)")
-    N: Any = Field(None, description="cross weight (n x m)")
-    integral: bool = Field(False, description="integral action on the reference error")
-    Qi: Weight = Field(None, description="weight of the integrator states (default identity)")
-    feedforward: bool = Field(True, description="steady-state feed-forward of the reference")
+    Q: Weight = Field(None, description=_Q_TEXT)
+    Qy: Weight = Field(None, description=_QY_TEXT)
+    R: Weight = Field(description="input weight (m x m, positive definite, per input unit squared)")
+    N: Any = Field(None, description="cross weight N of the cost term 2 x' N u (n x m; default zero)")
+    integral: bool = Field(False, description="integral action: z[k+1] = z[k] + r[k] - Cr x_hat[k|k] (the estimate, "
+                                              "not y), u = ... - Ki z; Ki from the LQR of the model augmented "
+                                              "with z (needs a reference)")
+    Qi: Weight = Field(None, description="weight of the integrator states z (q x q, one per tracked output; default "
+                                         "identity)")
+    feedforward: bool = Field(True, description="add the steady-state feed-forward of an output reference: "
+                                                "u = Nu r - K (x_hat - Nx r), with Cr Nx r = r at equilibrium")
+
+    _check_weights = model_validator(mode="after")(_weighted)
 
 
 @register("controller", "lqr", "discrete LQR state feedback (python-control dlqr at build)")
@@ -245,13 +277,18 @@ class LQRPart:
         from netsim.control.lqr import LQR
 
         return LQR(design.A, design.B, params.Q, params.R, N=params.N, Cr=design.Cr, integral=params.integral,
-                   Qi=params.Qi, feedforward=params.feedforward, u_min=params.u_min, u_max=params.u_max)
+                   Qi=params.Qi, feedforward=params.feedforward, u_min=params.u_min, u_max=params.u_max,
+                   Qy=params.Qy, C=design.C)
 
 
 class _StateFeedbackParams(_Limits):
-    K: Any = Field(description="state gain (m x n)")
-    Ki: Any = Field(None, description="integral gain (m x q), with a reference")
-    feedforward: bool = Field(True, description="steady-state feed-forward of the reference")
+    K: Any = Field(description="state gain (m x n): u = u_ff(r) - K x_hat[k|k] (negative feedback, the sign of "
+                               "control.dlqr's K)")
+    Ki: Any = Field(None, description="integral gain (m x q): u = ... - Ki z, z[k+1] = z[k] + r[k] - Cr x_hat[k|k] "
+                                      "(needs a reference; the sign of the integrator block of control.dlqr's gain "
+                                      "on the model augmented with z)")
+    feedforward: bool = Field(True, description="add the steady-state feed-forward of an output reference: "
+                                                "u = Nu r - K (x_hat - Nx r), with Cr Nx r = r at equilibrium")
 
 
 @register("controller", "state_feedback", "u = u_ff(r) - K x_hat with a given gain K")
@@ -270,16 +307,27 @@ class StateFeedbackPart:
 
 
 class _MPCParams(_Limits):
-    horizon: int = Field(ge=1, le=1000, description="prediction horizon N (samples)")
-    Q: Weight = Field(description="state weight (n x n, PSD)")
-    R: Weight = Field(description="input weight (m x m, positive definite)")
-    P: Weight = Field(None, description="terminal weight (default: the LQR Riccati solution)")
-    du_min: float | list[float] | None = Field(None, description="input rate lower limit per sample")
-    du_max: float | list[float] | None = Field(None, description="input rate upper limit per sample")
-    x_min: list[float | None] | None = Field(None, description="state lower limits (null: none)")
-    x_max: list[float | None] | None = Field(None, description="state upper limits (null: none)")
-    solver: Literal["daqp", "clarabel", "osqp", "piqp"] = Field("daqp", description="QP solver")
-    tol: float = Field(1e-9, gt=0, description="solver tolerance")
+    horizon: int = Field(ge=1, le=1000, description="prediction horizon N in samples of the task period (inputs "
+                                                   "u_0 .. u_{N-1}, states x_1 .. x_N)")
+    Q: Weight = Field(None, description=_Q_TEXT)
+    Qy: Weight = Field(None, description=_QY_TEXT)
+    R: Weight = Field(description="input weight (m x m, positive definite, per input unit squared)")
+    P: Weight = Field(None, description="terminal weight on x_N - x_s (n x n, PSD; default: the LQR Riccati "
+                                        "solution of (A, B, Q + C' Qy C, R))")
+    du_min: float | list[float] | None = Field(None, description="lower limit of u_k - u_{k-1} per sample, in input "
+                                                                 "units (one number, or one per input; <= 0)")
+    du_max: float | list[float] | None = Field(None, description="upper limit of u_k - u_{k-1} per sample, in input "
+                                                                 "units (one number, or one per input; >= 0)")
+    x_min: list[float | None] | None = Field(None, description="lower limits of the predicted states x_1 .. x_N (n "
+                                                               "numbers in state units; null: none)")
+    x_max: list[float | None] | None = Field(None, description="upper limits of the predicted states x_1 .. x_N (n "
+                                                               "numbers in state units; null: none)")
+    solver: Literal["daqp", "clarabel", "osqp", "piqp"] = Field("daqp", description="QP solver of the constrained "
+                                                                "steps (the unconstrained optimum is used when it "
+                                                                "satisfies every constraint)")
+    tol: float = Field(1e-9, gt=0, description="solver tolerance (its primal feasibility / optimality tolerance)")
+
+    _check_weights = model_validator(mode="after")(_weighted)
 
 
 @register("controller", "mpc", "linear MPC: horizon, input/rate/state box constraints, LQR terminal cost")
@@ -301,7 +349,7 @@ class MPCPart:
         return LinearMPC(design.A, design.B, params.Q, params.R, params.horizon, P=params.P,
                          u_min=params.u_min, u_max=params.u_max, du_min=params.du_min, du_max=params.du_max,
                          x_min=params.x_min, x_max=params.x_max, Cr=design.Cr, solver=params.solver, tol=params.tol,
-                         x0=design.x0)
+                         x0=design.x0, Qy=params.Qy, C=design.C)
 
 
 #: The estimator and law types a ``state_feedback`` program accepts (``pid`` is the registered PID).

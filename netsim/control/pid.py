@@ -26,7 +26,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from pydantic import model_validator
+from pydantic import Field, model_validator
 
 from netsim.registry import register
 from netsim.timebase import to_seconds
@@ -38,14 +38,20 @@ __all__ = ["PID", "PIDLaw", "PIDParams"]
 class PIDParams(StrictModel):
     """Parameters of :class:`PID` as they appear in a scenario (``h`` accepts ``"6 ms"``)."""
 
-    K: float = 1.0
-    Ti: float | None = None
-    Td: float = 0.0
-    N: float = 10.0
-    b: float = 1.0
-    h: Duration | None = None
-    u_min: float | None = None
-    u_max: float | None = None
+    K: float = Field(1.0, description="proportional gain K (input units per unit of the measured output)")
+    Ti: float | None = Field(None, description="integral time Ti in seconds: I(k+1) = I(k) + K h / Ti (r - y); "
+                                               "null: no integral action (PD)", json_schema_extra={"unit": "s"})
+    Td: float = Field(0.0, description="derivative time Td in seconds, derivative on -y only (0: no derivative)",
+                      json_schema_extra={"unit": "s"})
+    N: float = Field(10.0, description="derivative gain limit N (dimensionless): the derivative is filtered by "
+                                       "1 / (1 + s Td / N), a first-order filter of time constant Td / N seconds "
+                                       "(cut-off N / (2 pi Td) Hz)")
+    b: float = Field(1.0, description="set-point weight of the proportional part: P = K (b r - y)")
+    h: Duration | None = Field(None, description="sampling period of the discretisation (default: the task period)")
+    u_min: float | None = Field(None, description="output lower limit (input units); the integrator is frozen while "
+                                                  "saturated in the direction of the error")
+    u_max: float | None = Field(None, description="output upper limit (input units); the integrator is frozen while "
+                                                  "saturated in the direction of the error")
 
     @model_validator(mode="after")
     def _check(self) -> "PIDParams":
