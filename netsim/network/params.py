@@ -41,7 +41,8 @@ class NetworkParams(StrictModel):
     queue_discipline
         ``fifo`` or ``priority`` (lowest message priority first) in the sender queues.
     loss_probability
-        Independent loss probability of each copy (TrueTime); or give ``loss`` for another model.
+        Independent loss probability of each copy (TrueTime); or give ``loss`` for another model. Drawn after
+        the transmission; on the radios per attempt, before the ACK, so a lost frame is retried (docs/loss.md).
     loss
         ``{model: bernoulli, p: ..}`` or ``{model: gilbert_elliott, p_good_to_bad: .., p_bad_to_good: ..,
         loss_good: 0, loss_bad: 1}``.

@@ -4,7 +4,8 @@ A message goes through these stages (TrueTime's wired network block, plus bounde
 
     send -> sender pre-processing delay -> sender queue (FIFO or priority, bounded)
          -> medium access and transmission at the data rate (frame padded to min_frame_bits)
-         -> loss draw (after transmission: a lost frame still used the medium; one draw per receiver copy)
+         -> loss draw (after transmission: a lost frame still used the medium; one draw per receiver copy;
+            the wireless media draw it per attempt before the ACK, so a lost frame is retried: docs/loss.md)
          -> receiver post-processing delay -> stale filter (optional) -> receiver.deliver(network, msg)
 
 Subclasses model the medium access (CAN arbitration, TDMA slots, CSMA/CD collisions ...) by implementing
@@ -376,13 +377,14 @@ class Network(abc.ABC):
         for c in frame.copies:
             self._drop_copy(c, reason)
 
-    def _transmitted(self, frame: Frame, start: int, end: int, *, sync: bool = True) -> None:
+    def _transmitted(self, frame: Frame, start: int, end: int, *, sync: bool = True, draw_loss: bool = True) -> None:
         """``frame`` occupied the medium in ``[start, end]``: loss draw, post-delay, delivery of each copy.
 
         ``sync`` allows delivering in the current callback when no delay remains (only from event callbacks,
-        never from inside ``send``).
+        never from inside ``send``). ``draw_loss`` False: the medium already drew the loss of these copies
+        (the wireless media draw it per attempt, before the ACK; see docs/loss.md).
         """
-        loss = self._loss
+        loss = self._loss if draw_loss else None
         post = self._post
         sender = frame.sender
         sim = self.sim

@@ -56,9 +56,16 @@ Why this module is long: the radio channel is one state machine over shared per-
 motion, what each node senses, the receptions under way, ACK waits and retries, radio time); the MAC modules
 only add their channel access on top of it.
 
+Loss (``loss`` / ``loss_probability``, docs/loss.md)
+    Drawn once per attempt for each copy the radio received (in range, SINR met), before the ACK: a lost copy
+    is not received, so a unicast with ACKs gets no ACK and is retried like any other failed attempt (dropped
+    as ``no_ack`` after ``max_retries``); a broadcast, or a unicast with ``acks: false``, drops it as ``lost``.
+    ACK frames are not subject to it. ``lost_attempts`` (in the metrics when a loss model is set) counts the
+    erased receptions.
+
 Frames carry ``phy_overhead`` (time at the start of every frame: preamble and PHY header) and
-``mac_overhead_bits`` (MAC header and checksum) besides the payload. The ``loss`` model of every network
-applies on top, to copies the radio delivered. Random backoffs come from the stream ``network.<name>.backoff``.
+``mac_overhead_bits`` (MAC header and checksum) besides the payload. Random backoffs come from the stream
+``network.<name>.backoff``.
 """
 
 from __future__ import annotations
@@ -241,6 +248,7 @@ class WirelessMedium(Network):
         self.retransmissions = 0
         self.acks_sent = 0
         self.duplicates = 0
+        self.lost_attempts = 0  # received copies the loss model erased (each one an unacknowledged attempt)
         self._mac_setup()
 
     def _mac_setup(self) -> None:
@@ -461,6 +469,13 @@ class WirelessMedium(Network):
         now = self.sim.now
         p: Any = self.params
         pending = self._pending[node]
+        loss = self._loss
+        if loss is not None:  # the loss model erases a received copy of this attempt: not received, no ACK
+            for c in pending:
+                r = c[0].receiver
+                if outcome.get(r) is None and loss.lost((node, r)):  # type: ignore[arg-type]
+                    outcome[r] = DROP_LOST  # type: ignore[index]
+                    self.lost_attempts += 1
         got = [c for c in pending if outcome.get(c[0].receiver) is None]  # type: ignore[arg-type]
         fresh = []
         for c in got:
@@ -496,7 +511,7 @@ class WirelessMedium(Network):
     def _deliver_copies(self, frame: Frame, copies: list[Copy], now: int) -> None:
         start = frame.tx_start_ns if frame.tx_start_ns is not None else now
         self._transmitted(Frame(frame.msg, copies, frame.sender, frame.priority, frame.wire_bits, frame.tx_ns,
-                                frame.order, tx_start_ns=start), start, now)
+                                frame.order, tx_start_ns=start), start, now, draw_loss=False)
 
     def _send_ack(self, item: tuple) -> None:
         receiver, sender = item
@@ -556,5 +571,8 @@ class WirelessMedium(Network):
             self._contend(node, first=False)
 
     def _extra_metrics(self, t_end_ns: int) -> dict[str, float]:
-        return {"attempts": float(self.attempts), "retransmissions": float(self.retransmissions),
-                "acks": float(self.acks_sent), "duplicates": float(self.duplicates)}
+        out = {"attempts": float(self.attempts), "retransmissions": float(self.retransmissions),
+               "acks": float(self.acks_sent), "duplicates": float(self.duplicates)}
+        if self._loss is not None:  # only with a loss model (the metrics of lossless runs keep their keys)
+            out["lost_attempts"] = float(self.lost_attempts)
+        return out
