@@ -177,7 +177,9 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
         if hit is not None:  # unstable on its own scale though the plant's absolute bound was not reached
             status = f"diverged at t = {hit[0]:.9g} s"
             error = hit[1]
-    warnings = _unrecorded(scenario, sim.env.recorder)
+    from netsim.programs.design_summary import run_warnings as design_warnings  # D's hook (issue 26 s4)
+
+    warnings = design_warnings(sim) + _unrecorded(scenario, sim.env.recorder)
     for text in warnings:
         log.warning("%s: %s", scenario.name, text)
     result.meta.update(
@@ -372,6 +374,9 @@ def run(
     result.meta["wall_time_s"] = time.perf_counter() - wall0
     if folder is not None:
         try:
+            from netsim.programs.design_summary import write_design  # D's hook: design.json, before meta.json
+
+            write_design(folder, sim, tables)
             result.to_csv(folder, tables=tables)
         except OSError as exc:
             _mark_folder(exc, folder)

@@ -13,7 +13,7 @@ import numpy as np
 
 from netsim.errors import ConfigError
 
-__all__ = ["build_parts", "design_model", "part_params"]
+__all__ = ["MODEL_SOURCES", "build_parts", "design_model", "model_source", "part_params"]
 
 
 def _part(kind: str, name: Any) -> Any:
@@ -80,6 +80,28 @@ def _measured_rows(p: Any, scenario: Any, plant: Any, n_out: int) -> tuple[list[
     return per, order
 
 
+#: Where a task's discrete model comes from (:func:`model_source`).
+MODEL_SOURCES = {
+    "params": "params.model (given at the task period)",
+    "discrete_plant": "the discrete plant's own matrices (its dt is the task period)",
+    "zoh": "the plant's continuous (A, B, C, D) discretised at the task period (zero-order hold, c2d)",
+}
+
+
+def model_source(p: Any, plant: Any) -> str | None:
+    """Which branch of :func:`design_model` gives the model: a key of :data:`MODEL_SOURCES`, or ``None``
+    (no model: :func:`design_model` refuses the task)."""
+    if p.model is not None:
+        return "params"
+    if plant is None:
+        return None
+    if hasattr(plant, "Ad") and hasattr(plant, "dt_ns"):
+        return "discrete_plant"
+    if all(hasattr(plant, k) for k in ("A", "B", "C", "D")):
+        return "zoh"
+    return None
+
+
 def design_model(p: Any, scenario: Any, plant: Any, period_ns: int) -> tuple[Any, list[list[int]], list[int]]:
     """The :class:`~netsim.control.parts.Design` of a ``state_feedback`` task, with the measured rows.
 
@@ -91,7 +113,8 @@ def design_model(p: Any, scenario: Any, plant: Any, period_ns: int) -> tuple[Any
     from netsim.control.parts import Design
 
     h = period_ns / 1e9
-    if p.model is not None:
+    source = model_source(p, plant)
+    if source == "params":
         from netsim.control.design_checks import (
             as_input_matrix,
             as_matrix,
@@ -105,12 +128,12 @@ def design_model(p: Any, scenario: Any, plant: Any, period_ns: int) -> tuple[Any
         Df = np.zeros((Cf.shape[0], B.shape[1]))
     elif plant is None:
         raise ConfigError("model: the scenario has no plant; give the discrete model as 'model: {A, B, C}'")
-    elif hasattr(plant, "Ad") and hasattr(plant, "dt_ns"):
+    elif source == "discrete_plant":
         if int(plant.dt_ns) != int(period_ns):
             raise ConfigError(f"model: the discrete plant steps every {plant.dt_ns} ns, the task every {period_ns} ns; "
                               "give the model at the task period as 'model: {A, B, C}', or make the periods equal")
         A, B, Cf, Df = plant.Ad, plant.Bd, plant.Cd, plant.Dd
-    elif all(hasattr(plant, k) for k in ("A", "B", "C", "D")):
+    elif source == "zoh":
         import control
 
         sysd = control.c2d(control.ss(plant.A, plant.B, plant.C, plant.D), h, "zoh")
