@@ -429,8 +429,9 @@ def write_design(folder: str | Path, sim: Any, tables: bool = True) -> Path | No
 
 
 # --------------------------------------------------------------------------------------------- warning
-def nominal_warning(key: str, design: dict[str, Any]) -> str | None:
-    """The warning for a task whose nominal loop is unstable, naming the task and the eigenvalue magnitude."""
+def nominal_warning(key: str, design: dict[str, Any], with_path: bool = True) -> str | None:
+    """The warning for a task whose nominal loop is unstable, naming the task (and its YAML path unless
+    ``with_path`` is False: a validation problem carries it) and the eigenvalue magnitude."""
     nominal = design["nominal"]
     if nominal.get("stable") is not False:
         return None
@@ -441,7 +442,8 @@ def nominal_warning(key: str, design: dict[str, Any]) -> str | None:
     if design["estimator"].get("stable") is False:
         parts.append(f"observer |z| = {design['estimator']['spectral_radius']:.6g}")
     where = f" ({', '.join(parts)})" if parts else ""
-    return (f"task {key} ({design['path']}.params): the nominal closed loop (estimator and law on the discrete "
+    at = f" ({design['path']}.params)" if with_path else ""
+    return (f"task {key}{at}: the nominal closed loop (estimator and law on the discrete "
             f"model, no network) is unstable: eigenvalue {complex(re_, im_):.6g} has magnitude "
             f"{nominal['spectral_radius']:.6g} >= 1{where}; check the law's gain or weights and the estimator")
 
@@ -463,7 +465,7 @@ def nominal_problems(scenario: Any, plant: Any) -> list[Any]:
     designs = static_designs(scenario, plant, margin=False)
     out = []
     for key, d in sorted(designs.items()):
-        text = nominal_warning(key, d)
+        text = nominal_warning(key, d, with_path=False)
         if text is not None:
             out.append(Problem(f"{d['path']}.params.law", text, severity=WARNING))
     return out

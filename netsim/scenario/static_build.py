@@ -121,12 +121,16 @@ def build_problems(scenario: Any) -> list[Problem]:
     if not _netsim_kernels(scenario):
         return []
     env = SimEnv(seed=scenario.seed, record=None if scenario.record is None else set(scenario.record))
+    warnings: list[Problem] = []
     try:
         if _netsim_plant(scenario):
             signals = _make_signals(scenario)
             plant = _build_plant(scenario, env, signals)
             _build_io(scenario, env, plant)
             _design_checks(scenario, plant)
+            from netsim.programs.design_summary import nominal_problems  # issue 26 s4: unstable nominal loops
+
+            warnings = nominal_problems(scenario, plant)
         kernels, bindings = wire_kernels(scenario, env, _body)
         if _netsim_networks(scenario):
             networks = build_networks(scenario, env, kernels)
@@ -139,4 +143,4 @@ def build_problems(scenario: Any) -> list[Problem]:
                 raise type(exc)(exc.message, path=exc.path or f"nodes.{name}") from None
     except ConfigError as exc:
         return [Problem(exc.path or "", _message(exc))]
-    return []
+    return warnings
