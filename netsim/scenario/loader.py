@@ -42,8 +42,10 @@ from pydantic import ValidationError
 
 from netsim.errors import ConfigError
 from netsim.scenario.messages import problems_from_validation_error, shorten_problem
-from netsim.scenario.paths import PathPart, parse_path, plain_copy, set_path
+from netsim.scenario.paths import PathPart, parse_path
+from netsim.scenario.overrides import apply_overrides, shadowed_overrides
 from netsim.scenario.problems import ERROR, Problem, ScenarioError, sort_problems
+from netsim.scenario.python_values import plain_values
 from netsim.scenario.schema import Scenario
 
 __all__ = [
@@ -185,8 +187,9 @@ def _raw_tree(source: Source, overrides: Mapping[str, Any] | None
     """The raw tree of ``source`` (a private copy), its file, its line index and the problems reading it."""
     if isinstance(source, Scenario):
         return raw_copy(source), source.source, LineIndex(), []
-    if isinstance(source, Mapping):
-        return plain_copy(dict(source)), None, LineIndex(), []
+    if isinstance(source, Mapping):  # numpy values and python-control systems as the YAML forms, once
+        raw, problems = plain_values(dict(source))
+        return raw, None, LineIndex(), problems
     if isinstance(source, (str, os.PathLike)):
         file = os.fspath(source)
         try:
@@ -240,14 +243,10 @@ def _baseline(raw: dict[str, Any], main_valid: bool) -> tuple[list[Problem], lis
     where = "baseline.overrides"
     base_raw = copy.deepcopy(raw)
     base_raw["baseline"] = None
-    errors: list[Problem] = []
-    keys: list[list[PathPart]] = []
-    for key, value in baseline["overrides"].items():
-        try:
-            set_path(base_raw, str(key), copy.deepcopy(value))
-            keys.append(parse_path(str(key)))
-        except ConfigError as exc:
-            errors.append(Problem(where, f"override '{key}': {exc.message}"))
+    applied, refused = apply_overrides(base_raw, {str(k): v for k, v in baseline["overrides"].items()})
+    errors = [Problem(where, f"override '{p.path}': {p.message.removeprefix('cannot apply override: ')}")
+              for p in refused]
+    keys: list[list[PathPart]] = [list(a.parts) for a in applied]
     if not keys:
         return errors, [], None
     if not main_valid:
@@ -263,6 +262,11 @@ def _baseline(raw: dict[str, Any], main_valid: bool) -> tuple[list[Problem], lis
                     errors.append(Problem(where, f"override gives {p.path}: {p.message}"))
         return errors, [], None
     problems, scenario = _validate(base_raw, None)
+    if scenario is not None:  # an override of a preset the scenario spells out (issue 26)
+        hidden, changed = shadowed_overrides(base_raw, scenario, applied)
+        if changed:
+            problems, scenario = _validate(base_raw, None)
+        errors += [Problem(where, f"'{p.path}': {p.message}") for p in hidden]
     errors += [Problem(where, f"override gives {p.path}: {p.message}" if p.path else f"override gives: {p.message}")
                for p in problems if p.severity == ERROR]
     warnings = [p for p in problems if p.severity != ERROR]
@@ -290,12 +294,7 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: 
 
     for key in [k for k in raw if isinstance(k, str) and k.startswith(EXTENSION_PREFIX)]:
         del raw[key]  # a place for YAML anchors (``x-defaults: &task {...}``), ignored
-    problems: list[Problem] = []
-    for key, value in (overrides or {}).items():
-        try:
-            set_path(raw, key, plain_copy(value))
-        except ConfigError as exc:
-            problems.append(Problem(key, f"cannot apply override: {exc.message}"))
+    applied, problems = apply_overrides(raw, overrides)
     refused = _plugin_files(raw, file, allow_plugins)  # before any plugin name is looked up
     problems += refused
     if any(_NOT_ALLOWED in p.message for p in refused):
@@ -303,6 +302,13 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: 
         return done(problems), None, []
 
     found, scenario = _validate(raw, index.line_of)
+    if scenario is not None and applied:  # an override of a preset the file spells out (issue 26)
+        hidden, changed = shadowed_overrides(raw, scenario, applied)
+        if changed:  # siblings that spelled out the old preset were removed: the new one fills them
+            found, scenario = _validate(raw, index.line_of)
+        found += hidden
+        if hidden:
+            scenario = None
     problems += found
     valid = scenario is not None and not any(p.severity == ERROR for p in problems)
     base_errors, base_warnings, base_scenario = _baseline(raw, valid)

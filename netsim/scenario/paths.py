@@ -248,7 +248,9 @@ def plain_copy(data: Any) -> Any:
     """A deep copy of ``data`` made of plain dicts, lists and scalars (tuples become lists).
 
     Scenario data given from Python (a mapping, override values) is copied so, never shared: validation and
-    overrides then work on data that nobody else holds.
+    overrides then work on data that nobody else holds. A numpy array becomes its ``tolist()`` (a number, a list
+    or a list of rows) and a numpy scalar the Python value it holds (python-control systems:
+    :func:`netsim.scenario.python_values.plain_values`).
     """
     if isinstance(data, dict):
         return {_scalar(k): plain_copy(v) for k, v in data.items()}
@@ -272,12 +274,15 @@ def _readable(value: int) -> int:
 
 
 def _scalar(value: Any) -> Any:
-    """``value`` as the plain type it is a subclass of (a ``numpy.float64`` becomes a ``float``)."""
+    """``value`` as the plain type it is a subclass of (a ``numpy.float64`` becomes a ``float``), a numpy value as
+    the Python data its ``tolist()`` gives."""
     kind = type(value)
     if value is None or kind in (str, float, bool):
         return value
     if kind is int:
         return _readable(value)
+    if kind.__module__ == "numpy" and hasattr(value, "tolist"):  # ndarray (any shape), np.float32, np.bool_ ...
+        return plain_copy(value.tolist())
     for plain in (bool, int, float, str):
         if isinstance(value, plain):
             return plain(value)
