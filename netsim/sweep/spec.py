@@ -29,6 +29,7 @@ import numpy as np
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from netsim.errors import ConfigError
+from netsim.scenario.paths import plain_copy
 from netsim.units import StrictModel
 
 __all__ = [
@@ -361,7 +362,7 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
         accepted (see :func:`_check_paths`).
     """
     path = None if isinstance(source, dict) else Path(source)
-    data = dict(source) if isinstance(source, dict) else _read_yaml(path, sweep_file=True)  # type: ignore[arg-type]
+    data = plain_copy(dict(source)) if isinstance(source, dict) else _read_yaml(path, sweep_file=True)  # type: ignore[arg-type]  # numpy values as lists (issue 26)
     where = str(path) if path else "sweep"
     if not isinstance(data, dict):
         raise ConfigError(f"{where}: a sweep file is a mapping with keys sweep, base, factors, ...")
