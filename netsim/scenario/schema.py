@@ -92,6 +92,7 @@ from netsim.energy.params import EnergyModel
 from netsim.scenario.paths import format_path, parse_path, plain_copy
 from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema_sync import SyncSpec
+from netsim.scenario.schema_verdict import VerdictSpec
 from netsim.scenario.schema_task import TimeDistribution, kernel_fields, without_unused_arrivals
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
 from netsim.kernel.task import TaskSpec as KernelTaskSpec
@@ -794,6 +795,7 @@ class Scenario(SpecModel):
     _raw: Any = PrivateAttr(default=None)
     _baseline: Any = PrivateAttr(default=None)
 
+    verdict: VerdictSpec | None = None  # how the run is judged stable (netsim.scenario.schema_verdict); None: defaults
     @property
     def source(self) -> str | None:
         """The scenario file this came from (None for a dict)."""
@@ -837,6 +839,8 @@ class Scenario(SpecModel):
                 data["output"].pop(key)
         for path, spec in self.plugin_specs():
             params = _params_json(spec)
+        if data.get("verdict", 0) is None:  # no verdict: block: resolved (and hashed) as before (issue 26)
+            del data["verdict"]
             parts = parse_path(path)
             if parts[0] == "networks":
                 params.pop("nodes", None)
