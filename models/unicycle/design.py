@@ -42,7 +42,11 @@ __all__ = ["Phase", "PHASES", "Trajectory", "error_model", "lqr_gain", "LQR_Q", 
 
 @dataclass(frozen=True)
 class Phase:
-    """A piece of the trajectory with constant ``(v, w)`` and the sensors that are on."""
+    """A piece of the trajectory with constant ``(v, w)`` and the sensors that are on.
+
+    ``front``/``side`` schedule the sensors of the standalone studies (:mod:`models.unicycle.studies`); in a
+    netsim scenario the sensors' own ``on`` windows do (``unicycle_ekf``'s phases carry no flags).
+    """
 
     duration: float
     v: float

@@ -8,10 +8,17 @@ filter's grid; ``xhat[i]``, ``sd[i]``: posterior mean and standard deviations; `
 * ``cover_<s>_<p>``: share of samples with ``|truth - xhat| <= 1.96 sd`` (the 95 % band);
 * ``rmse_<s>_<p>``: RMS estimation error; ``nees_all``: mean of ``e' P^-1 e`` from the diagonal (``sum (e/sd)^2``);
 * ``sd_<s>_end_<p>``: the standard deviation at the phase's last sample; ``detP_end_<p>``;
-* ``detP_ratio_turn``: ``det P`` at the end of the turn over its value at the start; ``detP_monotone_turn``:
-  1 when it grew at every sample of the turn;
-* ``recovery_<s>_s``: seconds after the turn until ``sd`` is back at (or below) its value at the start of the
-  turn (NaN when it never is: the state is not observable with the front sensor alone);
+* ``detP_ratio_turn``: ``det P`` at the last sample of the blackout over its value at the sample before it;
+  ``detP_monotone_turn``: 1 when it grew at every sample of the blackout;
+* ``recovery_<s>_s``: seconds after the blackout's last sample until ``sd`` is back at (or below) its value at
+  the sample before the blackout (NaN when it never is: the state is not observable with the front sensor
+  alone).
+
+The blackout is read from the scenario (:func:`blackout_window`): the first interval, after the start, in which
+none of its ``ir_sensor`` tasks is in one of its ``on`` windows (the study's schedule: 4 s to 6 s, the turn).
+Without ``ir_sensor`` tasks (the standalone studies call :func:`run_measures` directly) it is the trajectory's
+``turn`` phase; with sensors that never are all off there is no blackout and no ``detP_*_turn``/``recovery_*``.
+The names keep ``turn`` (the study's blackout is its turn).
 * ``track_rms_<c>`` / ``track_max_<c>`` (``c`` = ``e1, e2, e3``): the cart-frame error of eq (24) between the
   reference and the *true* pose, over the whole run.
 """
@@ -19,16 +26,17 @@ filter's grid; ``xhat[i]``, ``sd[i]``: posterior mean and standard deviations; `
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Mapping, Union
 
 import numpy as np
 from pydantic import Field
 
 from models.unicycle.design import PHASES
 from netsim.registry import register
+from netsim.timebase import S, parse_time
 from netsim.units import StrictModel
 
-__all__ = ["UnicycleMetricParams", "unicycle_metric", "run_measures"]
+__all__ = ["UnicycleMetricParams", "unicycle_metric", "run_measures", "blackout_window"]
 
 STATES = ("x", "y", "theta")
 
@@ -41,9 +49,49 @@ class UnicycleMetricParams(StrictModel):
                               description="end of each phase in s")
 
 
+#: What :func:`run_measures` takes as the blackout: ``(start_s, end_s)``, ``"turn"`` (the trajectory's turn
+#: phase) or ``None`` (no blackout).
+Blackout = Union[tuple[float, float], str, None]
+
+
+def blackout_window(scenario: Mapping[str, Any] | None) -> Blackout:
+    """The sensors' blackout of a (resolved) scenario: ``(start_s, end_s)`` of the first interval after 0 in
+    which no ``ir_sensor`` task is in one of its ``on`` windows (``end_s`` the run's duration if none comes
+    back); ``None`` when the sensors are never all off; ``"turn"`` when the scenario has no ``ir_sensor`` task.
+    """
+    nodes = (scenario or {}).get("nodes") or {}
+    windows: list[tuple[int, float]] = []
+    sensors = 0
+    for node in nodes.values():
+        for task in (node or {}).get("tasks") or []:
+            if task.get("program") != "ir_sensor":
+                continue
+            sensors += 1
+            on = (task.get("params") or {}).get("on")
+            if on is None:
+                windows.append((0, math.inf))
+            else:
+                windows += [(parse_time(a), parse_time(b)) for a, b in on]
+    if not sensors:
+        return "turn"
+    duration = parse_time(scenario["duration"]) if scenario and "duration" in scenario else math.inf
+    merged: list[list[float]] = []  # the union of the windows, in order
+    for a, b in sorted(w for w in windows if w[0] < min(w[1], duration)):
+        if merged and a <= merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], b)
+        else:
+            merged.append([a, b])
+    if not merged or merged[0][1] >= duration:  # never on, or never all off after having been on
+        return None
+    end = merged[1][0] if len(merged) > 1 else duration
+    return (merged[0][1] / S, end / S)
+
+
 def run_measures(t: np.ndarray, truth: np.ndarray, xhat: np.ndarray, sd: np.ndarray, detP: np.ndarray,
-                 ref: np.ndarray | None, names: list[str], ends: list[float]) -> dict[str, float]:
-    """The measures of the module docstring from arrays over the filter's samples (``N x 3`` for poses)."""
+                 ref: np.ndarray | None, names: list[str], ends: list[float],
+                 blackout: Blackout = "turn") -> dict[str, float]:
+    """The measures of the module docstring from arrays over the filter's samples (``N x 3`` for poses);
+    ``blackout`` as :func:`blackout_window` gives it."""
     out: dict[str, float] = {}
     e = truth - xhat
     e[:, 2] = np.arctan2(np.sin(e[:, 2]), np.cos(e[:, 2]))
@@ -65,8 +113,15 @@ def run_measures(t: np.ndarray, truth: np.ndarray, xhat: np.ndarray, sd: np.ndar
         if p != "all":
             out[f"detP_end_{p}"] = float(detP[m][-1])
     out["nees_all"] = float(np.mean(np.sum((e / sd) ** 2, axis=1)))
-    if "turn" in masks and masks["turn"].any():
-        idx = np.flatnonzero(masks["turn"])
+    if blackout == "turn":
+        dark = masks.get("turn")
+    elif blackout is None:
+        dark = None
+    else:
+        a, b = blackout  # type: ignore[misc]
+        dark = (t >= a - 1e-9) & ((t < b - 1e-9) if b < t[-1] + 1e-9 else np.ones_like(t, dtype=bool))
+    if dark is not None and dark.any():
+        idx = np.flatnonzero(dark)
         i0, i1 = idx[0] - 1 if idx[0] > 0 else idx[0], idx[-1]
         out["detP_ratio_turn"] = float(detP[i1] / detP[i0])
         out["detP_monotone_turn"] = float(np.all(np.diff(detP[i0:i1 + 1]) > 0))
@@ -97,7 +152,8 @@ def unicycle_metric(result: Any, params: Any, baseline: Any = None) -> dict[str,
     xhat = sig[["xhat[0]", "xhat[1]", "xhat[2]"]].to_numpy(dtype=float)
     sd = sig[["sd[0]", "sd[1]", "sd[2]"]].to_numpy(dtype=float)
     ref = sig[["ref[0]", "ref[1]", "ref[2]"]].to_numpy(dtype=float) if "ref[0]" in sig else None
-    m = run_measures(t, truth, xhat, sd, sig["detP"].to_numpy(dtype=float), ref, p.phases, p.ends)
+    m = run_measures(t, truth, xhat, sd, sig["detP"].to_numpy(dtype=float), ref, p.phases, p.ends,
+                     blackout_window(getattr(result, "scenario", None)))
     return {f"unicycle.{k}": v for k, v in m.items()}
 
 

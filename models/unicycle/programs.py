@@ -33,7 +33,7 @@ from collections.abc import Generator
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from models.unicycle.design import PHASES, Phase, TrackingLaw, Trajectory
 from models.unicycle.ekf import CartEkf
@@ -96,17 +96,33 @@ class _Source(StrictModel):
 
 
 class _Phase(StrictModel):
+    """A piece of the reference trajectory: constant ``(v, w)`` for ``duration``.
+
+    It says nothing about the sensors: when each one measures is its ``ir_sensor`` task's ``on`` windows (the
+    ``unicycle`` metric reads the blackout from them too). The ``front``/``side`` flags it had did nothing and
+    are refused with a message saying so.
+    """
+
     duration: Time
     v: float
     w: float
-    front: bool = True
-    side: bool = True
     name: str = ""
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_sensor_flags(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            flags = [k for k in ("front", "side") if k in data]
+            if flags:
+                raise ValueError(
+                    f"'{flags[0]}' is not a setting of a trajectory phase (it never switched a sensor); remove it "
+                    "and switch the sensor with its own task's 'on' windows "
+                    "(nodes.<sensor>.tasks[i].params.on: [[start, end], ...])")
+        return data
 
 
 def _default_phases() -> list[_Phase]:
-    return [_Phase(duration=f"{p.duration:g} s", v=p.v, w=p.w, front=p.front, side=p.side, name=p.name)
-            for p in PHASES]
+    return [_Phase(duration=f"{p.duration:g} s", v=p.v, w=p.w, name=p.name) for p in PHASES]
 
 
 @register("program", "unicycle_ekf", "2WD cart: EKF with IR sensors fused at their sample times, cart-frame "
@@ -151,7 +167,7 @@ class UnicycleEkf:
         ts = self.period * 1e-9
         p = params
         self.ekf = CartEkf(p.Q, p.R, p.x0, np.diag(p.P0), ts, p.side_model)
-        phases = [Phase(ph.duration * 1e-9, ph.v, ph.w, ph.front, ph.side, ph.name) for ph in p.phases]
+        phases = [Phase(ph.duration * 1e-9, ph.v, ph.w, name=ph.name) for ph in p.phases]
         self.traj = Trajectory(phases, p.start, ts)
         self.law = TrackingLaw(self.traj, p.law, np.diag(p.lqr_Q), np.diag(p.lqr_R), p.a_sign)
         self.k = 0
