@@ -24,6 +24,7 @@ examples:
   netsim run scenarios/dc_servo_can.yaml                 run one scenario, write reports/<name>/<run-id>/
   netsim run scenarios/dc_servo_can.yaml --plot --seed 3 --set networks.can.bitrate="1 Mbit/s"
   netsim validate scenarios/*.yaml                       check files; exit code = number of problems
+  netsim design scenarios/dc_servo_lqr_kalman.yaml       gains, eigenvalues, delay margin; nothing runs
   netsim batch scenarios/ --workers 4                    run every scenario in a folder, write summary.csv
   netsim sweep scenarios/hdd_gpi_sweep.yaml              threshold sweep (parallel), summary.csv + surface
   netsim report reports/hdd_gpi                          tables and figures from a finished sweep
@@ -66,6 +67,18 @@ examples:
 
 Prints every problem as file:line: path: message (warnings marked "warning:") and exits with the
 number of errors found (0 when every file is valid, at most 255).
+"""
+
+_DESIGN_EPILOG = """\
+examples:
+  netsim design scenarios/dc_servo_lqr_kalman.yaml
+  netsim design scenarios/dc_servo_lqr_kalman.yaml --set nodes.controller.tasks[0].params.law.R=1e-4
+  netsim design scenarios/pendulum_lqr.yaml --json > design.json
+
+Builds every state_feedback task's model, estimator and law as a run does and prints, per task, the discrete
+model, K and Ki, the estimator gain, the eigenvalues of the state-feedback loop, of the observer and of the
+nominal loop (no network), and the delay margin (netsim.analysis.lqg) where the plant has a continuous LTI
+model. --json prints what a run writes to design.json. Nothing is simulated.
 """
 
 _BATCH_EPILOG = """\
@@ -220,6 +233,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="apply an override before checking (repeatable)")
     p.set_defaults(func=_cmd_validate)
 
+    p = sub.add_parser("design", parents=[common, trust], help="print the state_feedback designs without running",
+                       epilog=_DESIGN_EPILOG, formatter_class=_Formatter,
+                       description="Print each state_feedback task's gains, eigenvalues and delay margin.")
+    p.add_argument("file", metavar="FILE", help="scenario YAML file")
+    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
+                   help="apply an override first (repeatable)")
+    p.add_argument("--json", action="store_true", help="print design.json's text instead of the table")
+    p.set_defaults(func=_cmd_design)
+
     p = sub.add_parser("list", parents=[common], help="list registered plants, programs, networks, ...",
                        epilog=_LIST_EPILOG,
                        formatter_class=_Formatter, description="List registered building blocks, or show one "
@@ -239,6 +261,12 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Print a JSON Schema (draft 2020-12) that accepts a scenario or a sweep file.")
     p.set_defaults(func=_cmd_schema)
     return parser
+
+
+def _cmd_design(args: argparse.Namespace) -> int:
+    from netsim.cli.design import cmd_design  # imported when the command runs (netsim --help stays fast)
+
+    return cmd_design(args)
 
 
 def _positive_int(text: str) -> int:

@@ -57,6 +57,7 @@ __all__ = [
     "nominal_problems",
     "nominal_warning",
     "run_designs",
+    "scenario_designs",
     "static_designs",
     "summarize",
     "write_design",
@@ -390,6 +391,20 @@ def static_designs(scenario: Any, plant: Any, *, margin: bool = True) -> dict[st
                             margin=margin)
         out[f"{node}.{task.name}"] = _task_entry(node, i, task, summary)
     return out
+
+
+def scenario_designs(scenario: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
+    """:func:`static_designs` of a valid scenario, its plant and io channels built as ``netsim validate`` builds
+    them (:mod:`netsim.scenario.static_build`); what ``netsim design`` prints."""
+    if not _state_feedback_tasks(scenario):
+        return {}
+    from netsim.env import SimEnv
+    from netsim.scenario.builder import _build_io, _build_plant, _make_signals
+
+    env = SimEnv(seed=scenario.seed, record=None if scenario.record is None else set(scenario.record))
+    plant = _build_plant(scenario, env, _make_signals(scenario))
+    _build_io(scenario, env, plant)
+    return static_designs(scenario, plant, margin=margin)
 
 
 def run_designs(sim: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
