@@ -75,11 +75,9 @@ def _is_system(value: Any) -> bool:
 
 def _walk(value: Any, at: list[PathPart], problems: list[Problem], period: Any) -> Any:
     """``value`` (at ``at``) as plain data; ``period`` is the ``period`` of the nearest task around it."""
+    if at == ["plant"]:
+        value = _plant(value, problems)
     if isinstance(value, dict):
-        if at == ["plant"]:
-            value = _plant(value, problems)
-            if not isinstance(value, dict):
-                return value
         if "period" in value and "params" in value:
             period = value["period"]
         out = {}
