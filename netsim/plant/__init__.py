@@ -25,6 +25,11 @@ own (eq. (2) of Cuenca et al.): continuous ones are appended to the state of an 
 (``dt_ns``) update their state at multiples of ``dt_ns`` and hold their output in between. Any other
 callable ``t_ns -> value`` is sampled at each propagation instant and held (an approximation).
 
+Random disturbances given in a scenario (``plant.process_noise`` entries, :mod:`netsim.plant.noise`): white noise
+held per sample on inputs (:meth:`Plant.add_input_noise`, a :class:`~netsim.plant.noise.HeldNoise` discrete
+disturbance model, so exact propagation stays exact) and random-walk increments on any state of any plant
+(:meth:`Plant.add_state_noise`, jumps at the sample instants between the plant's own integration steps).
+
 Listeners
 ---------
 :meth:`Plant.on_input_change` registers ``callback(t_ns)`` called whenever the future trajectory stops being
@@ -35,7 +40,8 @@ Modules
 -------
 ``base`` (:class:`Plant`, the lazy-advance machinery), ``lti`` (:class:`LTIPlant`), ``discrete`` (:class:`DiscretePlant`),
 ``nonlinear`` (:class:`NonlinearPlant`, :class:`Mode`, :class:`Guard`), ``disturbance`` (:class:`LTIDisturbance`
-and the classification of disturbances), ``shared`` (matrix validation helpers, ``NEVER``). The concrete plants
+and the classification of disturbances), ``noise`` (:class:`~netsim.plant.noise.HeldNoise`, the ``process_noise``
+entries), ``shared`` (matrix validation helpers, ``NEVER``). The concrete plants
 are imported on first use (``scipy.integrate`` is not needed to build an LTI plant).
 """
 
@@ -52,6 +58,7 @@ __all__ = [
     "NonlinearPlant",
     "DiscretePlant",
     "LTIDisturbance",
+    "HeldNoise",
     "Mode",
     "Guard",
     "NEVER",
@@ -65,6 +72,7 @@ _LAZY = {
     "NonlinearPlant": "netsim.plant.nonlinear",
     "Mode": "netsim.plant.nonlinear",
     "Guard": "netsim.plant.nonlinear",
+    "HeldNoise": "netsim.plant.noise",
 }
 
 

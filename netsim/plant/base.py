@@ -11,7 +11,7 @@ import numpy as np
 
 from netsim.env import NORMAL, RECORD, schedule_call
 from netsim.errors import BuildError, ConfigError, DivergenceError, SimulationError
-from netsim.plant.disturbance import _classify, _Source
+from netsim.plant.disturbance import _classify, _Source, _StateNoise
 from netsim.plant.shared import NEVER, _names, _vector
 from netsim.timebase import format_time, to_seconds
 
@@ -139,8 +139,7 @@ class Plant(abc.ABC):
         self._record_events = bool(record_events)
         self._plain = self._started and self._is_plain()
         for src in self._sources:
-            if src.lti is not None and src.lti.noisy:
-                src.rng = env.rng(f"plant.{self.name}.disturbance.{self.input_names[src.index]}")
+            src.rng = self._source_stream(src)
         self._bind_streams(env)
         if record_grid_ns is not None:
             grid = int(record_grid_ns)
@@ -199,11 +198,68 @@ class Plant(abc.ABC):
             raise BuildError(f"plant {self.name}: add disturbances before the simulation starts")
         src = _classify(self.input_index(input), signal)
         self._check_source(src)
-        if src.lti is not None and src.lti.noisy and self.env is not None:
-            src.rng = self.env.rng(f"plant.{self.name}.disturbance.{self.input_names[src.index]}")
+        self._add_source(src)
+
+    def _add_source(self, src: _Source) -> None:
+        src.rng = self._source_stream(src)
         self._sources.append(src)
         self._has_held = any(s.kind == "held" for s in self._sources)
         self._on_sources_changed()
+
+    def _source_stream(self, src: _Source) -> Any:
+        """The random stream of a stochastic source once bound (None otherwise)."""
+        if self.env is None:
+            return None
+        if src.kind == "state":
+            return self.env.rng(f"plant.{self.name}.state_noise")
+        if src.lti is not None and src.lti.noisy:
+            return self.env.rng(f"plant.{self.name}.disturbance.{self.input_names[src.index]}")
+        return None
+
+    def add_input_noise(self, input: int | str, sigma: float, sample_ns: int) -> None:
+        """Add white noise held per sample to input ``input``: ``sigma * N(0, 1)`` drawn at every multiple of
+        ``sample_ns`` and held until the next (:class:`~netsim.plant.noise.HeldNoise`, stream
+        ``plant.<name>.disturbance.<input>``). A piecewise-constant input: exact propagation stays exact."""
+        from netsim.plant.noise import HeldNoise
+
+        self.add_disturbance(input, HeldNoise(sigma, sample_ns))
+
+    def add_state_noise(self, states: Sequence[int | str], sigma: float | Sequence[float], sample_ns: int) -> None:
+        """Add random-walk increments to ``states``: at every multiple ``k * sample_ns`` (``k >= 1``) each listed
+        state jumps by ``sigma_i * sqrt(sample) * N(0, 1)`` (``sigma`` per square root of a second; stream
+        ``plant.<name>.state_noise``). See :mod:`netsim.plant.noise` for how it composes with integration."""
+        if self._started:
+            raise BuildError(f"plant {self.name}: add state noise before the simulation starts")
+        idx = [self.state_index(s) for s in states]
+        if len(set(idx)) != len(idx):
+            raise ConfigError(f"plant {self.name}: state noise lists a state twice: {list(states)}")
+        sig = np.broadcast_to(np.asarray(sigma, dtype=float), (len(idx),)) if np.ndim(sigma) == 0 else \
+            np.asarray(sigma, dtype=float)
+        if sig.shape != (len(idx),) or not np.all(np.isfinite(sig)) or np.any(sig < 0):
+            raise ConfigError(f"plant {self.name}: state noise needs one finite sigma >= 0 per state, got {sigma}")
+        dt = int(sample_ns)
+        if dt <= 0:
+            raise ConfigError(f"plant {self.name}: state noise sample must be positive, got {sample_ns}")
+        self._add_source(_StateNoise(idx, sig * math.sqrt(dt / 1e9), dt))
+
+    def set_process_noise(self, process_noise: Any) -> None:
+        """Add the random disturbances of a scenario's ``process_noise`` entries before the run: held white
+        noise on inputs, random-walk increments on states (:mod:`netsim.plant.noise`).
+
+        LTI and discrete plants also take an intensity (a number, a vector or a matrix) here."""
+        from netsim.plant.noise import is_entry_form, noise_entries
+
+        if not is_entry_form(process_noise):
+            raise ConfigError(
+                f"plant {self.name} takes process noise as entries {{states: [...], sigma: ..., sample: ...}} or "
+                f"{{inputs: [...], sigma: ..., sample: ...}}; got {process_noise!r}"
+            )
+        for entry in noise_entries(process_noise):
+            for target, sigma in zip(entry.targets, entry.sigmas()):
+                if entry.kind == "inputs":
+                    self.add_input_noise(target, sigma, entry.sample)
+            if entry.kind == "states":
+                self.add_state_noise(entry.targets, entry.sigmas(), entry.sample)
 
     def _check_source(self, src: _Source) -> None:
         """Subclasses reject disturbance kinds they cannot propagate."""
@@ -216,8 +272,9 @@ class Plant(abc.ABC):
         self._started = True
         self._plain = self._is_plain()
         for src in self._sources:
-            if src.kind == "lti_d" and src.lti.noisy and src.rng is None:  # type: ignore[union-attr]
+            if (src.kind == "state" or (src.kind == "lti_d" and src.lti.noisy)) and src.rng is None:  # type: ignore[union-attr]
                 raise BuildError(f"plant {self.name}: bind(env) before running a noisy disturbance model")
+            src.start()
         self._refresh_sources(self._t)
 
     def _is_plain(self) -> bool:
@@ -241,6 +298,9 @@ class Plant(abc.ABC):
             if src.next_ns == t and src.kind == "lti_d":
                 src.step_discrete()
                 stochastic = stochastic or src.L is not None
+            elif src.next_ns == t and src.kind == "state":
+                self._set_state_now(src.jump(self._state_now()))  # type: ignore[attr-defined]
+                stochastic = True
         self._refresh_sources(t)
         return stochastic
 
@@ -258,7 +318,7 @@ class Plant(abc.ABC):
     def prediction_barrier(self) -> int:
         """Next instant beyond which the future cannot be predicted from the current state (stochastic
         disturbance updates), or a huge number."""
-        return min((s.next_ns for s in self._sources if s.kind == "lti_d"), default=NEVER)
+        return min((s.next_ns for s in self._sources if s.kind in ("lti_d", "state")), default=NEVER)
 
     def _prediction_window(self, t_first: int, tick: int, max_ticks: int) -> tuple[int, int, int]:
         """``(max_ticks, t_end, barrier)`` for ``predict_exit``: the ticks ``t_first + j*tick`` that lie

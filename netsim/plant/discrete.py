@@ -10,6 +10,7 @@ import numpy as np
 from netsim.errors import ConfigError
 from netsim.plant.disturbance import _Source
 from netsim.plant.lti import _LTIBase, _noise_matrix
+from netsim.plant.noise import is_entry_form
 from netsim.plant.shared import NEVER, _vector, matvec, psd_factor
 from netsim.timebase import from_seconds
 
@@ -73,7 +74,12 @@ class DiscretePlant(_LTIBase):
         self._next_update = NEVER  # first update instant after self._t (set when started)
 
     def set_process_noise(self, process_noise: Any) -> None:
-        """Set the covariance of the additive state noise per step (n x n, or a vector) before the run."""
+        """Set the covariance of the additive state noise per step (n x n, or a vector) before the run;
+        entries ``{inputs|states: [...], sigma: ..., sample: ...}`` add held input noise or state increments
+        instead (:meth:`Plant.set_process_noise <netsim.plant.Plant.set_process_noise>`)."""
+        if is_entry_form(process_noise):
+            super().set_process_noise(process_noise)
+            return
         Q = _noise_matrix(process_noise, self.n_states)
         self._L = psd_factor("process_noise", Q) if np.any(Q != 0) else None
         self._Lw = None if self._L is None else matvec(self._L)

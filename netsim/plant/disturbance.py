@@ -88,7 +88,7 @@ class _Source:
 
     def __init__(self, index: int, kind: str, signal: Any = None, lti: LTIDisturbance | None = None) -> None:
         self.index = index
-        self.kind = kind  # "piecewise" | "sine" | "lti_c" | "lti_d" | "held"
+        self.kind = kind  # "piecewise" | "sine" | "lti_c" | "lti_d" | "held" | "state" (_StateNoise)
         self.signal = signal
         self.lti = lti
         self.xd = None if lti is None else lti.x0.copy()
@@ -103,6 +103,9 @@ class _Source:
     def next_break_after(self, t: int) -> int:
         if self.kind == "lti_d":
             dt = self.lti.dt_ns  # type: ignore[union-attr]
+            return (t // dt + 1) * dt
+        if self.kind == "state":
+            dt = self.dt_ns  # type: ignore[attr-defined]
             return (t // dt + 1) * dt
         if self.kind != "piecewise":
             return NEVER
@@ -131,6 +134,12 @@ class _Source:
         elif self.kind == "sine":
             self.value = float(self.signal(t))
 
+    def start(self) -> None:
+        """At the plant's start: a model that draws its first value (:class:`~netsim.plant.noise.HeldNoise`)
+        draws it now, so the first sample is random too."""
+        if self.kind == "lti_d" and self.L is not None and getattr(self.lti, "draw_initial", False):
+            self.step_discrete()
+
     def step_discrete(self) -> None:
         """Advance a discrete disturbance model by one period (at its break instant)."""
         lti = self.lti
@@ -139,6 +148,28 @@ class _Source:
             assert self.rng is not None
             xd = xd + lti.B @ (self.L @ self.rng.standard_normal(self.L.shape[1]))  # type: ignore[union-attr]
         self.xd = xd
+
+
+class _StateNoise(_Source):
+    """Random-walk increments on plant states: at each multiple of ``dt_ns`` the plant adds ``sd * N(0, I)`` to
+    ``states`` (``sd = sigma sqrt(dt)``, :mod:`netsim.plant.noise`)."""
+
+    __slots__ = ("states", "sd", "dt_ns")
+
+    def __init__(self, states: list[int], sd: np.ndarray, dt_ns: int) -> None:
+        super().__init__(-1, "state")
+        self.states = np.array(states, dtype=int)
+        self.sd = np.asarray(sd, dtype=float)
+        if int(dt_ns) <= 0:
+            raise ConfigError(f"state noise sample must be positive, got {dt_ns}")
+        self.dt_ns = int(dt_ns)
+
+    def jump(self, x: np.ndarray) -> np.ndarray:
+        """``x`` with this instant's increments added (a new array)."""
+        assert self.rng is not None
+        x = np.array(x, dtype=float)
+        x[self.states] += self.sd * self.rng.standard_normal(self.sd.size)
+        return x
 
 
 def _classify(index: int, signal: Any) -> _Source:

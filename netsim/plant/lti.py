@@ -34,6 +34,7 @@ import numpy as np
 from netsim.errors import ConfigError
 from netsim.plant.base import Plant
 from netsim.plant.disturbance import _Source
+from netsim.plant.noise import is_entry_form
 from netsim.plant.shared import NEVER, _vector, as_matrix, matvec, psd_factor
 from netsim.timebase import S
 
@@ -210,7 +211,12 @@ class LTIPlant(_LTIBase):
         return cls(A, B, C, D, **kwargs)
 
     def set_process_noise(self, process_noise: Any) -> None:
-        """Set the intensity ``Qc`` of white process noise (n x n, or a vector for a diagonal) before the run."""
+        """Set the intensity ``Qc`` of white process noise (n x n, or a vector for a diagonal) before the run;
+        entries ``{inputs|states: [...], sigma: ..., sample: ...}`` add held input noise or state increments
+        instead (:meth:`Plant.set_process_noise <netsim.plant.Plant.set_process_noise>`)."""
+        if is_entry_form(process_noise):
+            super().set_process_noise(process_noise)
+            return
         self.Qc = _noise_matrix(process_noise, self.n_states)
         self._build(self._zu[: self.n_states].copy())
 

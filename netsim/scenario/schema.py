@@ -175,9 +175,14 @@ def _is_number(v: Any) -> bool:
 
 
 def _noise(value: Any) -> Any:
-    """Process noise: a number (same intensity on every state), a list (per state) or a matrix."""
+    """Process noise: a number (same intensity on every state), a list (per state) or a matrix; or random
+    disturbances ``{states|inputs: [...], sigma: ..., sample: ...}`` (or a list of them, :mod:`netsim.plant.noise`)."""
     if value is None:
         return None
+    if isinstance(value, dict) or (isinstance(value, (list, tuple)) and value and all(isinstance(v, dict) for v in value)):
+        from netsim.plant.noise import normalized_entries
+
+        return normalized_entries(value)
     if _is_number(value):
         if value < 0:
             raise ValueError(f"noise intensity must be >= 0, got {value}")
@@ -790,12 +795,12 @@ class Scenario(SpecModel):
     metrics: list[MetricSpec] = Field(default_factory=list)
     baseline: BaselineSpec | None = None
     output: OutputSpec = Field(default_factory=OutputSpec)
+    verdict: VerdictSpec | None = None  # how the run is judged stable (netsim.scenario.schema_verdict); None: defaults
 
     _source: str | None = PrivateAttr(default=None)
     _raw: Any = PrivateAttr(default=None)
     _baseline: Any = PrivateAttr(default=None)
 
-    verdict: VerdictSpec | None = None  # how the run is judged stable (netsim.scenario.schema_verdict); None: defaults
     @property
     def source(self) -> str | None:
         """The scenario file this came from (None for a dict)."""
@@ -834,13 +839,13 @@ class Scenario(SpecModel):
                 del node["energy"]
             if node.get("sync", 0) is None:  # the same for the sync objects
                 del node["sync"]
+        if data.get("verdict", 0) is None:  # no verdict: block: resolved (and hashed) as before (issue 26)
+            del data["verdict"]
         for key, default in OutputSpec.TRACE_DEFAULTS.items():  # the same for the trace settings (issue 19)
             if data["output"].get(key) == default:
                 data["output"].pop(key)
         for path, spec in self.plugin_specs():
             params = _params_json(spec)
-        if data.get("verdict", 0) is None:  # no verdict: block: resolved (and hashed) as before (issue 26)
-            del data["verdict"]
             parts = parse_path(path)
             if parts[0] == "networks":
                 params.pop("nodes", None)
