@@ -13,6 +13,12 @@ Validation runs in three layers that all run even when an earlier one finds prob
 checks (:mod:`netsim.scenario.static_build`). A scenario with ``baseline: {overrides: ...}`` has its baseline
 validated the same way, once, while it loads; :meth:`Scenario.baseline_scenario` returns it.
 
+A mapping from Python is made plain first (:mod:`netsim.scenario.python_values`: numpy arrays and scalars as lists
+and numbers, python-control systems as the plant or model forms), so validation, the resolved scenario and the hash
+see what the same scenario written in YAML gives. Overrides (``--set``, ``overrides=``, ``baseline.overrides``)
+are written by :mod:`netsim.scenario.overrides`, which also refuses one that a preset-like field's siblings, given
+in the scenario, would hide.
+
 Top-level keys starting with ``x-`` are ignored, so a file can hold YAML anchors for repeated entries::
 
     x-task: &task {program: sampler, priority: 1, execution: 0.5 ms}
