@@ -180,6 +180,8 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
     from netsim.programs.design_summary import run_warnings as design_warnings  # D's hook (issue 26 s4)
 
     warnings = design_warnings(sim) + _unrecorded(scenario, sim.env.recorder)
+    # a program's own warnings about its setting (e.g. models.unicycle's filter and plant disagreeing)
+    warnings += [w for prog in getattr(sim, "programs", {}).values() for w in getattr(prog, "build_warnings", ())]
     for text in warnings:
         log.warning("%s: %s", scenario.name, text)
     result.meta.update(

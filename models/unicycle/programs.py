@@ -20,6 +20,10 @@ reference, not a pose trajectory in the cart frame.
 ``wheel_drive``
     Event-driven: the newest wheel-speed pair to the two DACs.
 
+The filter's ``side_model`` and the ``unicycle`` plant's ``side`` may differ on purpose (a model-mismatch study:
+the filter built on the printed eq 6, the cart as the text describes it), but not silently: :func:`side_warning`
+is logged and kept in the run's warnings, and ``netsim validate`` reports it (:meth:`UnicycleEkf.scenario_warnings`).
+
 Counters (``control.<node>.<task>.*`` in the run's metrics): ``steps``, ``fused_front``, ``fused_side``,
 ``late`` (fused at an earlier sample than the one being processed), ``stale`` (older than ``history``),
 ``duplicates`` (a second message for a source and sample already fused: ignored), ``prediction_only``
@@ -29,7 +33,7 @@ Counters (``control.<node>.<task>.*`` in the run's metrics): ``steps``, ``fused_
 from __future__ import annotations
 
 import math
-from collections.abc import Generator
+from collections.abc import Generator, Mapping
 from typing import Annotated, Any, Literal
 
 import numpy as np
@@ -42,7 +46,7 @@ from netsim.programs.basic import ProgramContext, _newest
 from netsim.registry import register
 from netsim.units import StrictModel, Time
 
-__all__ = ["IrSensor", "UnicycleEkf", "WheelDrive"]
+__all__ = ["IrSensor", "UnicycleEkf", "WheelDrive", "side_warning"]
 
 Body = Generator[Any, Any, None]
 SOURCES = ("front", "side")
@@ -125,6 +129,22 @@ def _default_phases() -> list[_Phase]:
     return [_Phase(duration=f"{p.duration:g} s", v=p.v, w=p.w, name=p.name) for p in PHASES]
 
 
+def side_warning(plant: Any, side_model: str, where: str = "the unicycle_ekf task") -> str | None:
+    """The warning for a filter whose ``side_model`` differs from the ``unicycle`` plant's ``side`` (None if they
+    agree, or the plant is not the ``unicycle`` model). ``plant`` is the scenario's plant entry (a mapping or the
+    validated spec, with ``model`` and ``params``)."""
+    get = plant.get if isinstance(plant, Mapping) else (lambda k, d=None: getattr(plant, k, d))
+    if get("model") != "unicycle":
+        return None
+    params = get("params") or {}
+    side = params.get("side", "derived") if isinstance(params, Mapping) else getattr(params, "side", "derived")
+    if side == side_model:
+        return None
+    return (f"{where}: the filter's side_model is '{side_model}' but the cart's side sensor is '{side}' "
+            f"(plant.params.side): the filter models the side sensor at the other side of the cart; set both to "
+            f"the same value unless this mismatch is the experiment")
+
+
 @register("program", "unicycle_ekf", "2WD cart: EKF with IR sensors fused at their sample times, cart-frame "
           "tracking law, wheel speeds to the drive")
 class UnicycleEkf:
@@ -179,6 +199,21 @@ class UnicycleEkf:
                        "prediction_only": 0}
         self._wheels = (p.wheel_radius, p.half_wheelbase)
         self._sinks: list[tuple[int, Any, Any]] | None = None  # see _record
+        #: texts the runner logs and keeps in the run's warnings (meta.json)
+        self.build_warnings: list[str] = []
+        plant = getattr(ctx.scenario, "plant", None)
+        text = None if plant is None else side_warning(plant, p.side_model, f"task {ctx.node}.{ctx.task}")
+        if text is not None:
+            self.build_warnings.append(text)
+
+    @staticmethod
+    def scenario_warnings(scenario: Mapping[str, Any], params: Mapping[str, Any]) -> list[tuple[str, str]]:
+        """``netsim validate``'s warnings for this task: ``(key under the task's params, text)``."""
+        plant = scenario.get("plant") if isinstance(scenario, Mapping) else None
+        if not isinstance(plant, Mapping):
+            return []
+        text = side_warning(plant, params.get("side_model", "derived"))
+        return [] if text is None else [("side_model", text)]
 
     # ------------------------------------------------------------------ filter bookkeeping
     def _advance(self) -> None:

@@ -27,6 +27,8 @@ What is checked
 - I/O channel plant ports lie within the plant's inputs/outputs when the plant factory declares them
   (``ports(params) -> (input_names, output_names)``, or attributes ``input_names``/``output_names`` or
   ``n_inputs``/``n_outputs``); plant ``disturbances`` name plant inputs and scenario signals.
+- A program's own ``scenario_warnings(raw_scenario, params) -> [(key, text)]`` (e.g. the 2WD cart filter whose
+  sensor model differs from the plant's), reported as **warnings** at the task's ``params.<key>``.
 - ``record`` entries are names; the runner warns (in ``meta.json``) about names nothing recorded.
 - Metric parameters that name recorded signals (``reference``, ``output``, ``signal``, ``*_signal`` and the
   plurals ``signals``, ``outputs``, ``*_signals``) must be in the ``record:`` list when one is given (the
@@ -365,6 +367,10 @@ class _Checker:
                 self.conventions(name, values, [*at, "params"])
                 if getattr(program, "interference_source", False) is True:
                     self.interference(name, values, [*at, "params"])
+                hook = getattr(program, "scenario_warnings", None)  # a program's own checks of its setting
+                if callable(hook) and model is not None:
+                    for key, text in hook(self.raw, values):
+                        self.warn([*at, "params", key], text)
 
     def pid_period(self, model: Any, at: list[PathPart]) -> None:
         """A PID program in a task without a period needs its own sampling period ``h`` (PID.from_params's rule)."""
