@@ -196,7 +196,8 @@ def _law(law: Any, design: Any) -> tuple[dict[str, Any], Any]:
             Ac, Bc, Cc = Ac[1:, 1:], Bc[1:], Cc[:, 1:]
         return out, ("pid", Ac, Bc, Cc, Dc)
     if isinstance(law, LinearMPC):
-        K = -np.asarray(law._Mall[: law.m, : law.n])  # first move of the unconstrained optimum: u0 = -K x0
+        Mall = getattr(law, "_Mall", None)  # the unconstrained optimum U* = Mall [x0; x_s; u_s]
+        K = law.K if Mall is None else -np.asarray(Mall[: law.m, : law.n])  # its first move: u0 = -K x0
         Ki, Cr = None, None
         out["lqr_K"] = _matrix(law.K)
         out["horizon"] = law.N

@@ -216,3 +216,17 @@ def test_run_records_the_unstable_nominal_loop_in_meta_json_and_logs_it(tmp_path
     d = json.loads((Path(result.out_dir) / "design.json").read_text(encoding="utf-8"))["tasks"]["ctrl.control"]
     assert d["nominal"]["stable"] is False
     assert d["nominal"]["spectral_radius"] == pytest.approx(_bad_radius(), rel=1e-9)
+
+
+def test_pid_law_nominal_loop_is_the_plant_with_the_discrete_pid(tmp_path: Path) -> None:
+    # expected: netsim.analysis.lqg.pid_controller (the PID's state-space form, written for the Jitterbug-style
+    # analysis) closed around the discretised plant y = theta
+    from netsim.analysis.lqg import pid_controller
+
+    pid = {"type": "pid", "K": 0.1, "Ti": 0.5, "Td": 0.02, "N": 10.0}
+    d = _design(_loop({"type": "kalman", "Q": [0.0, 0.01], "R": 1e-6}, pid), tmp_path)
+    Ad, Bd = _zoh(A_C, B_C, H)
+    Ac, Bc, Cc, Dc = pid_controller(0.1, 0.5, 0.02, 10.0, H)
+    loop = np.block([[Ad + Bd @ Dc @ C, Bd @ Cc], [Bc @ C, Ac]])
+    _same_spectrum(d["nominal"]["eigenvalues"], np.linalg.eigvals(loop))
+    assert d["law"]["K"] is None and d["law"]["pid"]["Ti"] == 0.5
