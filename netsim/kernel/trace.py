@@ -60,9 +60,10 @@ class Tracing:
         return out
 
     def _clock(self) -> int:
-        """Now, except right after ``env.run(T)``: the simpy clock then stands at T + 1 ns, the run covered T."""
+        """Now, except once the run has ended at T: then T. After ``env.run(T)`` the simpy clock stands at T + 1 ns;
+        after netsim's own loop (``run_events``) at the last entry it processed, which may be before T."""
         now: int = self._sim.now
-        if self._t_end is not None and now == self._t_end + 1:
+        if self._t_end is not None and now <= self._t_end + 1:
             return self._t_end
         return now
 
