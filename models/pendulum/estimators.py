@@ -183,20 +183,26 @@ class _KalmanParams(StrictModel):
 class KalmanPart:
     """``estimator: {type: pendulum_kalman, disturbance_std, disturbance_hold, sensor_std, scale_Q, scale_R}``.
 
-    ``Qn`` is the white voltage disturbance mapped through the linearised pendulum over one period
-    (:func:`models.pendulum.model.process_noise_cov`), ``Rn = sensor_std^2 I`` (the slides: "hold the system
-    still ... sample variances ... as initial values for Rn"); the gain is the DARE's (the toolbox's
-    :class:`netsim.control.KalmanFilter` with ``steady_state=True``).
+    ``Qn`` is the white voltage disturbance mapped through the pendulum linearised with the scenario's own
+    ``plant.params`` over one period (:func:`models.pendulum.model.process_noise_cov`), ``Rn = sensor_std^2 I``
+    (the slides: "hold the system still ... sample variances ... as initial values for Rn"); the gain is the
+    DARE's (the toolbox's :class:`netsim.control.KalmanFilter` with ``steady_state=True``). The plant must be
+    the ``furuta_pendulum`` (its parameters reach the design as ``design.nonlinear.params``).
     """
 
     Params = _KalmanParams
 
     @classmethod
     def build(cls, params: _KalmanParams, design: Any) -> Any:
-        from models.pendulum.model import SENSOR_STD, discretise, process_noise_cov
+        from models.pendulum.model import SENSOR_STD, PendulumParams, discretise, process_noise_cov
         from netsim.control import KalmanFilter
+        from netsim.errors import ConfigError
 
-        lin = discretise(h=design.period_s)
+        plant_params = getattr(getattr(design, "nonlinear", None), "params", None)
+        if not isinstance(plant_params, PendulumParams):
+            raise ConfigError("pendulum_kalman: the scenario's plant is not the furuta_pendulum, whose parameters "
+                              "give Qn; use plant 'furuta_pendulum', or the toolbox's 'kalman' estimator with your Q")
+        lin = discretise(plant_params, h=design.period_s)
         Qn = process_noise_cov(lin, params.disturbance_std, params.disturbance_hold) * params.scale_Q
         std = SENSOR_STD if params.sensor_std is None else params.sensor_std
         Rn = np.eye(design.C.shape[0]) * std**2 * params.scale_R

@@ -157,9 +157,12 @@ def test_kalman_gain_is_the_dare_solution_and_the_limit_of_the_recursion(d):
         M = lin.Ad @ P @ lin.Ad.T + d.Qn
     assert np.allclose(K, d.K_kal, rtol=1e-5, atol=1e-9)
     # and the registered pendulum_kalman builds that gain from the study's Qn and Rn
-    from netsim.control.parts import Design
+    from netsim.control.parts import ContinuousModel, Design
 
-    built = est.KalmanPart.build(est._KalmanParams(), Design(A=lin.Ad, B=lin.Bd, C=lin.C, period_s=lin.h))
+    plant = ContinuousModel(f=pm.dynamics, h=pm.output, params=pm.PendulumParams(), n_states=4, n_inputs=1,
+                            rows=(0, 1))  # the default plant's parameters, as the scenario hands them to the design
+    built = est.KalmanPart.build(est._KalmanParams(), Design(A=lin.Ad, B=lin.Bd, C=lin.C, period_s=lin.h,
+                                                             nonlinear=plant))
     assert np.allclose(built.K_ss, d.K_kal, rtol=1e-6, atol=1e-12)
 
 
