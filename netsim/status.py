@@ -5,7 +5,11 @@ A run's status (``meta.json``, the ``status`` column of every summary) is one of
 ``ok``
     the run finished normally;
 ``diverged at t = ... s``
-    the loop went unstable and the run stopped there (its tables up to that instant are written);
+    the loop went unstable and the run stopped there (its tables up to that instant are written), or a signal
+    became non-finite or ran away past ``diverged_above`` times the loop's scale;
+``unstable at t = ... s``
+    the run went to its end, but the loop left its operating region (:mod:`netsim.verdict`): an error envelope
+    that kept growing, a signal past its ``verdict.bound``, or a metric's own verdict (a fallen pendulum);
 ``error``
     the run could not be built or raised (the error text is recorded);
 ``interrupted at t = ... s``
@@ -13,8 +17,8 @@ A run's status (``meta.json``, the ``status`` column of every summary) is one of
 ``pending``
     a sweep run not executed yet (Ctrl-C).
 
-Only ``ok`` is a success. A diverged run is a result worth keeping (it is a point of a surface, a row of a batch),
-but it is not a success: ``netsim run``, ``netsim batch`` and ``netsim sweep`` all exit with
+Only ``ok`` is a success. A diverged or unstable run is a result worth keeping (it is a point of a surface, a row
+of a batch), but it is not a success: ``netsim run``, ``netsim batch`` and ``netsim sweep`` all exit with
 :data:`EXIT_FAILED` when any run is not ``ok`` (``pending`` runs of an interrupted sweep exit with
 :data:`EXIT_INTERRUPTED`).
 """
@@ -29,6 +33,7 @@ __all__ = [
     "ERROR",
     "PENDING",
     "DIVERGED",
+    "UNSTABLE",
     "INTERRUPTED",
     "EXIT_OK",
     "EXIT_FAILED",
@@ -44,6 +49,7 @@ OK = "ok"
 ERROR = "error"
 PENDING = "pending"
 DIVERGED = "diverged"
+UNSTABLE = "unstable"
 INTERRUPTED = "interrupted"
 
 EXIT_OK = 0
@@ -53,12 +59,15 @@ EXIT_INTERRUPTED = 130
 
 
 def kind_of(status: object) -> str:
-    """``ok``, ``diverged``, ``interrupted``, ``pending`` or ``error`` (anything else, including an empty status)."""
+    """``ok``, ``diverged``, ``unstable``, ``interrupted``, ``pending`` or ``error`` (anything else, including an
+    empty status)."""
     text = str(status).strip() if status is not None else ""
     if text == OK:
         return OK
     if text.startswith(DIVERGED):
         return DIVERGED
+    if text.startswith(UNSTABLE):
+        return UNSTABLE
     if text.startswith(INTERRUPTED):
         return INTERRUPTED
     if text == PENDING:
@@ -84,15 +93,16 @@ class StatusCounts:
         counts = Counter(kind_of(s) for s in statuses)
         self.ok = counts[OK]
         self.diverged = counts[DIVERGED]
+        self.unstable = counts[UNSTABLE]
         self.error = counts[ERROR]
         self.pending = counts[PENDING]
         self.interrupted = counts[INTERRUPTED]
-        self.total = self.ok + self.diverged + self.error + self.pending + self.interrupted
+        self.total = self.ok + self.diverged + self.unstable + self.error + self.pending + self.interrupted
 
     @property
     def not_ok(self) -> int:
-        """Runs that ran and did not finish normally (diverged, error or interrupted)."""
-        return self.diverged + self.error + self.interrupted
+        """Runs that ran and did not finish normally (diverged, unstable, error or interrupted)."""
+        return self.diverged + self.unstable + self.error + self.interrupted
 
     def exit_code(self, interrupted: bool = False) -> int:
         """:data:`EXIT_INTERRUPTED` if interrupted, else :data:`EXIT_FAILED` if any run is not ok, else 0."""
@@ -104,7 +114,7 @@ class StatusCounts:
         """E.g. ``1 of 2 scenarios ok, 1 diverged``."""
         plural = what if self.total == 1 else f"{what}s"
         text = f"{self.ok} of {self.total} {plural} ok"
-        for n, word in ((self.diverged, "diverged"), (self.error, "failed"), (self.interrupted, "interrupted"),
+        for n, word in ((self.diverged, "diverged"), (self.unstable, "unstable"), (self.error, "failed"), (self.interrupted, "interrupted"),
                         (self.pending, "not run")):
             if n:
                 text += f", {n} {word}"

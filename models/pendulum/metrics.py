@@ -21,10 +21,15 @@ samples ``t_k = k period``:
     how long the estimator takes to catch up: the time after which both angle estimates ``x_hat[0]``,
     ``x_hat[2]`` (the estimate made from each sample, the last one recorded before the next sample) stay within
     ``est_tol`` of the true angles (0 when they always are; the run's length when they never settle).
+
+The metric also judges the run (:mod:`netsim.verdict`, ``pendulum_metric.verdict``): a pendulum whose ``|alpha|``
+reaches :data:`FALLEN_ALPHA` (pi/2, below the horizontal) has fallen, and the run's status is ``unstable at t = ...
+s`` from the first such sample, bounded as its states may be (``verdict.metrics: false`` turns it off).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -34,7 +39,7 @@ from pydantic import Field
 from netsim.registry import register
 from netsim.units import StrictModel
 
-__all__ = ["PendulumMetricParams", "pendulum_measures", "pendulum_metric"]
+__all__ = ["PendulumMetricParams", "pendulum_measures", "pendulum_metric", "fallen_at", "FALLEN_ALPHA"]
 
 
 class PendulumMetricParams(StrictModel):
@@ -124,4 +129,34 @@ def pendulum_metric(result: Any, params: Any, baseline: Any = None) -> dict[str,
     return {f"pendulum.{k}": v for k, v in pendulum_measures(result.signals, ok, p).items()}
 
 
+#: ``|alpha|`` (rad) at which the pendulum has fallen: below the horizontal, gravity pulls it away from upright
+#: and no balancing law about the upright position brings it back.
+FALLEN_ALPHA = math.pi / 2
+
+
+def fallen_at(signals: pd.DataFrame, bound: float = FALLEN_ALPHA) -> tuple[float, float] | None:
+    """``(t_s, alpha)`` of the first recorded sample with ``|alpha| >= bound``, or None (no ``alpha`` column, or the
+    pendulum stayed up)."""
+    if "alpha" not in signals.columns:
+        return None
+    alpha = signals["alpha"].to_numpy(float)
+    t = signals["time_s"].to_numpy(float) if "time_s" in signals.columns else signals.index.to_numpy(float)
+    down = np.abs(alpha) >= bound  # NaN (not yet sampled) compares False
+    if not down.any():
+        return None
+    k = int(np.argmax(down))
+    return float(t[k]), float(alpha[k])
+
+
+def pendulum_verdict(result: Any, params: Any) -> tuple[float, str] | None:
+    """The metric's verdict on a run: ``(t_s, text)`` when the pendulum fell (``|alpha| >= pi/2``), else None."""
+    hit = fallen_at(result.signals)
+    if hit is None:
+        return None
+    t, alpha = hit
+    return t, (f"the pendulum fell: |alpha| reached {abs(alpha):.3g} rad at t = {t:.9g} s, past pi/2 (below the "
+               f"horizontal; the pendulum metric's verdict, verdict.metrics: false turns it off)")
+
+
 pendulum_metric.Params = PendulumMetricParams  # type: ignore[attr-defined]
+pendulum_metric.verdict = pendulum_verdict  # type: ignore[attr-defined]

@@ -43,6 +43,17 @@ def metrics_point_fn(raw: Mapping[str, Any], out: Path, seed: int) -> dict[str, 
     return run_point(raw, out, seed, tables=False)
 
 
+def _run_status(folder: Path) -> tuple[str, str]:
+    """The run's own status and error from its ``meta.json`` (``diverged at ...``, ``unstable at ...``); ``ok``
+    when the point function wrote none."""
+    try:
+        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return "ok", ""
+    status = str(meta.get("status") or "ok")
+    return status, ("" if status == "ok" else str(meta.get("error") or ""))
+
+
 def _write_json(path: Path, data: Any) -> None:
     from netsim.safe_write import write_atomic  # written after the run folder: a point without it is unfinished
 
@@ -144,6 +155,7 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
                 metrics = point_fn(task["raw"], folder, task["seed"])
                 record["metrics"] = {str(k): float(v) for k, v in dict(metrics).items()}
                 record["scenario_hash"] = _run_hash(folder, task["raw"], task["seed"])
+                record["status"], record["error"] = _run_status(folder)  # diverged, unstable (issue 26)
             except Exception as exc:  # noqa: BLE001 - a failing point is a result of the sweep
                 record["status"] = "error"
                 record["error"] = f"{type(exc).__name__}: {exc}".strip()

@@ -185,8 +185,11 @@ def _prepare_out(out: Path, sweep: Sweep, overwrite: bool) -> None:
 
 def _finished(point: Point, folder: Path, raw: Mapping[str, Any]) -> dict[str, Any] | None:
     """The point's record if it finished ok with the same seed and scenario hash as now."""
-    rec = read_record(folder)
-    if not rec or rec.get("status") != "ok" or rec.get("seed") != point.seed or rec.get("index") != point.index:
+    from netsim.status import DIVERGED, OK, UNSTABLE, kind_of
+
+    rec = read_record(folder)  # a diverged or unstable run is a finished result (run again, it is the same)
+    if not rec or kind_of(rec.get("status")) not in (OK, DIVERGED, UNSTABLE) or rec.get("seed") != point.seed \
+            or rec.get("index") != point.index:
         return None
     try:
         now = point_hash(raw, point.seed)
