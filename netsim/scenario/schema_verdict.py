@@ -7,7 +7,7 @@ one place::
       growth: true          # the growth check of every metric's error (reference - output) and of `signals`
       window: 50 ms         # window of the error envelope (default: the run's duration / 20)
       windows: 4            # consecutive windows whose envelope must each grow ...
-      growth_ratio: 1.25    # ... by at least this factor over the window before
+      growth_ratio: 1.15    # ... by at least this factor over the window before
       signals: [y]          # also check these signals about 0 (a regulator without a control_error metric)
       bound: {alpha: 1.0}   # |alpha| past 1.0: out of its operating region at once
       metrics: true         # a metric's own verdict (the pendulum metric: the pendulum fell)
@@ -31,7 +31,7 @@ __all__ = ["VerdictSpec", "VerdictSettings", "DEFAULT_WINDOWS", "DEFAULT_GROWTH_
 #: Consecutive growing windows that make a loop unstable (``verdict.windows``).
 DEFAULT_WINDOWS = 4
 #: Growth of the envelope from one window to the next (``verdict.growth_ratio``).
-DEFAULT_GROWTH_RATIO = 1.25
+DEFAULT_GROWTH_RATIO = 1.15
 #: The default window is the run's duration divided by this.
 WINDOWS_PER_RUN = 20
 
