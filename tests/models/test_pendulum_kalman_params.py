@@ -79,3 +79,13 @@ def test_another_plant_is_refused_with_a_message():
     Ad = np.eye(4)
     with pytest.raises(ConfigError, match="furuta_pendulum"):
         KalmanPart.build(_KalmanParams(), Design(A=Ad, B=np.ones((4, 1)), C=np.eye(4)[[0, 2]], period_s=H))
+
+
+def test_validate_refuses_it_on_another_plant_at_the_estimator():
+    from netsim.scenario.loader import check_scenario
+
+    servo = SCENARIO.parent / "dc_servo_lqr_kalman.yaml"
+    problems = check_scenario(servo, {"nodes.controller.tasks[0].params.estimator": {"type": "pendulum_kalman"}})
+    errors = [p for p in problems if p.severity == "error"]
+    assert [p.path for p in errors] == ["nodes.controller.tasks[0].params.estimator"]
+    assert "furuta_pendulum" in errors[0].message
