@@ -312,6 +312,12 @@ class KalmanFilter:
             self.duplicates += 1
             return False
         recs[0].ys.append((sel, y))
+        self._replay(recs)
+        self.fused += 1
+        return True
+
+    def _replay(self, recs: list[_Sample]) -> None:
+        """Re-filter from the stored prior of ``recs[0]`` to the current sample (stored inputs and measurements)."""
         x, P = recs[0].x_prior, recs[0].P_prior
         for i, rec in enumerate(recs):
             if i > 0:
@@ -320,8 +326,51 @@ class KalmanFilter:
             for rr, yy in rec.ys:
                 x, P = self._fuse(x, P, yy, rr)
         self.x, self.P = x, P
-        self.fused += 1
-        return True
+
+    def revise_inputs(self, inputs: dict[int, Any]) -> int:
+        """Replace the inputs of past samples (``{k: u}``) and re-filter to the current sample.
+
+        The input of sample ``k`` is the one its prediction to ``k + 1`` used. This is how an input learned late
+        (the actuator's report of what it applied, :class:`~netsim.control.interface.AppliedInputTimeline`)
+        reaches the estimate: the stored priors from the earliest revised sample on are recomputed, with the
+        measurements already fused there. Samples older than ``history`` are no longer stored and are skipped.
+
+        Returns
+        -------
+        int
+            How many samples' inputs were replaced (an equal input is not counted).
+        """
+        recs = list(self._hist)
+        first = None
+        changed = 0
+        for i, rec in enumerate(recs[:-1]):  # the current sample has not been predicted yet
+            if rec.k in inputs:
+                u = self._as_u(inputs[rec.k])
+                if rec.u is None or not np.array_equal(rec.u, u):
+                    rec.u = u
+                    changed += 1
+                    first = i if first is None else first
+        if first is not None:
+            self._replay(recs[first:])
+        return changed
+
+    def start_from(self, y: Any, k: int | None = None, rows: Any = None) -> None:
+        """Start the estimate from a measurement of sample ``k`` (default: the current sample): the prior there
+        becomes ``x0 + pinv(C_rows) (y - C_rows x0)`` (:func:`~netsim.control.interface.first_measurement_estimate`)
+        and the filter is brought forward to the current sample with the stored inputs. The covariance stays
+        ``P0``. Call it before :meth:`correct` fuses the same measurement (whose innovation is then zero)."""
+        sel = self._rows(rows) if rows is not None else None
+        back = 0 if k is None else self.k - int(k)
+        if back < 0 or back >= len(self._hist):
+            return
+        recs = list(self._hist)[-1 - back:]
+        recs[0].x_prior = self._start_estimate(recs[0].x_prior, np.asarray(y, dtype=float).reshape(-1), sel)
+        self._replay(recs)
+
+    def _start_estimate(self, x_prior: np.ndarray, y: np.ndarray, sel: tuple[int, ...] | None) -> np.ndarray:
+        from netsim.control.interface import first_measurement_estimate
+
+        return first_measurement_estimate(self.C if sel is None else self.C[list(sel)], y, x_prior)
 
     def _rows(self, rows: Any) -> tuple[int, ...] | None:
         """``rows`` checked: ``None`` when it means every row, else a tuple of distinct row indices."""

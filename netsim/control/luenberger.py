@@ -156,6 +156,13 @@ class LuenbergerObserver:
             return self.A - self.L @ self.C
         return (np.eye(self.n) - self.L @ self.C) @ self.A
 
+    def start_from(self, y: Any) -> None:
+        """Start the estimate from the measurement of the current sample: ``x_hat <- x_hat + pinv(C) (y - C x_hat)``
+        (:func:`~netsim.control.interface.first_measurement_estimate`); call it before :meth:`correct`."""
+        from netsim.control.interface import first_measurement_estimate
+
+        self.x = first_measurement_estimate(self.C, y, self.x)
+
     def correct(self, y: Any) -> bool:
         """Use the measurement of the current sample; ``False`` if one was already used at this sample."""
         if self._y is not None:

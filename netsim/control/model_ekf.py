@@ -164,3 +164,13 @@ class ModelEKF(KalmanFilter):
         x_next = self._checked_call(lambda: self._phi(x, u), (self.n,), "f", SimulationError, where)
         F = numerical_jacobian(lambda z: self._phi(z, u), x, self.n)
         return x_next, F @ P @ F.T + self.Q
+
+    def _start_estimate(self, x_prior: np.ndarray, y: np.ndarray, sel: tuple[int, ...] | None) -> np.ndarray:
+        """One Gauss-Newton step from the prior towards ``h(x) = y``: ``x0 + pinv(H) (y - h(x0))``, ``H`` the
+        Jacobian of the measured rows at the prior (the linear rule of
+        :func:`~netsim.control.interface.first_measurement_estimate` with ``h`` linearised)."""
+        yhat = self._checked_call(lambda: self._measure(x_prior), (self.p,), "h", SimulationError, "at x0")
+        H = numerical_jacobian(self._measure, x_prior, self.p)
+        if sel is not None:
+            yhat, H = yhat[list(sel)], H[list(sel)]
+        return x_prior + np.linalg.pinv(H) @ (y - yhat)

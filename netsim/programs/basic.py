@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Annotated, Any, Callable, Generator
 
-from pydantic import Field, ValidationInfo, field_validator, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_serializer, model_validator
 
 from netsim.control.pid import PID, PIDParams
 from netsim.registry import register
@@ -298,10 +298,30 @@ class Controller:
 class Actuator:
     """Event-driven actuator: receive, execute, write the DAC."""
 
+    class Report(StrictModel):
+        """Where the actuator reports each input it applies (a ``{value, t_ns}`` message, ``t_ns`` the instant it
+        wrote the DAC), for a ``state_feedback`` estimator's ``applied_input``."""
+
+        network: str = Field(description="the network the report is sent on (the actuator's node must be on it)")
+        to: str = Field(description="the node the report goes to (the controller)")
+        tag: str = Field("applied", description="tag of the report message")
+        bits: int = Field(64, ge=1, le=10**9, description="size of the report message in bits")
+        priority: int = Field(0, description="priority of the report message on the network (medium-specific)")
+
     class Params(StrictModel):
-        network: str
-        channel: str
-        record_as: str | None = None
+        network: str = Field(description="the network the control messages arrive on (the newest one is applied)")
+        channel: str = Field(description="the DAC channel of the scenario's io the value is written to")
+        record_as: str | None = Field(None, description="record the applied value under this name, at the "
+                                                        "instant it is written")
+        report: Actuator.Report | None = Field(None, description="send back {value, t_ns} of each applied input "
+                                                                 "(default: none)")
+
+        @model_serializer(mode="wrap")
+        def _without_quiet_defaults(self, handler: Any) -> Any:
+            data = handler(self)  # 'report' (issue 26) is left out while unset: resolved scenarios stay as they were
+            if isinstance(data, dict) and data.get("report", 0) is None:
+                del data["report"]
+            return data
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
@@ -317,6 +337,10 @@ class Actuator:
         yield job.analog_out(self.p.channel, u)
         if self.p.record_as:
             self.ctx.record(self.p.record_as, u, job.now)
+        rep = self.p.report
+        if rep is not None:
+            yield job.send(rep.network, rep.to, {"value": u, "t_ns": int(job.now)}, rep.bits, priority=rep.priority,
+                           tag=rep.tag)
 
 
 @register("program", "interference", "dummy frames of `bits` on `network`: per job with probability, or at a rate")
