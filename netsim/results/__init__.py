@@ -22,10 +22,12 @@ A :class:`RunResult` holds
     seed, scenario name and hash, package versions, wall time, status (``ok``, ``error``,
     ``diverged at t = ... s``) and error text.
 ``schedule``
-    the kernels' schedule traces ``node, task, state, start_s, end_s`` (for Gantt charts; not written).
+    the kernels' schedule traces ``node, task, state, start_s, end_s`` (for Gantt charts), written as
+    ``schedule.csv`` (times in integer ns: ``node,task,state,start_ns,end_ns``) and read back by
+    :meth:`RunResult.read`; not kept with ``output.schedule: off`` (no file, an empty table).
 
 Run folder layout (see :meth:`RunResult.to_csv`): ``scenario.yaml``, ``signals.csv``, ``jobs.csv``,
-``messages.csv``, ``metrics.csv`` (``metric,value``), ``meta.json``. CSVs use a fixed float format and a
+``messages.csv``, ``schedule.csv``, ``metrics.csv`` (``metric,value``), ``meta.json``. CSVs use a fixed float format and a
 stable column order, so the same scenario and seed give byte-identical files. A scenario's ``output: {jobs:
 summary}`` (``messages: summary``) writes ``jobs_summary.csv`` (``messages_summary.csv``) instead of the rows;
 ``off`` writes neither (:mod:`netsim.results.traces`).
@@ -41,7 +43,17 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from netsim.results.files import FLOAT_FORMAT, JOB_TYPES, MESSAGE_TYPES, TIME_COLUMNS, read_table, write_csv
+from netsim.results.files import (
+    FLOAT_FORMAT,
+    JOB_TYPES,
+    MESSAGE_TYPES,
+    TIME_COLUMNS,
+    read_schedule,
+    read_table,
+    schedule_csv_chunks,
+    schedule_intervals,
+    write_csv,
+)
 from netsim.results.summary import key_metrics
 from netsim.results.tables import (
     JOB_COLUMNS,
@@ -89,7 +101,8 @@ def _json_default(obj: Any) -> Any:
 
 
 #: The files :meth:`RunResult.to_csv` writes besides ``metrics.csv`` and ``meta.json``.
-_TABLE_FILES = ("scenario.yaml", "signals.csv", "jobs.csv", "messages.csv", "jobs_summary.csv", "messages_summary.csv")
+_TABLE_FILES = ("scenario.yaml", "signals.csv", "jobs.csv", "messages.csv", "jobs_summary.csv", "messages_summary.csv",
+                "schedule.csv")
 
 
 class Lazy:
@@ -121,7 +134,7 @@ class RunResult:
         """Pickled and copied with every table built (a :class:`Lazy` holds a closure, which does not pickle); the
         records and samples the tables were built from are left behind."""
         state = {name: getattr(self, name) for name in object.__getattribute__(self, "__dict__")}
-        state.update(job_rows=None, message_rows=None, signal_source=None)
+        state.update(job_rows=None, message_rows=None, signal_source=None, schedule_source=None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -150,6 +163,9 @@ class RunResult:
     #: The recorded samples (:class:`netsim.results.signals.SignalSource`): ``signals.csv`` and the metrics read
     #: the table from them window by window, ``signals`` is built from them when read.
     signal_source: Any = None
+    #: The kernels' schedule traces ``[(node, [(task, state, t0_ns, t1_ns), ...]), ...]`` (this run's): ``schedule.csv``
+    #: is written from them, ``schedule`` is built from them when read.
+    schedule_source: Any = None
 
     def signal_chunks(self, names: list[str]) -> Any:
         """The signals table's rows in windows, ``(t_ns, [column of each name, ...])`` per window
@@ -252,6 +268,14 @@ class RunResult:
                     write_csv(getattr(self, name), out / f"{name}.csv")
             if summary is not None:
                 write_csv(summary, out / f"{name}_summary.csv")
+        sched = out / "schedule.csv"
+        if self.traces.get("schedule", "on") == "on":
+            source = object.__getattribute__(self, "schedule_source")
+            if source is None or type(object.__getattribute__(self, "schedule")) is not Lazy:
+                source = schedule_intervals(self.schedule)
+            write_atomic(sched, schedule_csv_chunks(source))
+        else:
+            sched.unlink(missing_ok=True)  # a folder written before: its trace is not this run's
 
     def plot(self, save: str | Path | None = None, *, window: Any = None) -> Any:
         """The responses figure (:func:`netsim.plotting.responses_figure`): a matplotlib ``Figure``.
@@ -274,10 +298,13 @@ class RunResult:
 
     def plot_schedule(self, window: Any = None) -> Any:
         """Gantt chart of the kernels' schedules over ``window`` (``(t0, t1)`` or a length in seconds; default:
-        the whole run when it is short): a matplotlib ``Figure``."""
+        the whole run when it is short): a matplotlib ``Figure``. A run made with ``output.schedule: off`` kept no
+        trace: the chart then says so in its title."""
         from netsim.plotting import schedule_figure
 
-        return schedule_figure(self.schedule, self.jobs, window=window, end_s=float(self.meta.get("t_end_s") or 0))
+        title = "schedule: not kept (output.schedule: off)" if self.traces.get("schedule") == "off" else ""
+        return schedule_figure(self.schedule, self.jobs, window=window, end_s=float(self.meta.get("t_end_s") or 0),
+                               title=title)
 
     def plot_network(self, window: Any = None) -> Any:
         """Network timeline (transmissions, delays, drops) over ``window``: a matplotlib ``Figure``."""
@@ -353,5 +380,10 @@ class RunResult:
         for name in ("jobs", "messages"):
             if not (folder / f"{name}.csv").exists():
                 traces[name] = "summary" if summaries[name] is not None else "off"
-        return cls(signals, jobs, messages, metrics, meta, scenario, out_dir=folder, traces=traces,
+        if (folder / "schedule.csv").exists():
+            schedule = read_schedule(folder / "schedule.csv")
+        else:  # output.schedule: off, or a folder written before schedule.csv existed
+            schedule = pd.DataFrame(columns=SCHEDULE_COLUMNS)
+            traces["schedule"] = "off"
+        return cls(signals, jobs, messages, metrics, meta, scenario, schedule=schedule, out_dir=folder, traces=traces,
                    job_summary=summaries["jobs"], message_summary=summaries["messages"])

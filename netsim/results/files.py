@@ -8,7 +8,7 @@ messages file back with the column types the run had.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterable, Iterator
 
 import numpy as np
 import pandas as pd
@@ -173,3 +173,51 @@ def read_table(path: Path, types: dict[str, str]) -> pd.DataFrame:
     present = {c: t for c, t in types.items() if c in header}
     empty_is_na = {c: [""] for c in header if present.get(c) != "str"}
     return pd.read_csv(path, dtype=present, keep_default_na=False, na_values=empty_is_na)
+
+
+#: Header of ``schedule.csv``: the kernels' schedule trace, one row per interval, times in integer nanoseconds.
+SCHEDULE_HEADER = "node,task,state,start_ns,end_ns"
+
+
+def schedule_csv_chunks(kernels: Iterable[tuple[str, Iterable[Any]]], chunk_rows: int = 20_000) -> Iterator[str]:
+    """``schedule.csv`` as text chunks from each kernel's trace ``(task, state, t0_ns, t1_ns)``: the node, then the
+    interval, times as integers (exact, compact; the table's ``start_s``/``end_s`` are these over 1e9)."""
+    import csv
+    import io
+
+    yield SCHEDULE_HEADER + "\n"
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    n = 0
+    for node, intervals in kernels:
+        for iv in intervals:
+            task, state, t0, t1 = iv[:4]
+            writer.writerow((node, task, state, int(t0), int(t1)))
+            n += 1
+            if n % chunk_rows == 0:
+                yield buf.getvalue()
+                buf.seek(0)
+                buf.truncate()
+    if buf.tell():
+        yield buf.getvalue()
+
+
+def schedule_intervals(frame: pd.DataFrame) -> list[tuple[str, list[tuple[str, str, int, int]]]]:
+    """The per-node intervals of a schedule table (seconds back to the integer ns they were made from)."""
+    out: dict[str, list[tuple[str, str, int, int]]] = {}
+    for node, task, state, a, b in zip(frame["node"], frame["task"], frame["state"], frame["start_s"], frame["end_s"]):
+        out.setdefault(str(node), []).append((str(task), str(state), round(float(a) * 1e9), round(float(b) * 1e9)))
+    return list(out.items())
+
+
+def read_schedule(path: Path) -> pd.DataFrame:
+    """The schedule table (``node, task, state, start_s, end_s``) from a ``schedule.csv``."""
+    from netsim.results.tables import SCHEDULE_COLUMNS, _ns_column
+
+    frame = pd.read_csv(path, dtype={"node": "str", "task": "str", "state": "str", "start_ns": "int64",
+                                     "end_ns": "int64"}, keep_default_na=False)
+    if frame.empty:
+        return pd.DataFrame(columns=SCHEDULE_COLUMNS)
+    return pd.DataFrame({"node": frame["node"], "task": frame["task"], "state": frame["state"],
+                         "start_s": _ns_column(frame["start_ns"].tolist()), "end_s": _ns_column(frame["end_ns"].tolist())},
+                        columns=SCHEDULE_COLUMNS)
