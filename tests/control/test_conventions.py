@@ -294,10 +294,13 @@ def test_integral_action_integrates_r_minus_cr_x_hat_not_r_minus_y() -> None:
     raw = _scenario({"estimator": {"type": "kalman", "Q": [0, 0.01], "R": 1e-4},
                      "law": {"type": "lqr", "Q": [1, 0], "R": 0.1, "integral": True, "Qi": Qi}},
                     noise=0.01, reference=r)
+    raw["plant"]["record_grid"] = "10 ms"  # the plant's true angle at the sample instants
+    raw["record"].append("theta")
     s = netsim.run(raw).signals
     at = s["u_cmd"].notna().to_numpy()
     u = s["u_cmd"].to_numpy()[at]
     xh = s[["xh[0]", "xh[1]"]].to_numpy()[at]
+    theta = s["theta"].to_numpy()[at]
     assert len(u) == 31  # jobs at 0, 10, ..., 300 ms
     Ad, Bd = _zoh(A_C, B_C, H)
     # design on the model augmented with z[k+1] = z[k] + r - Cr x[k]; u = -[K Ki] [x; z]
@@ -310,6 +313,9 @@ def test_integral_action_integrates_r_minus_cr_x_hat_not_r_minus_y() -> None:
     z = np.cumsum(np.concatenate([[0.0], r - xh[:-1] @ C_SERVO.ravel()]))  # z[k], errors of the estimate
     expected = (Fr * r).ravel() - xh @ K.ravel() - Ki.ravel() * z
     np.testing.assert_allclose(u, expected, rtol=1e-8, atol=1e-9)
+    # the check tells the two conventions apart: integrating the output's error instead would not match
+    z_y = np.cumsum(np.concatenate([[0.0], r - theta[:-1]]))
+    assert np.max(np.abs((Fr * r).ravel() - xh @ K.ravel() - Ki.ravel() * z_y - u)) > 1e-3
 
 
 def _box_qp(Hm: np.ndarray, g: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -430,6 +436,19 @@ def test_a_wrong_output_weight_is_refused_at_its_yaml_path(law: dict, where: str
         load_scenario(_scenario({"law": law}, plant=_servo_plant("tf")))
     problems = [(p.path, p.message) for p in err.value.problems]
     assert any(p.startswith(where) and words in m for p, m in problems), problems
+
+
+def test_qy_from_python_needs_c_and_a_weight() -> None:
+    from netsim.control.lqr import LQR
+    from netsim.errors import ConfigError
+
+    Ad, Bd = _zoh(A_C, B_C, H)
+    law = LQR(Ad, Bd, None, 0.1, Qy=[[4.0]], C=C_SERVO)
+    np.testing.assert_allclose(law.K, _dlqr(Ad, Bd, 4.0 * C_SERVO.T @ C_SERVO, np.array([[0.1]]))[0], rtol=1e-8)
+    with pytest.raises(ConfigError, match="Qy: an output weight needs the output matrix C"):
+        LQR(Ad, Bd, None, 0.1, Qy=1.0)
+    with pytest.raises(ConfigError, match="give a state weight Q, an output weight Qy"):
+        LQR(Ad, Bd, None, 0.1)
 
 
 # ----------------------------------------------------------------------------------------------- fuse_at
