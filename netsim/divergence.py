@@ -10,7 +10,8 @@ suits no scenario in particular). Two checks after the run judge it on its own s
   rest at 0, is not judged).
 
 Either makes the run's status ``diverged at t = ... s`` (the run itself went on to its end: the tables show the
-whole of it).
+whole of it). A loop that leaves its operating region without running away that far (a growing error envelope, a
+fallen pendulum) is judged by :mod:`netsim.verdict`: ``unstable at t = ... s``.
 """
 
 from __future__ import annotations

@@ -3,9 +3,10 @@
 ``netsim batch FILE... | DIR`` calls :func:`run_batch`. Each scenario writes its own run folder
 ``<out>/<file stem>/``; ``<out>/summary.csv`` has one row per scenario (in the order given): ``scenario,
 path, status, error, wall_time_s, run_dir`` and then every metric as a column. A scenario that fails (invalid
-file, build error, exception) does not stop the batch: its row carries the error text. A run that diverges
-keeps its tables and its row (``status: diverged at t = ...``). Both count as not ok, by the same rule as
-``netsim run`` (:mod:`netsim.status`): the returned count of runs that are not ok is then non-zero.
+file, build error, exception) does not stop the batch: its row carries the error text. A run that diverges or
+whose loop is unstable keeps its tables and its row (``status: diverged at t = ...``, ``unstable at t = ...``,
+with the reason in ``error``). All count as not ok, by the same rule as ``netsim run`` (:mod:`netsim.status`):
+the returned count of runs that are not ok is then non-zero.
 
 Default output folder: ``reports/batch/<UTC time stamp>/``.
 """
@@ -107,8 +108,8 @@ def run_batch(
     -------
     (summary, n_not_ok)
         The summary table (one row per scenario, metrics as columns) and the number of rows whose status
-        is not ``ok`` (diverged or error; :func:`netsim.status.count_statuses` of ``summary["status"]``
-        splits them).
+        is not ``ok`` (diverged, unstable or error; :func:`netsim.status.count_statuses` of
+        ``summary["status"]`` splits them).
     """
     files = expand_paths(paths)
     folder = Path(out) if out is not None else (

@@ -4,8 +4,9 @@ Columns: ``index, replicate``, then one column per factor (in the sweep file's o
 (in order of first appearance, scanning rows by index), then ``status, seed, error, folder``. Rows are
 sorted by ``index``. Floats are written with Python's shortest round-trip ``repr`` (exact and stable across
 processes and machines); a metric a run did not produce is an empty cell; non-scalar factor values are
-written as compact JSON. ``error`` is the one-line form of the run's error (:func:`one_line`: one row is one
-line of the file); the full text is in the run's ``point.json``.
+written as compact JSON. ``status`` is the run's own (``ok``, ``diverged at t = ...``, ``unstable at t = ...``,
+``error``, ``pending``: :mod:`netsim.status`); ``error`` is the one-line form of the run's error or of why it is
+not ok (:func:`one_line`: one row is one line of the file); the full text is in the run's ``point.json``.
 """
 
 from __future__ import annotations
