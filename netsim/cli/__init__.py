@@ -4,7 +4,7 @@ Every command catches the errors a user can cause (:class:`~netsim.errors.Netsim
 :class:`~netsim.scenario.ScenarioError`) and prints them without a traceback. Exit codes:
 
 - ``0`` success;
-- ``1`` a run, or any run of a batch or sweep, is not ``ok`` (diverged or error; one rule, :mod:`netsim.status`);
+- ``1`` a run, or any run of a batch or sweep, is not ``ok`` (diverged, unstable or error; one rule, :mod:`netsim.status`);
 - ``2`` the scenario or the command line is invalid (nothing ran);
 - ``validate``: the number of problems found (0 when every file is valid), capped at 255;
 - ``130`` interrupted (Ctrl-C).
