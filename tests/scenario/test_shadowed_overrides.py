@@ -83,7 +83,7 @@ def test_the_cli_refuses_a_hidden_preset_override_with_its_line(tmp_path: Path, 
     code = main(["validate", str(path), "--set", f"{FRICTION}.model=modes6"])
     err = capsys.readouterr()
     assert code != 0
-    line = next(i for i, row in enumerate(text.splitlines(), 1) if "friction:" in row)  # the friction mapping's line
+    line = next(i for i, row in enumerate(text.splitlines(), 1) if row.strip().startswith("friction:"))  # the friction mapping's line
     assert f"{path}:{line}: {FRICTION}.model:" in err.out + err.err
 
 
