@@ -13,12 +13,13 @@ at ``omega(p) = 2 pi v f (1 + gamma p) / lambda0`` rad/s (:meth:`Friction.omega_
 
 ``model`` selects one of three presets; any field given explicitly overrides the preset:
 
-``inband`` (default, follows the paper's description)
+``inband`` (default; tuned to the consequence the caption of the paper's Fig. 1 states)
     ``lambda0 = 3.3 m``, ``gamma = 9``, one mode, ``spread = 0.1``: at 0.8 m/s the level varies at 5.1-6.2
     rad/s at 0.3 m and 14-17 rad/s at 1 m, inside the bandwidth of every loop with wc >= 20. The velocity
     error a friction variation of frequency w leaves in a PI loop on the double integrator is
     ``|S(iw)/(iw)|`` times its amplitude, which for wc = 20 rises from 5 rad/s to its maximum near 14 rad/s
-    (0.7 wc), so the wc = 20 loops track worse in the later half, as in the paper's Fig. 1. (A variation at
+    (0.7 wc), so the wc = 20 loops track worse in the later half, as the caption of the paper's Fig. 1 says.
+    The range was chosen for that purpose: the later-half degradation is built in, not predicted. (A variation at
     10-20 rad/s, e.g. ``lambda0 = 1 m, gamma = 3``, sits on the flat top of that curve and does not degrade
     the later half; one mode rather than several keeps the amplitude the same along the track, so the
     property does not depend on where a beat of several modes happens to fall.)
@@ -65,7 +66,8 @@ class FrictionParams(StrictModel):
     """Parameters of the friction model (accelerations in m/s^2, lengths in m); see the module docs."""
 
     model: Literal["inband", "modes6", "constant"] = Field(
-        "inband", description="preset: inband (paper's description, default) | modes6 (earlier model) | constant")
+        "inband", description="preset: inband (default, tuned to the consequence the paper's Fig. 1 caption "
+        "states) | modes6 (earlier model) | constant")
     coulomb: float = Field(2.0, ge=0.0, description="mean Coulomb friction level F0 in m/s^2")
     variation: float = Field(0.3, ge=0.0, description="relative RMS variation a of the level along the track")
     wavelength: float = Field(3.3, gt=0.0, description="typical spatial wavelength lambda0 at p = 0, m")

@@ -173,8 +173,9 @@ def test_committed_report_quotes_the_numbers_of_its_runs():
     text = (REPORT / "README.md").read_text(encoding="utf-8")
     f2 = pd.read_csv(REPORT / "fig2.csv")
     fq = pd.read_csv(REPORT / "quant.csv")
+    inst = pd.read_csv(REPORT / "instability.csv") if (REPORT / "instability.csv").exists() else None
     # the verdicts recomputed from the run tables are the ones the README and claims.csv quote
-    rows = claims(f2, fq)
+    rows = claims(f2, fq, inst)
     table = _md_table(text, "| claim | verdict")
     assert [r[:3] for r in table] == [[c["claim"], c["verdict"], c["numbers"]] for c in rows]
     csv = pd.read_csv(REPORT / "claims.csv", keep_default_na=False)
