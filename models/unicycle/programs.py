@@ -37,7 +37,7 @@ from collections.abc import Generator, Mapping
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, model_serializer, model_validator
 
 from models.unicycle.design import PHASES, Phase, TrackingLaw, Trajectory
 from models.unicycle.ekf import CartEkf
@@ -177,6 +177,16 @@ class UnicycleEkf:
         priority: int = 1
         tag: str = "u"
         record: bool = True
+        input_delay: int = Field(0, ge=0, le=10_000, description="whole task periods between computing a command "
+                                 "and the cart applying it: the filter predicts period k with the command of "
+                                 "k - input_delay (issue 26 s5; default 0: with the command at once)")
+
+        @model_serializer(mode="wrap")
+        def _quiet_input_delay(self, handler: Any) -> Any:
+            data = handler(self)  # left out at its default: resolved scenarios (golden digests) stay as they were
+            if isinstance(data, dict) and data.get("input_delay") == 0:
+                del data["input_delay"]
+            return data
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx, self.p = ctx, params
@@ -195,6 +205,7 @@ class UnicycleEkf:
         self.hist: dict[int, list[Any]] = {0: [self.ekf.x, self.ekf.P, None, {}]}
         self._oldest = 0
         self.u = (0.0, 0.0)
+        self._line = [(0.0, 0.0)] * params.input_delay  # commands computed but not yet on the cart (input_delay)
         self.counts = {"steps": 0, "fused_front": 0, "fused_side": 0, "late": 0, "stale": 0, "duplicates": 0,
                        "prediction_only": 0}
         self._wheels = (p.wheel_radius, p.half_wheelbase)
@@ -290,7 +301,11 @@ class UnicycleEkf:
         self.counts["steps"] += 1
         v, w = self.law.step(k_now, ekf.x)
         self.u = (v, w)
-        hist[k_now][2] = self.u
+        if self._line:  # input_delay: period k_now is predicted with the command of k_now - input_delay
+            self._line.append(self.u)
+            hist[k_now][2] = self._line.pop(0)
+        else:
+            hist[k_now][2] = self.u
         if self.p.record:
             self._record(k_now)
         self._advance()
