@@ -15,7 +15,7 @@ from typing import Any
 
 from netsim.status import EXIT_INVALID, EXIT_OK
 
-__all__ = ["cmd_design", "format_designs"]
+__all__ = ["cmd_design", "format_designs", "scenario_designs"]
 
 
 def _g(x: Any) -> str:
@@ -105,11 +105,24 @@ def format_designs(name: str, designs: dict[str, dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def scenario_designs(scenario: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
+    """:func:`static_designs` of a valid scenario, its plant and io channels built as ``netsim validate`` builds
+    them (:mod:`netsim.scenario.static_build`); what ``netsim design`` prints."""
+    from netsim.env import SimEnv
+    from netsim.programs.design_summary import static_designs
+    from netsim.scenario.builder import _build_io, _build_plant, _make_signals
+
+    env = SimEnv(seed=scenario.seed, record=None if scenario.record is None else set(scenario.record))
+    plant = _build_plant(scenario, env, _make_signals(scenario))
+    _build_io(scenario, env, plant)
+    return static_designs(scenario, plant, margin=margin)
+
+
 def cmd_design(args: argparse.Namespace) -> int:
     """``netsim design FILE [--set ...] [--json]``."""
     from netsim.cli.commands import _err, _is_sweep, _overrides, _print_problems
     from netsim.errors import ConfigError
-    from netsim.programs.design_summary import design_json, scenario_designs
+    from netsim.programs.design_summary import design_json
     from netsim.scenario import ScenarioError, load_scenario
 
     if _is_sweep(args.file):

@@ -34,7 +34,7 @@ and the law that :func:`~netsim.programs.feedback_design.build_parts` made) and 
 
 Complex numbers are ``[re, im]``; matrices are lists of rows. :func:`run_designs` and :func:`write_design`
 are the runner's side (``design.json`` in the run folder), :func:`static_designs` is what ``netsim design``
-prints, :func:`nominal_warning` / :func:`nominal_problems` the warning for an unstable nominal loop.
+prints (:mod:`netsim.cli.design` builds the plant for it), :func:`nominal_warning` / :func:`nominal_warnings_at` the warning for an unstable nominal loop.
 """
 
 from __future__ import annotations
@@ -54,10 +54,9 @@ __all__ = [
     "LinearController",
     "delay_margin",
     "design_json",
-    "nominal_problems",
+    "nominal_warnings_at",
     "nominal_warning",
     "run_designs",
-    "scenario_designs",
     "static_designs",
     "summarize",
     "write_design",
@@ -394,20 +393,6 @@ def static_designs(scenario: Any, plant: Any, *, margin: bool = True) -> dict[st
     return out
 
 
-def scenario_designs(scenario: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
-    """:func:`static_designs` of a valid scenario, its plant and io channels built as ``netsim validate`` builds
-    them (:mod:`netsim.scenario.static_build`); what ``netsim design`` prints."""
-    if not _state_feedback_tasks(scenario):
-        return {}
-    from netsim.env import SimEnv
-    from netsim.scenario.builder import _build_io, _build_plant, _make_signals
-
-    env = SimEnv(seed=scenario.seed, record=None if scenario.record is None else set(scenario.record))
-    plant = _build_plant(scenario, env, _make_signals(scenario))
-    _build_io(scenario, env, plant)
-    return static_designs(scenario, plant, margin=margin)
-
-
 def run_designs(sim: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a built simulation, read from the programs
     it runs (their estimator and law objects)."""
@@ -474,14 +459,13 @@ def run_warnings(sim: Any) -> list[str]:
     return design_warnings(run_designs(sim, margin=False))
 
 
-def nominal_problems(scenario: Any, plant: Any) -> list[Any]:
-    """The same warnings as validation problems (``netsim validate``), at each task's ``params.law``."""
-    from netsim.scenario.problems import WARNING, Problem
-
+def nominal_warnings_at(scenario: Any, plant: Any) -> list[tuple[str, str]]:
+    """The same warnings for ``netsim validate``: ``(YAML path, message)`` at each task's ``params.law``
+    (:mod:`netsim.scenario.static_build` makes them warning problems)."""
     designs = static_designs(scenario, plant, margin=False)
     out = []
     for key, d in sorted(designs.items()):
         text = nominal_warning(key, d, with_path=False)
         if text is not None:
-            out.append(Problem(f"{d['path']}.params.law", text, severity=WARNING))
+            out.append((f"{d['path']}.params.law", text))
     return out

@@ -27,7 +27,7 @@ import logging
 from typing import Any
 
 from netsim.errors import ConfigError
-from netsim.scenario.problems import Problem
+from netsim.scenario.problems import WARNING, Problem
 
 __all__ = ["build_problems"]
 
@@ -128,9 +128,9 @@ def build_problems(scenario: Any) -> list[Problem]:
             plant = _build_plant(scenario, env, signals)
             _build_io(scenario, env, plant)
             _design_checks(scenario, plant)
-            from netsim.programs.design_summary import nominal_problems  # issue 26 s4: unstable nominal loops
+            from netsim.programs.design_summary import nominal_warnings_at  # issue 26 s4: unstable nominal loops
 
-            warnings = nominal_problems(scenario, plant)
+            warnings = [Problem(at, text, severity=WARNING) for at, text in nominal_warnings_at(scenario, plant)]
         kernels, bindings = wire_kernels(scenario, env, _body)
         if _netsim_networks(scenario):
             networks = build_networks(scenario, env, kernels)
