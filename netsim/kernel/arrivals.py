@@ -18,9 +18,19 @@ Semantics
   one ``min_interarrival`` plus a draw of ``extra_interarrival`` (``0`` without it) after the previous one.
 - **Run-time parameters**: :meth:`Arrivals.set_period`, :meth:`Arrivals.set_priority` and
   :meth:`Arrivals.set_deadline` change a task's description (``task.spec`` is replaced, so
-  ``job.spec`` and the policies see the new values). The next release of a periodic task comes one new
-  period after its last nominal release (at once if that instant has passed); a priority change re-ranks the
-  task's released jobs and re-dispatches; a deadline change applies to jobs released afterwards.
+  ``job.spec`` and the policies see the new values). A priority change re-ranks the task's released jobs and
+  re-dispatches; a deadline change applies to jobs released afterwards. A period change follows the task's
+  ``set_period`` rule (:attr:`~netsim.kernel.task.TaskSpec.set_period`, or the call's ``rule``):
+
+  ``next_release`` (the default; TrueTime 1.5)
+      the release already scheduled moves to one new period after the task's last nominal release (at once
+      if that instant has passed).
+  ``keep_armed`` (TrueTime 2.0's ``ttSetPeriod``)
+      the release already scheduled stays where it is; the new period counts from it.
+
+  Example: period 10 ms, releases at 0 and 10 ms, ``set_period(task, 4 ms)`` at 12 ms. ``next_release``: the
+  next releases are at 14 ms (10 + 4), 18, 22 ms; ``keep_armed``: at 20 ms (already armed), 24, 28 ms. Before
+  the task's first release both keep the first release at its offset.
 """
 
 from __future__ import annotations
@@ -34,7 +44,7 @@ from netsim.errors import BuildError, SimulationError
 from netsim.kernel.events import NORMAL
 from netsim.kernel.monitor import refresh_rank
 from netsim.kernel.states import READY
-from netsim.kernel.task import check_time
+from netsim.kernel.task import SET_PERIOD_RULES, check_time
 
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.job import Job
@@ -135,12 +145,14 @@ class Arrivals:
                     rec.arrival = got
 
     # ================================================================= run-time parameters
-    def set_period(self, task: str, period: int) -> None:
+    def set_period(self, task: str, period: int, rule: str | None = None) -> None:
         """Change the period of periodic task ``task`` (TrueTime's ``ttSetPeriod``).
 
-        The next release comes ``period`` after the task's last nominal release (now, if that has passed);
-        before the first release, the first release stays at the offset. A relative deadline equal to the old
-        period (an implicit deadline) follows the new period; another deadline is kept.
+        ``rule`` (default: the task's ``set_period``, see the module notes): with ``"next_release"`` the next
+        release comes ``period`` after the task's last nominal release (now, if that has passed); with
+        ``"keep_armed"`` the release already scheduled stays and the ones after it are ``period`` apart. Before
+        the first release, the first release stays at the offset. A relative deadline equal to the old period
+        (an implicit deadline) follows the new period; another deadline is kept.
 
         Raises
         ------
@@ -153,9 +165,16 @@ class Arrivals:
             raise SimulationError(f"node '{self.name}': set_period('{task}'): the task is not periodic (only a "
                                   "periodic task's period can change)")
         new = _checked(self.name, task, "period", period)
+        rule = spec.set_period if rule is None else rule
+        if rule not in SET_PERIOD_RULES:
+            raise SimulationError(f"node '{self.name}': set_period('{task}'): rule must be one of "
+                                  f"{', '.join(SET_PERIOD_RULES)}, got {rule!r}")
         old = spec.period
         deadline = new if spec.deadline == old else spec.deadline
         self._replace_spec(t, period=new, deadline=deadline)
+        if rule == "keep_armed":  # the armed release reads the new period when it schedules the next one
+            self._rekey(t)
+            return
         now = self._sim.now
         entry = self._cancel_release(t)
         if entry is not None:

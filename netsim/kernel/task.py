@@ -22,7 +22,7 @@ from typing import Any
 from netsim.errors import BuildError
 from netsim.timebase import format_time
 
-__all__ = ["Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
+__all__ = ["SET_PERIOD_RULES", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
 
 
 def did_you_mean(name: str, known: Iterable[str]) -> str:
@@ -96,6 +96,10 @@ def check_time(node: str, task: str, field: str, value: Any, *, positive: bool =
     return value
 
 
+#: The rules of :attr:`TaskSpec.set_period`: ``next_release`` (TrueTime 1.5) and ``keep_armed`` (TrueTime 2.0).
+SET_PERIOD_RULES = ("next_release", "keep_armed")
+
+
 @dataclass(frozen=True)
 class TaskSpec:
     """The static description of a task (times in ns): what the user asked for, apart from the run-time
@@ -139,6 +143,11 @@ class TaskSpec:
     abort_on_miss
         Kill a job that has not finished at its absolute deadline (after its ``deadline_handler``): its
         record is killed and missed, and the task's next job may start.
+    set_period
+        What a period change at run time (``Kernel.set_period``, TrueTime's ``ttSetPeriod``) does to the
+        release already scheduled: ``"next_release"`` (TrueTime 1.5, the default) moves it to one new period
+        after the last release; ``"keep_armed"`` (TrueTime 2.0) keeps it, and the new period counts from it
+        (:mod:`netsim.kernel.arrivals`).
     """
 
     name: str
@@ -154,6 +163,7 @@ class TaskSpec:
     min_interarrival: int | None = None
     extra_interarrival: Any = None
     abort_on_miss: bool = False
+    set_period: str = "next_release"
 
     @property
     def self_released(self) -> bool:
@@ -197,6 +207,9 @@ class TaskSpec:
             raise task_error(node, name, "abort_on_miss", f"must be true or false, got {self.abort_on_miss!r}")
         if self.abort_on_miss and deadline_ns is None:
             raise task_error(node, name, "abort_on_miss", "needs a deadline (or a period) to abort the job at")
+        if self.set_period not in SET_PERIOD_RULES:
+            raise task_error(node, name, "set_period", f"must be one of {', '.join(SET_PERIOD_RULES)}, got "
+                             f"{self.set_period!r}")
         priority = self.priority
         if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
             raise task_error(node, name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
@@ -210,7 +223,8 @@ class TaskSpec:
         if self.deadline_handler is not None and deadline_ns is None:
             raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
         return TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(self.preemptible),
-                        self.wcet_handler, self.deadline_handler, jitter, mia_ns, extra, self.abort_on_miss)
+                        self.wcet_handler, self.deadline_handler, jitter, mia_ns, extra, self.abort_on_miss,
+                        self.set_period)
 
 
 def _distribution(node: str, task: str, field: str, value: Any) -> Any:

@@ -15,6 +15,9 @@ CPU utilisation follows a set-point, and the controllers follow their new period
     (TrueTime's ``ttSetPeriod``) and records the utilisation it measured over the last window as ``record_as``
     (default ``cpu_u``: the tasks' CPU time over the window's length). Its ``metrics()`` report the mean of that
     measure over the second half of the run (``utilization_late``) and the last scale factor (``scale``).
+    Whether a new period moves the controller's release already scheduled is that task's ``set_period`` rule:
+    ``next_release`` (default, TrueTime 1.5: one new period after its last release) or ``keep_armed``
+    (TrueTime 2.0: the armed release stays), :mod:`netsim.kernel.arrivals`.
 ``adaptive_pid``
     :class:`~netsim.programs.basic.PeriodicController`'s loop (``analog_in``, PID, ``execute``, ``analog_out``)
     whose PID is re-discretised for the task's current period at each job, so a period changed at run time

@@ -93,7 +93,7 @@ from netsim.scenario.paths import format_path, parse_path, plain_copy
 from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema_sync import SyncSpec
 from netsim.scenario.schema_verdict import VerdictSpec
-from netsim.scenario.schema_task import TimeDistribution, kernel_fields, without_unused_arrivals
+from netsim.scenario.schema_task import SetPeriodRule, TimeDistribution, kernel_fields, without_unused_arrivals
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
 from netsim.kernel.task import TaskSpec as KernelTaskSpec
 from netsim.units import Duration, StrictModel, Time
@@ -525,6 +525,7 @@ class TaskSpec(PluginSpec):
     min_interarrival: Duration | None = _KTASK.min_interarrival
     extra_interarrival: TimeDistribution | None = None
     abort_on_miss: bool = _KTASK.abort_on_miss
+    set_period: SetPeriodRule = _KTASK.set_period  # type: ignore[assignment]  # netsim.scenario.schema_task
 
     @model_validator(mode="after")
     def _defaults(self) -> TaskSpec:

@@ -10,6 +10,7 @@ a time (``"1 ms"``: constant) or a mapping with ``dist``, the forms of ``executi
     min_interarrival: 10 ms                                    # arrivals at least 10 ms apart ...
     extra_interarrival: {dist: exponential, mean: 5 ms}        # ... plus an exponential gap of mean 5 ms
     abort_on_miss: true                                        # kill a job still unfinished at its deadline
+    set_period: keep_armed                                     # a period changed at run time: see SetPeriodRule
 
 The kernel reads them as :class:`~netsim.kernel.exectime.ExecTime` models (:func:`kernel_fields`), drawn from
 the task's own random stream ``kernel.<node>.release.<task>``.
@@ -32,6 +33,7 @@ from netsim.units import Duration, StrictModel, Time
 
 __all__ = [
     "TIME_DISTS",
+    "SetPeriodRule",
     "ConstantTime",
     "EmpiricalTime",
     "ExponentialTime",
@@ -45,7 +47,14 @@ __all__ = [
 
 #: The task fields of this module and their values when unused.
 ARRIVAL_DEFAULTS: dict[str, Any] = {"release_jitter": None, "min_interarrival": None, "extra_interarrival": None,
-                                    "abort_on_miss": False}
+                                    "abort_on_miss": False, "set_period": "next_release"}
+
+#: What a period changed at run time (``kernel.set_period``, TrueTime's ``ttSetPeriod``; the feedback scheduler
+#: uses it) does to the release already scheduled. ``next_release`` (default, TrueTime 1.5): it moves to one new
+#: period after the last release (at once if that has passed). ``keep_armed`` (TrueTime 2.0): it stays, and the
+#: new period counts from it. Period 10 ms, releases at 0 and 10 ms, new period 4 ms set at 12 ms: next releases
+#: at 14, 18, 22 ms (next_release) or at 20, 24, 28 ms (keep_armed). :mod:`netsim.kernel.arrivals`.
+SetPeriodRule = Literal["next_release", "keep_armed"]
 
 
 class _Dist(StrictModel):
