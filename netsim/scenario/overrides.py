@@ -32,6 +32,7 @@ from netsim.errors import ConfigError
 from netsim.scenario.paths import PathPart, format_path, get_path, parse_path, set_path
 from netsim.scenario.problems import Problem
 from netsim.scenario.python_values import plain_values
+from netsim.scenario.schema import PluginSpec
 
 __all__ = ["Applied", "apply_overrides", "shadowed_overrides"]
 
@@ -118,7 +119,9 @@ def shadowed_overrides(raw: dict[str, Any], scenario: Any, applied: list[Applied
             continue
         parent, field = item.parts[:-1], item.parts[-1]
         model = _model_at(scenario, parent)
-        if model is None or field not in type(model).model_fields:
+        if isinstance(model, PluginSpec) and field not in type(model).model_fields:
+            model = model._validated  # a parameter written inline (plant: {type: NAME, preset: ...})
+        if not isinstance(model, BaseModel) or field not in type(model).model_fields:
             continue
         try:
             siblings = get_path(raw, parent)
@@ -206,8 +209,6 @@ def _model_at(scenario: Any, parts: tuple[PathPart, ...]) -> BaseModel | None:
 
 
 def _child(node: Any, part: PathPart) -> Any:
-    from netsim.scenario.schema import PluginSpec
-
     if isinstance(node, PluginSpec):
         if part != "params" and isinstance(part, str) and part in type(node).model_fields:
             return getattr(node, part)

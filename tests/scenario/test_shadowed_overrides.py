@@ -157,6 +157,14 @@ def test_any_plugin_preset_hidden_by_its_own_values_is_refused(base: Any) -> Non
     assert "pole: 5.0" in problems[0].message and "plant.params.pole=10.0" in problems[0].message
 
 
+def test_a_preset_written_inline_is_checked_too(base: Any) -> None:
+    raw = base()
+    raw["plant"] = {"type": "zzt_preset_plant", "shape": "slow", "gain": 2.0}
+    problems = check_scenario(raw, {"plant.shape": "fast"})
+    assert [p.path for p in problems] == ["plant.shape"]
+    assert "gain: 2.0" in problems[0].message and "plant.gain=3.0" in problems[0].message
+
+
 def test_any_plugin_preset_spelled_out_follows_the_override(base: Any) -> None:
     raw = _with_plant(base, {"pole": 1.0, "gain": 1.0})  # the slow preset written out, shape left at its default
     params = load_scenario(raw, {"plant.params.shape": "fast"}).plant.validated_params()
