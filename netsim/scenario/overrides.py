@@ -75,7 +75,7 @@ def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any] | None) ->
     for key, value in (overrides or {}).items():
         try:
             parts = parse_path(key)
-            plain, refused = plain_values(value, parts)
+            plain, refused = plain_values(value, parts, raw)
             if refused:
                 problems += refused
                 continue

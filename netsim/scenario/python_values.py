@@ -42,7 +42,7 @@ _SYSTEMS_GO = ("a python-control system is accepted as the plant (plant: sys, pl
                "plant: {model: sys, ...}) or as a state_feedback model (params.model: a discrete system)")
 
 
-def plain_values(data: Any, where: str | Sequence[PathPart] = ()) -> tuple[Any, list[Problem]]:
+def plain_values(data: Any, where: str | Sequence[PathPart] = (), root: Any = None) -> tuple[Any, list[Problem]]:
     """A plain copy of ``data`` (dicts, lists, numbers, text), with numpy values and python-control systems
     turned into the scenario's YAML forms (see the module docstring).
 
@@ -52,6 +52,8 @@ def plain_values(data: Any, where: str | Sequence[PathPart] = ()) -> tuple[Any, 
         A scenario mapping, or a value to be written at ``where`` (an override).
     where
         The YAML path of ``data`` in the scenario (``()``: the whole scenario).
+    root
+        The scenario ``data`` is written into (an override's), where a model's task period is looked up.
 
     Returns
     -------
@@ -62,7 +64,20 @@ def plain_values(data: Any, where: str | Sequence[PathPart] = ()) -> tuple[Any, 
     """
     at = parse_path(where) if isinstance(where, str) and where else list(where or ())
     problems: list[Problem] = []
-    return _walk(data, at, problems, None), problems
+    return _walk(data, at, problems, _task_period(root, at)), problems
+
+
+def _task_period(root: Any, at: list[PathPart]) -> Any:
+    """The ``period`` of the innermost task on the path ``at`` into ``root`` (None when there is none)."""
+    period, node = None, root
+    for part in at:
+        if isinstance(node, dict) and "period" in node and "params" in node:
+            period = node["period"]
+        try:
+            node = node[part]
+        except (KeyError, IndexError, TypeError):
+            break
+    return period
 
 
 def _is_system(value: Any) -> bool:

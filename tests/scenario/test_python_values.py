@@ -212,6 +212,16 @@ def test_a_model_that_is_not_the_discrete_model_at_the_period_is_refused(system:
     assert words in problems[0].message
 
 
+def test_a_model_given_as_an_override_is_checked_against_the_task_period() -> None:
+    path = "nodes.controller.tasks[0].params.model"
+    problems = check_scenario(_base(), {path: control.c2d(control.ss(A_C, B_C, C_C, 0), 0.02)})
+    assert [p.path for p in problems] == [path] and "not the task period (10 ms)" in problems[0].message
+    sysd = _discrete()
+    assert (scenario_hash(load_scenario(_base(), {path: sysd}))
+            == scenario_hash(load_scenario(_base(), {path: {"A": sysd.A.tolist(), "B": sysd.B.tolist(),
+                                                            "C": sysd.C.tolist()}})))
+
+
 def test_a_system_where_numbers_are_wanted_says_where_systems_go() -> None:
     raw = _base()
     _ctl(raw)["law"] = {"type": "state_feedback", "K": _discrete()}
