@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import BeforeValidator, ConfigDict, Field, StringConstraints
+from pydantic import ConfigDict, Field, StringConstraints, model_validator
 
 from netsim.units import Duration, StrictModel
 
@@ -68,6 +68,11 @@ class VerdictSettings(StrictModel):
     action: Literal["fail", "warn"] = Field("fail", description="fail: status 'unstable at t = ... s' (exit 1); "
                                                                 "warn: the status stays ok, a warning says it")
 
+    @model_validator(mode="before")
+    @classmethod
+    def _on_off(cls, value: Any) -> Any:
+        return _switch(value)
+
 
 #: The ``verdict:`` block: a mapping of the fields above, or ``false``/``off`` (every check off).
-VerdictSpec = Annotated[VerdictSettings, BeforeValidator(_switch)]
+VerdictSpec = VerdictSettings
