@@ -222,7 +222,16 @@ class Plant(abc.ABC):
         ``plant.<name>.disturbance.<input>``). A piecewise-constant input: exact propagation stays exact."""
         from netsim.plant.noise import HeldNoise
 
-        self.add_disturbance(input, HeldNoise(sigma, sample_ns))
+        noise = HeldNoise(sigma, sample_ns)
+        index = self.input_index(input)
+        try:
+            self.add_disturbance(index, noise)
+        except (BuildError, ConfigError) as exc:
+            if self._started:
+                raise
+            raise type(exc)(f"plant {self.name} does not take random input noise (its model refuses a sampled "
+                            f"disturbance: {exc}); put the noise on its states instead: {{states: [...], "
+                            "sigma: ..., sample: ...}") from None
 
     def add_state_noise(self, states: Sequence[int | str], sigma: float | Sequence[float], sample_ns: int) -> None:
         """Add random-walk increments to ``states``: at every multiple ``k * sample_ns`` (``k >= 1``) each listed

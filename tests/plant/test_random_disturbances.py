@@ -155,3 +155,24 @@ def test_noise_on_an_unknown_state_is_refused_by_validate_and_run():
     assert any("has no state 'speed'" in p.message and p.path.startswith("plant.process_noise") for p in errors), errors
     with pytest.raises(ConfigError, match="has no state 'speed'"):
         netsim.run(sc)
+
+
+def test_held_input_noise_drives_a_nonlinear_plant_through_its_solver():
+    # x' = u integrated by solve_ivp, u = 0.4 e_k held over 5 ms: x(12 ms) = 0.005 (e_0 + e_1) + 0.002 e_2, times 0.4
+    env = SimEnv(seed=4)
+    plant = NonlinearPlant(lambda t, x, u, p: u, lambda t, x, u, p: x, n_states=1, n_inputs=1, n_outputs=1,
+                           input_names=["u"], name="nl")
+    plant.add_input_noise("u", 0.4, 5 * MS)
+    plant.bind(env)
+    e = 0.4 * _stream(4, "plant.nl.disturbance.u").standard_normal(3)
+    assert plant.state(12 * MS)[0] == pytest.approx(0.005 * (e[0] + e[1]) + 0.002 * e[2], rel=1e-9)
+
+
+@pytest.mark.parametrize(("noise", "words"), [
+    (0.1, "takes process noise as entries"),  # an intensity: only LTI and discrete plants take one
+    ({"inputs": ["omega_L"], "sigma": 0.1, "sample": "10 ms"}, "put the noise on its states instead"),
+])
+def test_a_plant_that_cannot_take_a_noise_form_says_what_to_write(noise, words):
+    sc = {"name": "u", "duration": "20 ms", "plant": {"model": "unicycle", "process_noise": noise}}
+    errors = [p for p in check_scenario(sc) if p.severity == "error"]
+    assert any(words in p.message and p.path == "plant.process_noise" for p in errors), errors
