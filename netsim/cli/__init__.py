@@ -7,7 +7,10 @@ Every command catches the errors a user can cause (:class:`~netsim.errors.Netsim
 - ``1`` a run, or any run of a batch or sweep, is not ``ok`` (diverged, unstable or error; one rule, :mod:`netsim.status`);
 - ``2`` the scenario or the command line is invalid (nothing ran);
 - ``validate``: the number of problems found (0 when every file is valid), capped at 255;
-- ``130`` interrupted (Ctrl-C).
+- ``130`` interrupted (Ctrl-C);
+- ``0`` when the reader of the output stops early (``netsim list | head``): the rest of the output is dropped
+  quietly (no traceback), like output nobody reads; 0 rather than 141 so that ``set -o pipefail`` scripts do not
+  fail on a ``| head``.
 
 Heavy modules (numpy, pandas, control, the simulation engine) are imported inside the commands, so
 ``netsim --help`` is fast. BLAS is pinned to one thread (tiny matrices; parallelism comes from processes).
@@ -75,7 +78,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "allow_plugins", False):
         os.environ[ENV_VAR] = "1"  # this command and the batch/sweep worker processes it starts
     try:
-        return func(args)
+        code = func(args)
+        sys.stdout.flush()  # a closed pipe shows here, inside the try, rather than at interpreter exit
+        return code
+    except BrokenPipeError:
+        _drop_stdout()
+        return EXIT_OK
     except KeyboardInterrupt as exc:
         _err("interrupted")
         _partial_folder(exc)
@@ -109,6 +117,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             import signal
 
             signal.signal(signal.SIGTERM, previous)
+
+
+def _drop_stdout() -> None:
+    """Point stdout at the null device after its reader went away, so that the flush at exit neither fails nor
+    prints 'Exception ignored ... BrokenPipeError'."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # an in-process stdout without a file descriptor
+        pass
 
 
 def _terminate_as_interrupt() -> Any:
