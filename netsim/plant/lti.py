@@ -166,7 +166,8 @@ class LTIPlant(_LTIBase):
         See :class:`~netsim.plant.Plant`.
     process_noise
         Intensity ``Qc`` of white process noise on the state (n x n, or a vector for a diagonal), drawn
-        from ``env.rng(f"plant.{name}.process")`` with the exact Van Loan covariance per step length.
+        from ``env.rng(f"plant.{name}.process")`` with the exact Van Loan covariance per step length; or
+        entries ``{inputs|states: [...], sigma: ..., sample: ...}`` (:mod:`netsim.plant.noise`).
     """
 
     def __init__(
@@ -189,12 +190,15 @@ class LTIPlant(_LTIBase):
         n = self.n_states
         self.A, self.B, self.C, self.D = A, B, C, D
         self.x0 = np.zeros(n) if x0 is None else _vector(f"plant {name} x0", x0, n)
-        if process_noise is None:
+        entries = is_entry_form(process_noise)
+        if process_noise is None or entries:
             self.Qc = np.zeros((n, n))
         else:
             self.Qc = _noise_matrix(process_noise, n)
         self._rng: np.random.Generator | None = None
         self._build(self.x0)
+        if entries:  # held input noise or state increments (netsim.plant.noise)
+            self.set_process_noise(process_noise)
 
     @classmethod
     def from_system(cls, sys: Any, **kwargs: Any) -> "LTIPlant":

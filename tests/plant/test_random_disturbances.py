@@ -176,3 +176,14 @@ def test_a_plant_that_cannot_take_a_noise_form_says_what_to_write(noise, words):
     sc = {"name": "u", "duration": "20 ms", "plant": {"model": "unicycle", "process_noise": noise}}
     errors = [p for p in check_scenario(sc) if p.severity == "error"]
     assert any(words in p.message and p.path == "plant.process_noise" for p in errors), errors
+
+
+def test_entries_given_to_the_constructor_act_as_set_later():
+    entries = [{"inputs": ["u"], "sigma": 0.3, "sample": "2 ms"}, {"states": [1], "sigma": 0.1, "sample": "3 ms"}]
+    given = LTIPlant(A, B, C, None, input_names=["u"], name="p", process_noise=entries)
+    later = LTIPlant(A, B, C, None, input_names=["u"], name="p")
+    later.set_process_noise(entries)
+    for plant in (given, later):
+        plant.bind(SimEnv(seed=8))
+    np.testing.assert_array_equal(given.state(20 * MS), later.state(20 * MS))
+    assert np.all(given.state(20 * MS) != 0.0)
