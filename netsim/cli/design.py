@@ -99,8 +99,9 @@ def format_designs(name: str, designs: dict[str, dict[str, Any]]) -> str:
             lines.append(f"                 ({est['reason']})")
         integ = " + integrator" if law.get("with_integrator") else ""
         lines += _eig_table([(f"state feedback{integ}", law), ("observer", est), ("nominal loop", d["nominal"])])
-        if d["nominal"].get("reason"):
-            lines.append(f"                 ({d['nominal']['reason']})")
+        for why in (d["nominal"].get("reason"), d["nominal"].get("note")):
+            if why:
+                lines.append(f"                 (nominal loop: {why})")
         lines.append(f"  delay margin   {_margin(d['delay_margin'], model['period_s'])}")
     return "\n".join(lines) + "\n"
 

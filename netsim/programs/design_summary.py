@@ -323,7 +323,7 @@ def summarize(design: Any, estimator: Any, law: Any, fed_state: bool, *, rows: l
     law_out, law_form = _law(law, design)
     ctrl, why = _controller(design, est_form, law_form, fed_state)
     nominal: dict[str, Any] = {"eigenvalues": None, "magnitudes": None, "spectral_radius": None, "stable": None,
-                               "reason": why}
+                               "reason": why, "note": None}
     if ctrl is not None:
         nominal.update(_spectrum(_nominal(design, ctrl)))
         if law_form[0] == "pid":
@@ -357,6 +357,13 @@ def _task_entry(node: str, index: int, spec: Any, summary: dict[str, Any], progr
              "period_ns": int(spec.period) if spec.period is not None else None,
              "estimator_type": str(p.estimator.get("type")), "law_type": str(p.law.get("type"))}
     entry.update(summary)
+    delay, applied = getattr(p, "input_delay", None), getattr(p, "applied_input", None) is not None
+    entry["input_delay_s"] = None if delay is None else int(delay) / 1e9
+    entry["applied_input"] = applied
+    if delay is not None or applied:  # the program's delay-aware prediction (issue 26 s5) is not in the loop above
+        fed = "the input delayed by input_delay" if delay is not None else "the inputs the actuator reports"
+        entry["nominal"]["note"] = (f"the estimator predicts with {fed}; these eigenvalues and the delay margin are "
+                                    "the design's without that option (the gains do not depend on it)")
     return entry
 
 

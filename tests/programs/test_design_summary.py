@@ -230,3 +230,15 @@ def test_pid_law_nominal_loop_is_the_plant_with_the_discrete_pid(tmp_path: Path)
     loop = np.block([[Ad + Bd @ Dc @ C, Bd @ Cc], [Bc @ C, Ac]])
     _same_spectrum(d["nominal"]["eigenvalues"], np.linalg.eigvals(loop))
     assert d["law"]["K"] is None and d["law"]["pid"]["Ti"] == 0.5
+
+
+def test_design_json_with_input_delay_keeps_the_gains_and_says_the_loop_is_without_it(tmp_path: Path) -> None:
+    # the delay-aware prediction changes only the estimator's input matrix: the gains are the design's
+    d = _design(_loop({"type": "kalman", "Q": [0.0, 0.01], "R": 1e-6}, {"type": "lqr", "Q": [1.0, 0.0], "R": 0.1},
+                      extra={"input_delay": "20 ms"}), tmp_path)
+    Ad, Bd = _zoh(A_C, B_C, H)
+    L, _ = _kalman_gain(Ad, C, np.diag([0.0, 0.01]), np.array([[1e-6]]))
+    np.testing.assert_allclose(d["estimator"]["gain"], L, rtol=1e-7)
+    K, _, _ = control.dlqr(Ad, Bd, np.diag([1.0, 0.0]), 0.1)
+    np.testing.assert_allclose(d["law"]["K"], K, rtol=1e-8)
+    assert d["input_delay_s"] == pytest.approx(0.02) and "input_delay" in d["nominal"]["note"]
