@@ -157,11 +157,15 @@ class UnicycleEkf:
                                description="variances of the front and side readings [m^2]")
         P0: list[float] = Field(default_factory=lambda: np.diag(P0).tolist(), min_length=3, max_length=3)
         x0: list[float] = Field(default_factory=lambda: XI0_HAT.tolist(), min_length=3, max_length=3)
-        side_model: Literal["derived", "printed"] = "derived"
+        side_model: Literal["derived", "printed"] = Field(
+            "derived", description="side sensor offset the filter models (as the plant's side); a value other "
+                                   "than plant.params.side is warned about")
         fuse_at: Literal["sample_time", "arrival"] = "sample_time"
         history: int = Field(50, ge=0)
         start: list[float] = Field(default_factory=lambda: XI0_HAT.tolist(), min_length=3, max_length=3)
-        phases: list[_Phase] = Field(default_factory=_default_phases, min_length=1)
+        phases: list[_Phase] = Field(default_factory=_default_phases, min_length=1,
+                                     description="reference trajectory: [{duration, v, w, name}, ...]; when the "
+                                                 "sensors measure is their own tasks' 'on' windows")
         law: Literal["feedforward", "lqr", "lqr_ff"] = "feedforward"
         # diagonals of Q (each >= 0) and R (each > 0): a negative weight made slycot raise at build (issue 14 B)
         lqr_Q: list[Annotated[float, Field(ge=0)]] = Field(default_factory=lambda: [1e4, 1e4, 100.0], min_length=3,
