@@ -25,16 +25,18 @@ and the law that :func:`~netsim.programs.feedback_design.build_parts` made) and 
     ``r = 0``), ``xc[k+1] = Ac xc + Bc y``, ``u = Cc xc + Dc y``. For a state-fed law this is the union of the
     state-feedback and observer eigenvalues (separation); ``stable`` is False when one has magnitude >= 1.
 ``delay_margin``
-    For a plant with a continuous LTI model (the ``zoh`` model source): the smallest constant delay from the
-    sample to the actuation at which the sampled loop loses stability, found with
-    :func:`netsim.analysis.lqg.lqg_cost` (its second-moment recursion's spectral radius reaches 1) on a grid
-    of the period, refined by bisection. That analysis covers delays up to one period, so a loop still stable
+    For a plant with a continuous LTI model (the ``zoh`` model source; a nonlinear plant's linearisation, the
+    model the design used): the constant delay from the sample to the actuation at which the sampled loop
+    loses stability, found with :func:`netsim.analysis.lqg.lqg_cost` (its second-moment recursion's spectral
+    radius reaches 1) as the first unstable point of a grid over the period, refined by bisection (a loss and
+    recovery of stability between two grid points would be missed). That analysis covers delays up to one period, so a loop still stable
     at one period reports ``seconds: None`` with the reason (and ``stable_up_to_s``); so does every case the
     analysis cannot take (no continuous model, a nonlinear estimator, an unstable nominal loop).
 
 Complex numbers are ``[re, im]``; matrices are lists of rows. :func:`run_designs` and :func:`write_design`
 are the runner's side (``design.json`` in the run folder), :func:`static_designs` is what ``netsim design``
-prints (:mod:`netsim.cli.design` builds the plant for it), :func:`nominal_warning` / :func:`nominal_warnings_at` the warning for an unstable nominal loop.
+prints (:mod:`netsim.cli.design` builds the plant for it), and :func:`nominal_warning` /
+:func:`nominal_warnings_at` give the warning for an unstable nominal loop.
 """
 
 from __future__ import annotations
