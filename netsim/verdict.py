@@ -259,14 +259,28 @@ def _pairs(metric_specs: Iterable[Any]) -> list[tuple[str, str | None]]:
     """``(output, reference or None)`` of every metric that names an output signal, once each."""
     out: list[tuple[str, str | None]] = []
     for spec in metric_specs or []:
-        params = spec.params if hasattr(spec, "params") else dict(spec).get("params")
-        params = dict(params or {})
+        params = _params_of(spec)
         y, r = params.get("output"), params.get("reference")
         if isinstance(y, str) and (r is None or isinstance(r, str)) and "time_s" not in (y, r):
             pair = (y, r or None)
             if pair not in out:
                 out.append(pair)
     return out
+
+
+def _params_of(spec: Any) -> dict[str, Any]:
+    """A metric spec's parameters with its ``Params`` defaults (et_control's ``reference: r, output: y``) when the
+    loader validated them, else as written."""
+    try:
+        validated = spec.validated_params()
+    except Exception:  # noqa: BLE001 - a spec built by hand, not validated: its parameters as written
+        validated = None
+    if hasattr(validated, "model_dump"):
+        return validated.model_dump()
+    if isinstance(validated, dict):
+        return dict(validated)
+    params = spec.params if hasattr(spec, "params") else dict(spec).get("params")
+    return dict(params or {})
 
 
 def judge_signals(result: Any, scenario: Any, t_end_ns: int) -> tuple[Finding | None, list[str]]:
