@@ -439,6 +439,21 @@ TEXT: dict[str, str] = {
                "(lower end of the next one's {ci_pct} % interval over upper end of its own: {ord_stat_margin}) | holds in "
                "stationary operation (the design's setting); over the whole run it does not: from a zero initial "
                "estimate the Kalman filter is the slowest to converge |"),
+    "delay_aware": ("Estimation that knows the delay (`delay_aware.csv`, `delay_aware_margins.csv`; "
+                    "`pendulum_delay_aware_sweep.yaml`: {da_seeds} runs per point from upright, seeds of their own). "
+                    "The state_feedback task's `input_delay` is set to the total sample-to-actuation delay, so the "
+                    "estimator predicts each period with the input the pendulum really holds (the exact ZOH split of "
+                    "the period at the instant the input arrives, with the inputs still on their way: the augmented "
+                    "model of Astrom & Wittenmark); the LQR law is unchanged, u = -K x_hat[k|k]. Kalman filter: "
+                    "unaware of the delay, {da_kal_unaware}; told the delay, {da_kal_aware}. Luenberger observer: "
+                    "unaware, {da_lu_unaware}; told the delay, {da_lu_aware}. Measured by the largest delay with "
+                    "every run balanced, knowing the delay moves the limit from {da_kal_unaware_ok} to "
+                    "{da_kal_aware_ok} ms (Kalman) and from {da_lu_unaware_ok} to {da_lu_aware_ok} ms (Luenberger). "
+                    "For comparison, raw finite differences (no model prediction to get wrong) keep every run "
+                    "balanced up to {da_fd_ok} ms: what remains is the delay margin of the law itself, which "
+                    "still feeds back the estimate of x[k] to a plant that gets u later. At {da_cost_delay} ms, where "
+                    "both Kalman rows have every run balanced, the stationary cost is {da_kal_cost_unaware} unaware "
+                    "and {da_kal_cost_aware} told the delay."),
     "quantised": ("Encoder quantisation as the noise instead of Gaussian noise of the same variance: u std "
                   "{q_kal} V against {q_kal_ref} V with Kalman, {q_lu} against {q_lu_ref} with Luenberger, "
                   "{q_fd} against {q_fd_ref} with low-pass FD."),
@@ -693,6 +708,8 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
     L += _md_table(tables["delay_cost"][DELAY_COST_COLUMNS]) + [""]
     if (out / "delay_cost.png").exists():
         L += [f"![stationary cost against delay: runs ({texts['ci_pct']} % intervals) and analysis](delay_cost.png)", ""]
+    if "delay_aware" in tables:
+        L += delay_aware_lines(texts, tables["delay_aware"], tables["delay_aware_margins"])
     L += ["### Loss, solve time, quantisation", "",
           "- " + render("loss", texts), "", "- " + render("mpc_timing", texts), "", "- " + render("quantised", texts),
           "", "## Differences from the slides, and why", "",
@@ -726,6 +743,90 @@ def _figures(out: Path, runs_signals: dict[str, pd.DataFrame]) -> None:
     plt.close(fig)
 
 
+DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report pendulum_delay_aware -->", "<!-- /delay-aware -->")
+
+
+def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame) -> pd.DataFrame:
+    """The numbers of the delay-aware paragraph (keys ``da_*``), from ``delay_aware.csv``, its margins and
+    ``delay_cost.csv`` (the raw FD row)."""
+    from models.pendulum.report_sweeps import noise_delay_margins
+
+    q: list[tuple[str, float, str, str]] = []
+
+    def add(key: str, value: float, source: str, text: str | None = None) -> None:
+        q.append((key, float(value), text if text is not None else fmt(float(value)), source))
+
+    m = margins.set_index(["estimator", "estimation"])
+    for tag, e in (("kal", "kalman"), ("lu", "luenberger")):
+        for how, name in (("unaware", "unaware"), ("input_delay", "aware")):
+            r = m.loc[(e, how)]
+            src = f"delay_aware_margins:{e} {how}"
+            add(f"da_{tag}_{name}_ok", r.stable_up_to_ms, src)
+            if math.isfinite(r.fails_at_ms):
+                phrase = (f"every run balanced up to {fmt(r.stable_up_to_ms)} ms, the first fallen run at "
+                          f"{fmt(r.fails_at_ms)} ms ({int(r.stable_runs_at_fail)} of {int(r.seed_count)} balanced "
+                          "there)")
+                add(f"da_{tag}_{name}_fail", r.fails_at_ms, src)
+            else:
+                phrase = f"every run balanced at every delay run, up to {fmt(r.largest_delay_ms)} ms"
+            q.append((f"da_{tag}_{name}", 0.0, phrase, src))
+    add("da_seeds", da[da.estimation == "input_delay"].seed_count.max(), "delay_aware: seed_count")
+    add("da_fd_ok", noise_delay_margins(dc)["fd_raw"][0], "delay_cost: fd_raw (noise_delay_margins)")
+    k = da[(da.estimator == "kalman")]
+    both = sorted(set(k[(k.estimation == "unaware") & k.sim_cost.notna()].total_delay_ms)
+                  & set(k[(k.estimation == "input_delay") & k.sim_cost.notna()].total_delay_ms))
+    at = both[-1]
+    add("da_cost_delay", at, "delay_aware: largest delay with every Kalman run balanced in both rows")
+    for how, name in (("unaware", "unaware"), ("input_delay", "aware")):
+        add(f"da_kal_cost_{name}", float(k[(k.estimation == how) & (k.total_delay_ms == at)].sim_cost.iloc[0]),
+            f"delay_aware:kalman {how} {at} ms")
+    return pd.DataFrame(q, columns=["key", "value", "text", "source"])
+
+
+DELAY_AWARE_COLUMNS = ["estimator", "estimation", "total_delay_ms", "seed_count", "stable_runs", "sim_cost"]
+
+
+def delay_aware_lines(texts: dict[str, str], da: pd.DataFrame, margins: pd.DataFrame) -> list[str]:
+    """The README section of the delay-aware estimators, between :data:`DELAY_AWARE_MARK`."""
+    L = [DELAY_AWARE_MARK[0], "### Estimation that knows the delay (delay_aware.csv)", "", render("delay_aware", texts),
+         ""]
+    L += _md_table(margins) + [""]
+    L += _md_table(da[DELAY_AWARE_COLUMNS]) + [DELAY_AWARE_MARK[1], ""]
+    return L
+
+
+@register("report", "pendulum_delay_aware",
+          "pendulum: only the delay-aware estimators (input_delay) beside delay_cost.csv; splices its README section")
+def pendulum_delay_aware_report(out_dir: Path | None = None, plots: bool = True, *,
+                                workers: int | None = None) -> dict[str, pd.DataFrame]:
+    """Run (or resume) ``pendulum_delay_aware_sweep`` and write ``delay_aware.csv``, ``delay_aware_margins.csv``,
+    the ``da_*`` rows of ``quoted.csv`` and the README's delay-aware section, next to the full report's
+    ``delay_cost.csv`` (which gives the unaware rows). The rest of the report is left as it is."""
+    from models.pendulum.report_sweeps import delay_aware_margins, delay_aware_table, run_delay_aware
+
+    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "pendulum"
+    dc = pd.read_csv(out / "delay_cost.csv")
+    da = delay_aware_table(run_delay_aware(out, workers), ESTIMATORS, dc)
+    margins = delay_aware_margins(da)
+    da.to_csv(out / "delay_aware.csv", index=False)
+    margins.to_csv(out / "delay_aware_margins.csv", index=False)
+    qd = quote_delay_aware(da, margins, dc)
+    quoted = pd.read_csv(out / "quoted.csv", keep_default_na=False)
+    quoted = pd.concat([quoted[~quoted.key.astype(str).str.startswith("da_")], qd], ignore_index=True)
+    quoted.to_csv(out / "quoted.csv", index=False)
+    texts = dict(zip(qd["key"], qd["text"].astype(str)))
+    section = delay_aware_lines(texts, da, margins)
+    readme = (out / "README.md").read_text().split("\n")
+    if DELAY_AWARE_MARK[0] in readme:
+        i, j = readme.index(DELAY_AWARE_MARK[0]), readme.index(DELAY_AWARE_MARK[1])
+        readme[i:j + 2] = section
+    else:
+        i = readme.index("### Loss, solve time, quantisation")
+        readme[i:i] = section
+    (out / "README.md").write_text("\n".join(readme))
+    return {"delay_aware": da, "delay_aware_margins": margins, "quoted": qd}
+
+
 def render_readme(out: Path) -> pd.DataFrame:
     """Quote the numbers again from the CSV tables of ``out`` and rewrite ``quoted.csv`` and ``README.md``
     (no run: for a change of the prose). Returns the quoted values."""
@@ -733,6 +834,11 @@ def render_readme(out: Path) -> pd.DataFrame:
     tables = {n: pd.read_csv(out / f"{n}.csv") for n in names}
     quoted = quote(tables["runs"], tables["table"], tables["hold_still"], tables["delay"], tables["tuning"],
                    tables["delay_cost"])
+    if (out / "delay_aware.csv").exists():
+        tables["delay_aware"] = pd.read_csv(out / "delay_aware.csv")
+        tables["delay_aware_margins"] = pd.read_csv(out / "delay_aware_margins.csv")
+        quoted = pd.concat([quoted, quote_delay_aware(tables["delay_aware"], tables["delay_aware_margins"],
+                                                      tables["delay_cost"])], ignore_index=True)
     quoted.to_csv(out / "quoted.csv", index=False)
     write_readme(out, quoted, tables)
     return quoted
@@ -790,6 +896,10 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     hs = hold_still_table(runs)
     dc = delay_cost_table(summaries, ESTIMATORS)
     dl = delay_table(runs, noise_delay_margins(dc))
+    from models.pendulum.report_sweeps import delay_aware_margins, delay_aware_table, run_delay_aware
+
+    da = delay_aware_table(run_delay_aware(out, workers), ESTIMATORS, dc)
+    da_margins = delay_aware_margins(da)
     from models.pendulum.design import designs, motion_errors
 
     me = motion_errors(designs())
@@ -797,12 +907,14 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
                            "alpha_dot_err": v[3]} for k, v in me.items()])
     sw = tuning_table(summaries)
     quoted = quote(runs, table, hs, dl, sw, dc)
+    quoted = pd.concat([quoted, quote_delay_aware(da, da_margins, dc)], ignore_index=True)
     tables = {"table": table, "hold_still": hs, "delay": dl, "delay_cost": dc, "forms": forms, "runs": runs,
+              "delay_aware": da, "delay_aware_margins": da_margins,
               "quoted": quoted, "tuning": sw, "loss": runs[runs.kind == "loss"],
               "mpc_timing": runs[runs.kind == "mpc_timing"], "quantised": runs[runs.kind == "quantised"]}
     table.to_csv(out / "table.csv", index=False)
     for name in ("hold_still", "delay", "delay_cost", "forms", "runs", "quoted", "loss", "mpc_timing", "quantised",
-                 "tuning"):
+                 "tuning", "delay_aware", "delay_aware_margins"):
         tables[name].to_csv(out / f"{name}.csv", index=False)
     stale = out / "sweeps.csv"  # before the sweeps ran through netsim sweep: tuning.csv
     if stale.exists():

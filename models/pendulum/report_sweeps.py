@@ -10,7 +10,11 @@ their ``summary.csv``:
 * :func:`delay_cost_table` -- per estimator and delay: the simulated stationary cost with its 95 % Monte-Carlo
   interval over the seeds, beside the expected cost from :mod:`models.pendulum.analysis`;
 * :func:`noise_delay_margins` -- per estimator the largest delay with every seed stable and the first with a
-  failing one.
+  failing one;
+* :func:`delay_aware_table` -- the Luenberger observer and the Kalman filter told the delay
+  (``scenarios/pendulum_delay_aware_sweep.yaml``: the state_feedback task's ``input_delay``, issue 26 section 5)
+  beside the same estimators unaware of it (the rows of ``delay_cost.csv``): per delay the runs that stayed
+  balanced and the stationary cost; :func:`delay_aware_margins` gives each row's delay bracket.
 """
 
 from __future__ import annotations
@@ -24,12 +28,15 @@ from typing import Any, Mapping
 import numpy as np
 
 __all__ = ["SWEEPS", "run_sweeps", "point_values", "estimator_name", "tuning_table", "delay_cost_table",
-           "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS", "CI_LEVEL"]
+           "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS", "CI_LEVEL",
+           "DELAY_AWARE_SWEEP", "run_delay_aware", "delay_aware_table", "delay_aware_margins"]
 
 log = logging.getLogger("netsim.progress.pendulum")
 
 _SCEN = Path(__file__).resolve().parents[2] / "scenarios"
 SWEEPS = ("pendulum_kalman_sweep", "pendulum_poles_sweep", "pendulum_delay_sweep")
+#: The sweep of the estimators told the delay (run on its own by ``netsim report pendulum_delay_aware``).
+DELAY_AWARE_SWEEP = "pendulum_delay_aware_sweep"
 #: Sample-to-actuation delay of pendulum_network.yaml without the act link: 0.5 ms offset + 0.5 ms execution
 #: + 0.1 ms actuator (read from the scenario in tests/models/test_pendulum_report.py).
 NETWORK_BASE_DELAY_MS = 1.1
@@ -199,3 +206,66 @@ def noise_delay_margins(cost: Any) -> dict[str, tuple[float, float]]:
         ok = g[(g.stable_share >= 1.0) & ((g.total_delay_ms < first) if len(fails) else True)]
         out[str(e)] = (float(ok.total_delay_ms.max()) if len(ok) else math.nan, first)
     return out
+
+
+def run_delay_aware(out: Path, workers: int | None = None) -> Any:
+    """Run (or resume) :data:`DELAY_AWARE_SWEEP` into ``out/runs/<sweep>``; returns its ``summary.csv``."""
+    from netsim.sweep.run import run_sweep
+
+    log.info("pendulum: sweep %s ...", DELAY_AWARE_SWEEP)
+    res = run_sweep(_SCEN / f"{DELAY_AWARE_SWEEP}.yaml", out=out / "runs" / DELAY_AWARE_SWEEP, workers=workers,
+                    progress=sys.stderr.isatty())
+    return res.summary
+
+
+def delay_aware_table(summary: Any, estimators: Mapping[str, dict[str, Any]], unaware: Any) -> Any:
+    """One row per estimator, estimation (``unaware``: ``delay_cost.csv``'s rows; ``input_delay``: told the delay)
+    and act delay: the runs, how many stayed balanced (``pendulum.stable``), and the mean stationary cost
+    (``pendulum.lqg_cost_after_settle``) when every run did."""
+    import pandas as pd
+
+    s = _with_values(summary, DELAY_AWARE_SWEEP)
+    s["estimator"] = [estimator_name(v["estimator"], estimators) for v in s["values"]]
+    s["act_delay_ms"] = [_delay_ms(v["act_delay"]) for v in s["values"]]
+    s["input_delay_ms"] = [_delay_ms(v["input_delay"]) for v in s["values"]]
+    rows = []
+    names = list(dict.fromkeys(s["estimator"]))
+    for e in names:
+        u = unaware[unaware.estimator == e]
+        for _, r in u.iterrows():
+            n = int(r.seed_count)
+            rows.append({"estimator": e, "estimation": "unaware", "act_delay_ms": float(r.act_delay_ms),
+                         "total_delay_ms": float(r.total_delay_ms), "input_delay_ms": math.nan, "seed_count": n,
+                         "stable_runs": int(round(float(r.stable_share) * n)), "stable_share": float(r.stable_share),
+                         "sim_cost": float(r.sim_cost)})
+        for (dl, di), g in s[s.estimator == e].groupby(["act_delay_ms", "input_delay_ms"], sort=True):
+            ok = g["status"] == "ok"
+            stable = g["pendulum.stable"].where(ok, 0.0).astype(float)
+            all_stable = bool(stable.min() > 0.5)
+            rows.append({"estimator": e, "estimation": "input_delay", "act_delay_ms": float(dl),
+                         "total_delay_ms": float(dl) + NETWORK_BASE_DELAY_MS, "input_delay_ms": float(di),
+                         "seed_count": int(len(g)), "stable_runs": int((stable > 0.5).sum()),
+                         "stable_share": float(stable.mean()),
+                         "sim_cost": float(g["pendulum.lqg_cost_after_settle"].astype(float).mean()) if all_stable
+                         else math.nan})
+    return pd.DataFrame(rows)
+
+
+def delay_aware_margins(table: Any) -> Any:
+    """Per estimator and estimation: the largest total delay with every run balanced below the first delay with a
+    fallen run, that first delay (NaN: none in the sweep) and how many runs stayed balanced there, and the
+    largest delay run."""
+    import pandas as pd
+
+    rows = []
+    for (e, how), g in table.groupby(["estimator", "estimation"], sort=False):
+        g = g.sort_values("total_delay_ms")
+        fails = g[g.stable_runs < g.seed_count]
+        first = float(fails.total_delay_ms.iloc[0]) if len(fails) else math.nan
+        ok = g[(g.stable_runs == g.seed_count) & ((g.total_delay_ms < first) if len(fails) else True)]
+        rows.append({"estimator": e, "estimation": how,
+                     "stable_up_to_ms": float(ok.total_delay_ms.max()) if len(ok) else math.nan,
+                     "fails_at_ms": first,
+                     "stable_runs_at_fail": int(fails.stable_runs.iloc[0]) if len(fails) else -1,
+                     "seed_count": int(g.seed_count.max()), "largest_delay_ms": float(g.total_delay_ms.max())})
+    return pd.DataFrame(rows)

@@ -3,7 +3,9 @@
 Sweeps (``facts`` keys): ``net`` (CAN: front rate x Bernoulli loss), ``burst`` (CAN: Bernoulli against
 Gilbert-Elliott), ``radio_mc`` (802.15.4: sensor rate x loss model, 200 replicates), ``delay`` (CAN: command
 delay with the report's sensors), ``radio_delay`` (802.15.4: command delay, the report's and accurate sensors);
-``zigbee`` is one run's metrics. Every number goes through the :class:`~models.unicycle.quoting.Quotes`.
+``zigbee`` is one run's metrics; ``delay_aware_can`` and ``delay_aware_radio`` (issue 26 section 5: the same
+command delays with the filter unaware of them and told them, ``input_delay``) feed :func:`delay_aware_section`.
+Every number goes through the :class:`~models.unicycle.quoting.Quotes`.
 """
 
 from __future__ import annotations
@@ -16,7 +18,11 @@ import numpy as np
 from models.unicycle.model import TS
 from models.unicycle.quoting import Quotes
 
-__all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference", "GROWTH", "LOST_E3"]
+__all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference", "delay_aware_section",
+           "delay_aware_frame", "GROWTH", "LOST_E3", "DELAY_AWARE_MARK"]
+
+#: The README lines of the delay-aware study sit between these (``netsim report unicycle_delay_aware`` splices them).
+DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report unicycle_delay_aware -->", "<!-- /delay-aware -->")
 
 #: A delay "degrades" the loop when the mean RMS longitudinal error e1 reaches this multiple of the no-delay one.
 GROWTH = 3.0
@@ -242,6 +248,7 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
                      f"{_pct(d['unicycle.cover_theta_all'].mean())} |")
             T.add("5 delay CAN", f"command delay {dv:g} ms", "RMS e3 [rad]", d["unicycle.track_rms_e3"].mean(), "", "")
         L.append("")
+    L += delay_aware_section(q, T, F)
     hist = F.get("history")
     L += ["Late samples are fused at their own sample time by re-running the filter from the stored prior of that "
           f"sample (up to {q.i(hist, 'history')} samples back); a sample is never fused twice "
@@ -261,4 +268,69 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
               f"machine: {_f(sp['pool_runs'] / sp['pool_wall_s'], 3, 'pool_runs_per_s')} runs/s"
               + (f" (load average {_f(sp['load_average'], 2)} at the end)" if "load_average" in sp else "")
               + ". Both figures depend on the load of the machine, shared with other jobs.", ""]
+    return L
+
+
+def delay_aware_frame(can: Any, radio: Any) -> Any:
+    """The two delay-aware sweeps' summaries as one frame: ``network``, ``sensors``, ``_ms`` (command delay),
+    ``filter`` (``unaware``: ``input_delay`` 0; ``told the delay``), and the run metrics."""
+    import pandas as pd
+
+    parts = []
+    for net, d in (("CAN", can), ("radio", radio)):
+        if d is None or not len(d):
+            continue
+        d = d.copy()
+        d["network"] = net
+        if "sensors" not in d.columns:
+            d["sensors"] = "report"
+        d["_ms"] = _ms(d["delay"])
+        told = d["input_delay"].astype(float) > 0
+        d["filter"] = np.where(told | (d["_ms"] == 0), "told the delay", "unaware")
+        zero = d[d["_ms"] == 0].copy()  # delay 0: one run serves both rows
+        zero["filter"] = "unaware"
+        parts += [d, zero]
+    return pd.concat(parts, ignore_index=True) if parts else pd.DataFrame()
+
+
+def delay_aware_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
+    """The README lines of the delay-aware study (and their ``table.csv`` rows), between :data:`DELAY_AWARE_MARK`."""
+    d = delay_aware_frame(F.get("delay_aware_can"), F.get("delay_aware_radio"))
+    if not len(d):
+        return []
+    _f, _pct = q.f, q.pct
+    runs = {net: int(g.groupby(["sensors", "_ms", "filter"]).size().min()) for net, g in d.groupby("network")}
+    L = [DELAY_AWARE_MARK[0],
+         "Filter told the command delay (issue 26; `unicycle_lqr_delay_aware.yaml`, `unicycle_radio_delay_aware.yaml`): "
+         "the `unicycle_ekf` task's `input_delay` is the pre_delay in whole periods, so the filter predicts each "
+         "period with the command the cart holds rather than the one just computed; the law is unchanged. Each "
+         "delay is run with the filter unaware of it and told it (runs per point: "
+         + ", ".join(f"{q.i(n, f'da_runs_{net}')} on {net}" for net, n in runs.items())
+         + "; the radio study above has more, CPU was scarce when this was added; seeds of their own):", "",
+         "| network | sensors | delay | filter | runs | RMS e1 [mm] | RMS e3 [rad] | max e3 [rad] | runs with max e3 > "
+         "pi/2 | coverage y / theta |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for (net, sens, ms, filt), g in d.groupby(["network", "sensors", "_ms", "filter"], sort=True):
+        L.append(f"| {net} | {sens} | {q.g(ms)} ms | {filt} | {q.i(len(g))} | "
+                 f"{_f(g['unicycle.track_rms_e1'].mean() * 1e3)} | {_f(g['unicycle.track_rms_e3'].mean())} | "
+                 f"{_f(g['unicycle.track_max_e3'].mean())} | {_pct(np.mean(g['unicycle.track_max_e3'] > LOST_E3))} | "
+                 f"{_pct(g['unicycle.cover_y_all'].mean())} / {_pct(g['unicycle.cover_theta_all'].mean())} |")
+        T.add("5 delay-aware", f"{net}, {sens} sensors, {ms:g} ms, {filt}", "RMS e1 [m]",
+              g["unicycle.track_rms_e1"].mean(), "", "")
+    L.append("")
+    for (net, sens), g in d.groupby(["network", "sensors"], sort=True):
+        top = q.g(float(g["_ms"].max()))
+        said = []
+        for filt in ("unaware", "told the delay"):
+            lim = stability_limits(g[g["filter"] == filt])
+            key = f"da_{net}_{sens}_{'told' if filt != 'unaware' else 'unaware'}"
+            deg = (f"RMS e1 reaches {q.g(GROWTH)}x its no-delay value from {q.g(lim['degrade_ms'], key + '_degrade')} ms"
+                   if not math.isnan(lim["degrade_ms"]) else f"RMS e1 stays below {q.g(GROWTH)}x up to {top} ms")
+            lost = (f"most runs lose the loop from {q.g(lim['lost_ms'], key + '_lost')} ms"
+                    if not math.isnan(lim["lost_ms"]) else f"no delay up to {top} ms makes most runs lose the loop")
+            said.append(f"{filt}: {deg}, {lost}")
+            for what, col in (("delay at which RMS e1 grows 3x [ms]", "degrade_ms"),
+                              ("delay at which most runs lose the loop [ms]", "lost_ms")):
+                T.add("5 delay-aware", f"{net}, {sens} sensors, {filt}", what, lim[col], "", "")
+        L.append(f"- {net}, {sens} sensors: " + "; ".join(said) + ".")
+    L += ["", DELAY_AWARE_MARK[1], ""]
     return L

@@ -173,7 +173,9 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     # ---------------------------------------------------------------- netsim sweeps
     for key, name in (("net", "unicycle_net_sweep"), ("delay", "unicycle_lqr_delay"), ("burst", "unicycle_burst_sweep"),
                       ("radio_mc", "unicycle_radio_mc"), ("radio_delay", "unicycle_radio_delay"),
-                      ("qr_can", "unicycle_qr_can"), ("qr_radio", "unicycle_qr_radio")):
+                      ("qr_can", "unicycle_qr_can"), ("qr_radio", "unicycle_qr_radio"),
+                      ("delay_aware_can", "unicycle_lqr_delay_aware"),
+                      ("delay_aware_radio", "unicycle_radio_delay_aware")):
         facts[key] = _sweep(name, out, workers) if sweeps else None
     for key in ("qr_can", "qr_radio"):
         df = facts[key]
@@ -193,6 +195,45 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     text = write_readme(out, T, facts)
     T.frame().to_csv(out / "table.csv", index=False)
     return {"table": T.frame(), "readme": pd.DataFrame({"text": [text]})}
+
+
+@register("report", "unicycle_delay_aware",
+          "2WD cart: only the delay-aware filter study (input_delay); splices its README section, quotes and rows")
+def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True, *,
+                                workers: int | None = None) -> dict[str, pd.DataFrame]:
+    """Run (or resume) ``unicycle_lqr_delay_aware`` and ``unicycle_radio_delay_aware`` and write
+    ``delay_aware.csv`` and the README's delay-aware section (with ``template.md``, ``quoted.csv`` and
+    ``table.csv`` kept consistent: the section's quotes are ``s5da.*``, its rows ``5 delay-aware``). The rest of
+    the report is left as it is (``netsim report unicycle`` runs everything, this section included)."""
+    from models.unicycle.quoting import Quotes
+    from models.unicycle.readme_net import DELAY_AWARE_MARK, delay_aware_frame, delay_aware_section
+
+    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
+    F = {"delay_aware_can": _sweep("unicycle_lqr_delay_aware", out, workers),
+         "delay_aware_radio": _sweep("unicycle_radio_delay_aware", out, workers)}
+    frame = delay_aware_frame(F["delay_aware_can"], F["delay_aware_radio"])
+    frame.drop(columns=["values"], errors="ignore").to_csv(out / "delay_aware.csv", index=False)
+    q, T = Quotes(), _Table()
+    q.section = "s5da"
+    marked = "\n".join(delay_aware_section(q, T, F))
+    for name, text in (("README.md", Quotes.render(marked)), ("template.md", Quotes.template(marked))):
+        lines = (out / name).read_text().split("\n")
+        new = text.split("\n")
+        if DELAY_AWARE_MARK[0] in lines:
+            i, j = lines.index(DELAY_AWARE_MARK[0]), lines.index(DELAY_AWARE_MARK[1])
+            lines[i:j + 2] = new
+        else:
+            i = next(n for n, ln in enumerate(lines) if ln.startswith("Late samples are fused"))
+            lines[i:i] = new
+        (out / name).write_text("\n".join(lines))
+    quoted = pd.read_csv(out / "quoted.csv", keep_default_na=False, dtype={"text": str})
+    quoted = pd.concat([quoted[~quoted["key"].astype(str).str.startswith("s5da.")],
+                        pd.DataFrame(q.rows, columns=["key", "value", "text"])], ignore_index=True)
+    quoted.to_csv(out / "quoted.csv", index=False)
+    table = pd.read_csv(out / "table.csv", keep_default_na=False)
+    table = pd.concat([table[table["experiment"] != "5 delay-aware"], T.frame()], ignore_index=True)
+    table.to_csv(out / "table.csv", index=False)
+    return {"delay_aware": frame, "table": T.frame()}
 
 
 def _code_hash() -> str:
