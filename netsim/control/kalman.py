@@ -140,6 +140,10 @@ class KalmanFilter:
     samples is stale. Both make :meth:`correct` return ``False`` and are counted in :attr:`duplicates` and
     :attr:`stale`.
 
+    *Inputs learned late* (:meth:`revise_inputs`): the input of a stored sample can be replaced (the actuator's
+    report of what the plant really held) and the filter re-run from there, as for a delayed measurement.
+    :meth:`start_from` starts the estimate from a measurement (``x0 + pinv(C) (y - C x0)``).
+
     The feed-through ``D`` is taken as zero (the measurement at ``k`` is taken before ``u[k]`` is computed).
     """
 

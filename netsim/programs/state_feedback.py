@@ -10,6 +10,7 @@ sends ``u``. The estimator and the law are named in YAML with their parameters::
       estimator: {type: kalman, Q: [0, 1e-4], R: 1e-6}         # kalman | steady_state_kalman | luenberger | none
       law: {type: lqr, Q: [1, 0], R: 1e-4}                     # lqr | state_feedback | mpc | pid
       reference: r                                             # a scenario signal (output reference)
+      input_delay: 30 ms                                       # optional: the estimator knows the actuation delay
       network: can, to: actuator                               # or output_channel: u
 
 *Model.* The estimator and the law use the discrete model ``(A, B, C)`` at the task period: the plant's
@@ -35,6 +36,29 @@ still correct the estimate (``fused`` counts the parts). With any other estimato
 sources are in; a sample still incomplete when it leaves the filter's history is dropped (counted as
 ``partial``). A sample without any measurement is prediction only.
 
+*The input the plant holds* (issue 26 section 5). By default the estimator predicts sample ``k + 1`` with the
+``u[k]`` just computed, as if it acted on the plant from the sample instant on. Under a network delay it does
+not; three options tell the estimator what the plant really gets (the law is unchanged: ``u = law(x_hat[k|k])``):
+
+* ``input_delay: <time>``: a known constant delay ``tau = d h + tau'`` from the instant ``x_hat[k]`` refers to
+  (the sample time of the measurement fused at ``k``) until the plant receives ``u[k]``. The estimator is built
+  on ``x[k+1] = A x[k] + Gamma0 u[k-d] + Gamma1 u[k-d-1]`` (the exact ZOH split of the period at ``tau'``,
+  :func:`~netsim.control.interface.zoh_split`; ``Gamma1 = 0`` when ``tau'`` is 0), the model of Astrom &
+  Wittenmark's augmented state ``[x; u[k-d-1] ... u[k-1]]`` with the known delayed inputs taken out of the
+  estimated state (:class:`~netsim.control.interface.InputDelayLine`). Any estimator whose ``build`` uses the
+  design's ``B`` (kalman, steady_state_kalman, luenberger, none, the registered ones that do); ``ekf``: whole
+  periods only. A fraction of a period needs the plant's continuous linear model.
+* ``applied_input: {network, sender, tag}``: the actuator's reports (``actuator`` program, ``report:``) of each
+  input it applied and when. The Kalman filter is built on ``x[k+1] = A x[k] + w[k]`` and fed the effect ``w[k]``
+  of the input known to be on the plant over period ``k`` (from the task's release ``offset + k h`` to the next;
+  after the last report the last reported value is taken
+  as held); a report that changes a past period re-predicts from there (``KalmanFilter.revise_inputs``, within
+  ``history`` samples). Kalman filters only, with the plant's continuous linear model. With a constant delay and
+  reports that arrive before the next sample it gives the estimate of ``input_delay``.
+* ``x0_hat: first_measurement``: the estimate starts from the first measurement fused,
+  ``x0 + pinv(C) (y - C x0)`` (states measured directly take their value, directions ``C`` does not see keep
+  the estimator's ``x0``); the default ``x0`` starts from the estimator's fixed ``x0``.
+
 *Execution time.* The task's ``execution:`` is charged after the computation; with an MPC law, ``solve_time``
 adds ``{base, per_iteration}`` (a model: ``base + per_iteration * solver iterations``, reproducible) or
 ``{scale}`` (the measured wall time of the step times ``scale``: runs are then not reproducible), so deadline
@@ -45,7 +69,8 @@ misses show in the job table.
 
 *Metrics* (added to every run's metrics as ``control.<node>.<task>.<name>``): ``steps``, ``fused``,
 ``prediction_only`` (steps without a measurement of the current sample: lost, missing or still on its way),
-``stale``, ``duplicates``, ``partial``, and for MPC
+``stale``, ``duplicates``, ``partial``, with ``applied_input`` ``inputs_reported`` and ``inputs_revised`` (past
+samples whose input a report changed), and for MPC
 ``mpc_fallbacks`` (infeasible QP or solver failure: the saturated LQR law was applied), ``mpc_solver_calls``,
 ``mpc_solver_iterations`` (wall times are left out: the metrics of a run are reproducible).
 
@@ -153,8 +178,9 @@ class _Params(StrictModel):
     fuse_at: Literal["sample_time", "arrival"] = Field("sample_time", description="sample_time: a message's "
                                                        "measurement is fused at the sample nearest its t_ns; "
                                                        "arrival: at the sample where it is read")
-    input_delay: Time | None = Field(None, description="known delay from the sample instant (the job's release, "
-                                                       "offset + k * period) until the plant receives u[k], e.g. "
+    input_delay: Time | None = Field(None, description="known delay from the instant x_hat[k] refers to (the "
+                                                       "sample time of the measurement fused at k) until the plant "
+                                                       "receives u[k], e.g. "
                                                        "'30 ms': the estimator predicts with the input the plant "
                                                        "holds (exact ZOH split of the period; a fraction of a "
                                                        "period needs the plant's continuous linear model). Default: "
