@@ -16,21 +16,16 @@ Examples
 
 from __future__ import annotations
 
-import math
 import re
-from typing import Annotated, Any, Final
+from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, PlainSerializer
 
-from netsim.timebase import TimeParseError, format_time, parse_duration, parse_time
+from netsim.quantities import BITRATE, NUMBER_LIMIT, parse_bitrate, quantity_pattern
+from netsim.timebase import UNITS, TimeParseError, format_time, parse_duration, parse_time
 
-__all__ = ["NUMBER_LIMIT", "Time", "Duration", "SignedTime", "Bitrate", "StrictModel", "parse_bitrate"]
-
-#: The largest magnitude of a number in a scenario (gains, rates, positions, initial states, noise levels):
-#: ``|x| <= 1e15``. Larger values overflow the float arithmetic of plants and controllers (a square of 1e160
-#: is already inf); NaN and inf are refused everywhere. Checked for every number of a scenario by
-#: :mod:`netsim.scenario.validate`.
-NUMBER_LIMIT: Final[float] = 1e15
+__all__ = ["NUMBER_LIMIT", "Time", "Duration", "SignedTime", "Bitrate", "StrictModel", "parse_bitrate",
+           "TIME_PATTERN", "SIGNED_TIME_PATTERN", "BITRATE_PATTERN"]
 
 
 def _time(value: Any) -> int:
@@ -54,26 +49,15 @@ def _signed(value: Any) -> int:
         raise ValueError(str(exc)) from None
 
 
-_BITRATE = re.compile(r"^\s*([0-9.eE+-]+)\s*([kKMG]?)(?:bit/s|bps|b/s)\s*$")
-_BITRATE_SCALE = {"": 1.0, "k": 1e3, "K": 1e3, "M": 1e6, "G": 1e9}
-
-
-def parse_bitrate(value: Any) -> float:
-    """Parse a data rate in bit/s: a number, or ``"80 kbit/s"``, ``"1 Mbps"``, ``"10 Mbit/s"``."""
-    if isinstance(value, bool):
-        raise ValueError(f"expected a bit rate such as '80 kbit/s', got {value!r}")
-    if isinstance(value, (int, float)):
-        rate = float(value)
-    elif isinstance(value, str):
-        m = _BITRATE.match(value)
-        if m is None:
-            raise ValueError(f"cannot read {value!r} as a bit rate; write e.g. '80 kbit/s', '1 Mbit/s' or 80000")
-        rate = float(m.group(1)) * _BITRATE_SCALE[m.group(2)]
-    else:
-        raise ValueError(f"expected a bit rate such as '80 kbit/s', got {value!r}")
-    if not math.isfinite(rate) or not 0 < rate <= NUMBER_LIMIT:
-        raise ValueError(f"bit rate must be positive and at most {NUMBER_LIMIT:g} bit/s, got {value!r}")
-    return rate
+_TIME_UNITS = "|".join(re.escape(u) for u in sorted(UNITS, key=len, reverse=True))
+_DECIMAL = r"(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+#: A regular expression for the text forms of a non-negative time (:func:`netsim.timebase.parse_time`: a number
+#: and one of its units), for the JSON Schema; ``0`` may also be written as a number.
+TIME_PATTERN = rf"^\s*\+?{_DECIMAL}\s*(?:{_TIME_UNITS})\s*$"
+#: The same for a time that may be negative (``SignedTime``).
+SIGNED_TIME_PATTERN = rf"^\s*[-+]?{_DECIMAL}\s*(?:{_TIME_UNITS})\s*$"
+#: A regular expression for the text forms of a bit rate (:func:`netsim.quantities.parse_bitrate`).
+BITRATE_PATTERN = quantity_pattern(BITRATE)
 
 
 def _as_text(ns: int) -> str:
@@ -86,7 +70,7 @@ Time = Annotated[int, BeforeValidator(_time), PlainSerializer(_as_text, return_t
 Duration = Annotated[int, BeforeValidator(_duration), PlainSerializer(_as_text, return_type=str, when_used="json")]
 #: A time that may be negative (offsets relative to something).
 SignedTime = Annotated[int, BeforeValidator(_signed), PlainSerializer(_as_text, return_type=str, when_used="json")]
-#: A data rate in bit/s.
+#: A data rate in bit/s (``"80 kbit/s"``; :mod:`netsim.quantities` reads it, as every quantity other than time).
 Bitrate = Annotated[float, BeforeValidator(parse_bitrate)]
 
 

@@ -20,54 +20,17 @@ frames already queued at the node's controller still go out.
 
 from __future__ import annotations
 
-import re
-from typing import Annotated, Any, Literal
+from typing import Literal
 
-from pydantic import BeforeValidator, Field, WithJsonSchema, model_validator
+from pydantic import Field, model_validator
 
-from netsim.units import NUMBER_LIMIT, StrictModel
+from netsim.quantities import Energy, Power, parse_energy, parse_power
+from netsim.units import StrictModel
 
 __all__ = ["CpuPower", "RadioPower", "Battery", "EnergyModel", "parse_power", "parse_energy"]
 
-_POWER_UNITS = {"W": 1.0, "mW": 1e-3, "uW": 1e-6, "µW": 1e-6}
-_ENERGY_UNITS = {"J": 1.0, "mJ": 1e-3, "kJ": 1e3, "Wh": 3600.0, "mWh": 3.6}
-_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-zµ]+)?\s*$")
-
-
-def _quantity(value: Any, units: dict[str, float], what: str, example: str) -> float:
-    if isinstance(value, bool):
-        raise ValueError(f"expected a {what}, e.g. {example}, got {value!r}")
-    if isinstance(value, (int, float)):
-        x = float(value)
-    elif isinstance(value, str) and (m := _QUANTITY.match(value)):
-        unit = m.group(2)
-        if unit is not None and unit not in units:
-            raise ValueError(f"unknown {what} unit '{unit}' in {value!r}; use one of {', '.join(units)}")
-        x = float(m.group(1)) * (units[unit] if unit else 1.0)
-    else:
-        raise ValueError(f"expected a {what}, e.g. {example}, got {value!r}")
-    if not (0.0 <= x <= NUMBER_LIMIT):
-        raise ValueError(f"a {what} must be a finite number >= 0, got {value!r}")
-    return x
-
-
-def parse_power(value: Any) -> float:
-    """A power in watts: a number (W) or text with a unit (``"52 mW"``, ``"3 uW"``)."""
-    return _quantity(value, _POWER_UNITS, "power", "'52 mW' or 0.052 (W)")
-
-
-def parse_energy(value: Any) -> float:
-    """An energy in joules: a number (J) or text with a unit (``"20 J"``, ``"1.5 Wh"``, ``"300 mWh"``)."""
-    return _quantity(value, _ENERGY_UNITS, "energy", "'20 J', '1.5 Wh' or 20 (J)")
-
-
-#: A power in W (``"52 mW"`` text accepted; the JSON Schema says so, for editors).
-Power = Annotated[float, BeforeValidator(parse_power), WithJsonSchema(
-    {"anyOf": [{"type": "number", "minimum": 0}, {"type": "string", "description": "a power: 52 mW, 3 uW, 0.1 W"}]})]
-#: An energy in J (``"1.5 Wh"`` text accepted).
-Energy = Annotated[float, BeforeValidator(parse_energy), WithJsonSchema(
-    {"anyOf": [{"type": "number", "exclusiveMinimum": 0},
-               {"type": "string", "description": "an energy: 20 J, 300 mWh, 1.5 Wh"}]})]
+# Powers and energies are read by netsim.quantities (one SI-prefix parser for every quantity other than time):
+# '52 mW', '60 nW', '5 uJ', '300 mWh', '1 kWh', or a bare number in W or J.
 
 
 class CpuPower(StrictModel):
