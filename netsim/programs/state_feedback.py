@@ -567,14 +567,15 @@ def _input_options(p: _Params, design: Any, estimator: Any, plant: Any, period_n
         if p.input_delay < 0:
             raise ConfigError(f"input_delay must be >= 0, got {p.input_delay} ns", path=where)
         d, rest = divmod(int(p.input_delay), int(period_ns))
+        lo, hi = f"{d * period_ns / 1e6:g} ms", f"{(d + 1) * period_ns / 1e6:g} ms"
         if rest and continuous is None:
-            raise ConfigError(f"input_delay is {d} periods and {rest} ns: a fraction of a period needs the plant's "
-                              "continuous linear model (A, B) for the ZOH split; give a whole number of periods "
-                              f"(e.g. {d * period_ns} or {(d + 1) * period_ns} ns)", path=where)
+            raise ConfigError(f"input_delay is {d} periods and {rest / 1e6:g} ms: a fraction of a period needs the "
+                              "plant's continuous linear model (A, B) for the ZOH split; give a whole number of "
+                              f"periods (e.g. {lo} or {hi})", path=where)
         if kind == "ekf":
             if rest:
                 raise ConfigError("the ekf estimator takes whole periods of input delay only; give a multiple of the "
-                                  f"period (e.g. {d * period_ns} or {(d + 1) * period_ns} ns)", path=where)
+                                  f"period (e.g. {lo} or {hi})", path=where)
             line = InputDelayLine(m, d)
             return _FirstHalf(estimator, m), line, None
         if rest:
