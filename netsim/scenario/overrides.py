@@ -125,7 +125,7 @@ def shadowed_overrides(raw: dict[str, Any], scenario: Any, applied: list[Applied
             continue
         try:
             siblings = get_path(raw, parent)
-        except ConfigError:
+        except ConfigError:  # not reachable (set_path made it): nothing there can hide the override
             continue
         if not isinstance(siblings, dict):
             continue

@@ -183,5 +183,5 @@ def _period_ns(period: Any) -> int | None:
 
     try:
         return parse_time(plain_copy(period))
-    except (ValueError, TypeError):
+    except (ValueError, TypeError):  # a malformed period: the schema reports it at its path
         return None
