@@ -17,7 +17,10 @@ of ``D`` whole periods plus a fraction ``f`` is modelled as a delay line of ``D`
   the expected cost at the sampling instants (what the ``pendulum`` metric's ``lqg_cost_after_settle``
   estimates) and the spectral radius of the loop;
 * :func:`lqg_delay_margin` -- the largest delay with a mean-square stable loop (bisection on the spectral
-  radius), an exact counterpart of the phase-margin estimate :func:`models.pendulum.design.delay_margin`.
+  radius), an exact counterpart of the phase-margin estimate :func:`models.pendulum.design.delay_margin`;
+* :func:`law_delay_margin` -- the delay margin of the LQR law fed the true state: the limit of any estimator
+  told the delay with an exact model (issue 26 section 5), since the loop's eigenvalues are then those of the law
+  on the delayed plant and those of the estimation error (separation).
 """
 
 from __future__ import annotations
@@ -30,7 +33,8 @@ import numpy as np
 from models.pendulum.design import Q_LQR, R_LQR, Designs, _estimator_ss
 from models.pendulum.model import DISTURBANCE_HOLD, DISTURBANCE_STD, SENSOR_STD
 
-__all__ = ["controller_matrices", "sampled_loop", "analytic_cost", "lqg_delay_margin"]
+__all__ = ["controller_matrices", "sampled_loop", "analytic_cost", "lqg_delay_margin", "law_spectral_radius",
+           "law_delay_margin"]
 
 
 def controller_matrices(name: str, d: Designs, delay_samples: int = 0) -> tuple[np.ndarray, ...]:
@@ -116,6 +120,48 @@ def lqg_delay_margin(name: str, d: Designs, max_delay_s: float = 0.08, step_s: f
             while hi - lo > tol_s:
                 mid = 0.5 * (lo + hi)
                 lo, hi = (lo, mid) if unstable(mid) else (mid, hi)
+            return 0.5 * (lo + hi)
+        prev = float(tau)
+    return math.inf
+
+
+def law_spectral_radius(d: Designs, delay_s: float) -> float:
+    """Spectral radius of ``x[k+1] = Phi x[k] + Gamma1 u[k-D-1] + Gamma0 u[k-D]``, ``u[k] = -K x[k]``, for a delay
+    ``D h + f`` (Astrom & Wittenmark's augmented state ``[x; u[k-D-1] ... u[k-1]]``; ``Gamma0, Gamma1``: the ZOH
+    split of the period at ``f``, :func:`netsim.control.interface.zoh_split`)."""
+    from netsim.control.interface import zoh_split
+
+    h = d.lin.h
+    D = int(math.floor(delay_s / h + 1e-9))
+    f = max(delay_s - D * h, 0.0)
+    Phi, G0, G1 = zoh_split(d.lin.A, d.lin.B, h, f)
+    K = d.K_lqr
+    n = Phi.shape[0]
+    N = n + D + 1  # z = [x; u[k-D-1], ..., u[k-1]]
+    F = np.zeros((N, N))
+    F[:n, :n] = Phi
+    F[:n, n:n + 1] = G1
+    if D == 0:  # u[k-D] = u[k] = -K x[k]
+        F[:n, :n] += -G0 @ K
+        F[n, :n] = -K  # the next u[k-1] is u[k]
+    else:
+        F[:n, n + 1:n + 2] = G0
+        for i in range(D):  # shift the line
+            F[n + i, n + i + 1] = 1.0
+        F[n + D, :n] = -K  # the newest entry becomes u[k]
+    return float(np.max(np.abs(np.linalg.eigvals(F))))
+
+
+def law_delay_margin(d: Designs, max_delay_s: float = 0.1, step_s: float = 0.0005, tol_s: float = 1e-6) -> float:
+    """The smallest total delay (s) at which the LQR law fed the true state loses stability (:func:`law_spectral_
+    radius` reaches 1): scan by ``step_s``, then bisect to ``tol_s``; ``inf`` when stable up to ``max_delay_s``."""
+    prev = 0.0
+    for tau in np.arange(step_s, max_delay_s + 1e-12, step_s):
+        if law_spectral_radius(d, float(tau)) >= 1.0:
+            lo, hi = prev, float(tau)
+            while hi - lo > tol_s:
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if law_spectral_radius(d, mid) >= 1.0 else (mid, hi)
             return 0.5 * (lo + hi)
         prev = float(tau)
     return math.inf

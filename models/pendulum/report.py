@@ -449,9 +449,12 @@ TEXT: dict[str, str] = {
                     "unaware, {da_lu_unaware}; told the delay, {da_lu_aware}. Measured by the largest delay with "
                     "every run balanced, knowing the delay moves the limit from {da_kal_unaware_ok} to "
                     "{da_kal_aware_ok} ms (Kalman) and from {da_lu_unaware_ok} to {da_lu_aware_ok} ms (Luenberger). "
-                    "For comparison, raw finite differences (no model prediction to get wrong) keep every run "
-                    "balanced up to {da_fd_ok} ms: what remains is the delay margin of the law itself, which "
-                    "still feeds back the estimate of x[k] to a plant that gets u later. At {da_cost_delay} ms, where "
+                    "What remains is the delay margin of the law itself, which still feeds back the estimate of "
+                    "x[k] to a plant that gets u later: fed the true state, the LQR loop loses stability at "
+                    "{da_law} ms (`law_delay_margin` in models/pendulum/analysis.py; with an exact model the loop "
+                    "of an estimator told the delay has the law's eigenvalues and those of the estimation error, so "
+                    "this is the linear limit of every row told the delay), and raw finite differences (no model "
+                    "prediction to get wrong) keep every run balanced up to {da_fd_ok} ms. At {da_cost_delay} ms, where "
                     "both Kalman rows have every run balanced, the stationary cost is {da_kal_cost_unaware} unaware "
                     "and {da_kal_cost_aware} told the delay."),
     "quantised": ("Encoder quantisation as the noise instead of Gaussian noise of the same variance: u std "
@@ -772,6 +775,10 @@ def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame)
             q.append((f"da_{tag}_{name}", 0.0, phrase, src))
     add("da_seeds", da[da.estimation == "input_delay"].seed_count.max(), "delay_aware: seed_count")
     add("da_fd_ok", noise_delay_margins(dc)["fd_raw"][0], "delay_cost: fd_raw (noise_delay_margins)")
+    from models.pendulum.analysis import law_delay_margin
+    from models.pendulum.design import designs
+
+    add("da_law", 1e3 * law_delay_margin(designs()), "analysis.law_delay_margin (LQR fed the true state)")
     k = da[(da.estimator == "kalman")]
     both = sorted(set(k[(k.estimation == "unaware") & k.sim_cost.notna()].total_delay_ms)
                   & set(k[(k.estimation == "input_delay") & k.sim_cost.notna()].total_delay_ms))

@@ -48,3 +48,21 @@ def test_unicycle_delay_aware_frame_names_the_rows_and_shares_the_zero_delay_run
                           ("radio", "accurate", 0.0, "told the delay", 4.0),
                           ("radio", "accurate", 0.0, "unaware", 4.0),
                           ("radio", "accurate", 50.0, "told the delay", 5.0)])
+
+
+def test_pendulum_law_spectral_radius_matches_hand_built_loops() -> None:
+    import numpy as np
+
+    from models.pendulum.analysis import law_spectral_radius
+    from models.pendulum.design import designs
+
+    d = designs()
+    A, B, K = d.lin.Ad, d.lin.Bd, d.K_lqr
+    # no delay: the state-feedback loop A - B K
+    assert abs(law_spectral_radius(d, 0.0) - np.max(np.abs(np.linalg.eigvals(A - B @ K)))) < 1e-12
+    # two whole periods: z = [x; u[k-2]; u[k-1]], x+ = A x + B u[k-2], written out by hand
+    F = np.zeros((6, 6))
+    F[:4, :4], F[:4, 4:5] = A, B
+    F[4, 5] = 1.0
+    F[5, :4] = -K
+    assert abs(law_spectral_radius(d, 2 * d.lin.h) - np.max(np.abs(np.linalg.eigvals(F)))) < 1e-12
