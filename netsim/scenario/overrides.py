@@ -152,7 +152,7 @@ def _shadowing(model: BaseModel, siblings: dict[str, Any], field: str, item: App
     cls = type(model)
     fields = cls.model_fields
     value = getattr(model, field)
-    if not isinstance(value, (str, enum.Enum)) or isinstance(value, bool):
+    if not isinstance(value, (str, enum.Enum)):
         return None  # a value in its own right, not a name that picks defaults
     before = item.before
     if before is MISSING:
