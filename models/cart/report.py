@@ -8,20 +8,16 @@ or with ``engine="numpy"`` through the plain numpy loop :func:`models.cart.sim.s
 the numbers for each of the paper's claims. ``instability.csv`` holds the wc = 80 runs of every controller over
 :data:`SEEDS_INSTABILITY` (the instability verdict counts its oscillating runs per controller).
 
-Run cache: each point's row is kept in ``<out>/runs/points_<hash>.pkl`` (not in git), keyed by the point and
-the engine; ``<hash>`` covers the cart's numeric code and ``scenarios/cart.yaml`` (:func:`code_hash`), so a
-change there runs everything again. netsim's own code is not in the key: the golden trace of ``cart.yaml``
-(tests/test_golden_traces.py) pins its output. Delete the folder to force fresh runs.
+Run cache (:mod:`models.cart.cache`): each point's row is kept in ``<out>/runs/points_<hash>.pkl`` (not in
+git), keyed by the point and the engine; ``<hash>`` covers the cart's numeric code, ``scenarios/cart.yaml``
+and the run durations, so a change there runs everything again. Delete the folder to force fresh runs.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
 import math
 import os
-import pickle
 import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
@@ -30,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from models.cart.cache import PointCache, code_hash
 from models.cart.claims import claims as make_claims
 from models.cart.claims import fmt as _fmt
 from models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool_sigma, pooling_difference
@@ -40,7 +37,7 @@ from netsim.registry import register
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["cart_report", "run_point", "fig2_points", "quant_points", "sensitivity_points", "instability_points",
-           "FRICTIONS", "SEEDS_INSTABILITY", "PointCache", "code_hash"]
+           "FRICTIONS", "SEEDS_INSTABILITY", "run_cache"]
 
 log = logging.getLogger(__name__)
 #: Progress messages of the report (the CLI shows this logger at INFO level).
@@ -99,57 +96,9 @@ def instability_points(seeds: tuple[int, ...] = SEEDS_INSTABILITY) -> list[dict[
     return [dict(controller=c, wc=80, q=6, vref=0.8, seed=s, friction="inband") for c in CONTROLLERS for s in seeds]
 
 
-#: The cart modules whose code decides a run's numbers (the run cache's key, :func:`code_hash`).
-_NUMERIC_MODULES = ("controllers.py", "dynamics.py", "encoding.py", "estimators.py", "friction.py", "jmap.py",
-                    "metrics.py", "plant.py", "programs.py", "sim.py", "tuning.py")
-
-
-def code_hash() -> str:
-    """Hash of the cart's numeric modules, ``scenarios/cart.yaml`` and the run durations (the cache's key)."""
-    h = hashlib.sha256()
-    for name in _NUMERIC_MODULES:
-        h.update((Path(__file__).parent / name).read_bytes())
-    h.update(SCENARIO.read_bytes())
-    h.update(f"{DURATION_FIG2}/{DURATION_QUANT}/{CONTROL_DELAY_NS}".encode())
-    return h.hexdigest()[:12]
-
-
-class PointCache:
-    """Rows of runs already made with the same code (:func:`code_hash`), keyed by point and engine; only runs
-    that ended ``ok`` are kept.
-
-    Parameters
-    ----------
-    folder
-        Where the cache file lives (``None``: no cache, every point runs).
-    """
-
-    def __init__(self, folder: Path | None) -> None:
-        self.path = None if folder is None else Path(folder) / f"points_{code_hash()}.pkl"
-        self.rows: dict[str, dict[str, Any]] = {}
-        self.reused = 0
-        if self.path is not None and self.path.is_file():
-            with open(self.path, "rb") as fh:
-                self.rows = pickle.load(fh)
-
-    @staticmethod
-    def key(point: dict[str, Any], engine: str) -> str:
-        return json.dumps({**point, "engine": engine}, sort_keys=True)
-
-    def get(self, point: dict[str, Any], engine: str) -> dict[str, Any] | None:
-        row = self.rows.get(self.key(point, engine))
-        return None if row is None else dict(row)
-
-    def put(self, point: dict[str, Any], engine: str, row: dict[str, Any]) -> None:
-        self.rows[self.key(point, engine)] = dict(row)
-
-    def save(self) -> None:
-        if self.path is not None:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = self.path.with_suffix(".tmp")
-            with open(tmp, "wb") as fh:
-                pickle.dump(self.rows, fh)
-            tmp.replace(self.path)
+def run_cache(folder: Path | None) -> PointCache:
+    """The run cache of the report's points in ``folder`` (``None``: none), keyed by this code's hash."""
+    return PointCache(folder, code_hash(SCENARIO, f"{DURATION_FIG2}/{DURATION_QUANT}/{CONTROL_DELAY_NS}"))
 
 
 def run_point(point: dict[str, Any], engine: str = "netsim") -> dict[str, Any]:
@@ -503,7 +452,7 @@ def cart_report(out_dir: Path | None = None, plots: bool = True, *, engine: str 
         Also run every controller at wc = 80 over ``inst_seeds`` (default :data:`SEEDS_INSTABILITY`) for the
         instability verdict (``instability.csv``).
     use_cache
-        Reuse the rows of points already run with the same code (:class:`PointCache` in ``<out>/runs``).
+        Reuse the rows of points already run with the same code (:func:`run_cache` in ``<out>/runs``).
     progress
         Called as ``progress(done, total, study)`` after each run (default: :func:`log_progress`); ``None``
         for silence.
@@ -512,7 +461,7 @@ def cart_report(out_dir: Path | None = None, plots: bool = True, *, engine: str 
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "cart"
     out.mkdir(parents=True, exist_ok=True)
     sd = tuple(seeds) if seeds else SEEDS_FIG2
-    cache = PointCache(out / "runs" if use_cache else None)
+    cache = run_cache(out / "runs" if use_cache else None)
     f2 = pool_sigma(_run_all(fig2_points(sd), engine, workers, progress, "Fig. 2", cache))
     fq = (pool_sigma(_run_all(quant_points(), engine, workers, progress, "Figs. 3-4", cache)) if quant
           else pd.DataFrame())
