@@ -9,11 +9,13 @@ does not use). Annotations are unaffected under ``from __future__ import annotat
 from __future__ import annotations
 
 import importlib
+import sys
+import warnings
 from collections.abc import Callable, Mapping
 from types import ModuleType
 from typing import Any
 
-__all__ = ["lazy_exports", "lazy_module"]
+__all__ = ["callable_module", "lazy_exports", "lazy_module"]
 
 
 class _LazyModule:
@@ -81,3 +83,47 @@ def lazy_exports(package: str, where: Mapping[str, str]) -> tuple[Callable[[str]
         return sorted(set(vars(sys.modules[package])) | set(where))
 
     return __getattr__, __dir__
+
+
+class _CallableModule(ModuleType):
+    """A module that can be called: it warns (``DeprecationWarning``) and calls the function it names.
+
+    Before issue 27, ``netsim.sweep`` and ``netsim.report`` were functions until their module was first imported,
+    and modules from then on. They are now always the modules; calling one still works, through this class.
+    """
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        module, attr, instead = self.__dict__["__call_target__"]
+        warnings.warn(f"calling the module {self.__name__} is deprecated: call {instead}(...) instead",
+                      DeprecationWarning, stacklevel=2)
+        return getattr(importlib.import_module(module), attr)(*args, **kwargs)
+
+
+def callable_module(name: str, target: str, instead: str) -> None:
+    """Make the (imported) module ``name`` callable, as a deprecated alias of the function ``target``.
+
+    Parameters
+    ----------
+    name : str
+        The module's ``__name__`` (call this at the end of the module itself, so that every import path gives
+        the same callable module).
+    target : str
+        ``"package.module:function"``: what a call runs (imported at the call).
+    instead : str
+        The name the deprecation warning tells the caller to use (``"netsim.run_sweep"``).
+
+    Examples
+    --------
+    >>> import types, sys
+    >>> sys.modules["old_api"] = types.ModuleType("old_api")
+    >>> callable_module("old_api", "math:sqrt", "math.sqrt")
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     sys.modules["old_api"](4.0)
+    2.0
+    """
+    module, _, attr = target.partition(":")
+    mod = sys.modules[name]
+    mod.__dict__["__call_target__"] = (module, attr, instead)
+    mod.__class__ = _CallableModule

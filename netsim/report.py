@@ -48,6 +48,7 @@ import numpy as np
 import pandas as pd
 
 from netsim.errors import ConfigError
+from netsim.lazy_import import callable_module as _callable_module
 from netsim.metrics.runtime import job_outcome_counts
 
 __all__ = [
@@ -380,3 +381,7 @@ def report(path_or_name: str | Path, *, out: str | Path | None = None, plots: bo
             write_csv(frame, target / f"{name}.csv")
     log.info("report of %s (%s, %d runs) written to %s", folder, kind, len(runs), target)
     return tables
+
+
+# ``netsim.report`` was once the function report (issue 27): calling the module still runs it, with a warning
+_callable_module(__name__, "netsim.report:report", "netsim.make_report")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from netsim.lazy_import import lazy_exports
+from netsim.lazy_import import callable_module, lazy_exports
 
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.sweep.executor import SchedulerLost, SchedulerUnreachable
@@ -33,6 +33,7 @@ _WHERE = {
 
 
 __getattr__, __dir__ = lazy_exports(__name__, {name: f"netsim.sweep.{where}" for name, where in _WHERE.items()})
+callable_module(__name__, "netsim.sweep.run:run_sweep", "netsim.run_sweep")  # it was the function once (issue 27)
 
 __all__ = [
     "run_sweep",
