@@ -12,8 +12,9 @@ What is checked
 - ``nodes``, when given, names at least one node; a node whose ``tasks`` is written as an empty list and that
   has no handlers is refused, a node with neither key is a warning (it runs nothing); task and handler names are
   unique per node (the message names the first definition, with its line when the caller gives a line lookup).
-- A task with neither ``period`` nor ``release`` is a warning: it is aperiodic by default, and nothing but a
-  plugin's program releases an aperiodic task (a deleted ``period`` leaves a task that never runs).
+- A task with neither ``period`` nor ``release`` (nor ``min_interarrival``) is refused: a deleted ``period``
+  used to leave an aperiodic task that never runs while the run said ``ok``. A task released only by a
+  plugin's program or a trigger says so with ``release: aperiodic``.
 - The expected number of events (:func:`expected_events`: ``duration / period`` summed over periodic tasks,
   timer handlers, polling encoders and the plant's ``record_grid``) above :data:`EVENTS_WARN` is a warning
   with the estimate.
@@ -147,10 +148,10 @@ def _structure_problems(raw: dict[str, Any], line_of: LineOf | None) -> Iterator
             if (isinstance(task, dict) and task.get("period") is None and task.get("release") is None
                     and task.get("min_interarrival") is None):  # a sporadic task releases itself
                 yield Problem(format_path(["nodes", node_name, "tasks", i]),
-                              f"task '{_short(str(task.get('name')))}' has no period and no release, so it is "
-                              "aperiodic: it runs only when a program creates its jobs, which none of netsim's "
-                              "programs does; add e.g. 'period: 10 ms' or 'release: on_message:<network>', or "
-                              "write 'release: aperiodic' if a plugin releases it", severity=WARNING)
+                              f"task '{_short(str(task.get('name')))}' has no period and no release, so "
+                              "nothing would ever release it; add e.g. 'period: 10 ms' or "
+                              "'release: on_message:<network>', or write 'release: aperiodic' if only a "
+                              "plugin's program or a trigger releases it")
         first: dict[str, str] = {}
         for kind in ("tasks", "handlers"):
             for i, item in enumerate(_l(node.get(kind))):
