@@ -12,7 +12,8 @@ The battery: a check at ``t`` knows the energy left ``R = C - E(t)``; the node c
 ``P_max`` (CPU busy plus every radio in its most costly state), so it cannot run out before
 ``t + R / P_max``, where the next check is. The checks close in on the instant ``E`` reaches ``C`` and stop
 within a nanosecond of it (fewer than ``ln(C / (P_max 1 ns)) P_max / P_mean`` checks per run: a few hundred);
-then the node stops (:meth:`Kernel.halt`, :meth:`WirelessMedium.radio_off`) and uses nothing more.
+then the node stops (:meth:`Kernel.halt`) and uses nothing more, and every network it is on drops its queued
+frames (:meth:`Network.halt_node`, ``sender_dead``; a radio also stops receiving).
 A node without a battery costs no event at all: its energy is read once, after the run.
 """
 
@@ -41,8 +42,6 @@ class EnergyMeter:
         Its energy model.
     media
         The wireless media the node is on (their radio time is tracked when the model has radio powers).
-    others
-        The node's other networks (nothing to stop there: a halted kernel sends nothing and ignores receptions).
 
     Attributes
     ----------
@@ -121,5 +120,13 @@ class EnergyMeter:
         self._frozen = self.breakdown(now)
         self.depleted_ns = now
         self.kernel.halt()
-        for medium in self.media:
-            medium.radio_off(self.node)
+        for net in self._networks():
+            net.halt_node(self.node)
+
+    def _networks(self) -> list[Any]:
+        """Every network the node is on: its wireless media, and the others among ``env.components``."""
+        out = list(self.media)
+        for key, comp in getattr(self.env, "components", {}).items():
+            if key.startswith("network.") and comp not in out and self.node in getattr(comp, "nodes", ()):
+                out.append(comp)
+        return out

@@ -105,6 +105,9 @@ class CanBus(Network):
                 heappush(self._cands, (frame.priority, frame.order, frame.sender))
             self._request_arbitration()
 
+    def _halted(self, node: str, dropped: int) -> None:
+        self._queued -= dropped  # their candidate entries are stale now: dropped when they come to the top
+
     def _request_arbitration(self) -> None:
         if not self._busy and not self._arb_pending:
             self._arb_pending = True

@@ -18,7 +18,8 @@ from pydantic import Field
 from netsim.env import ARBITRATE
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Frame, Network
-from netsim.network.records import DROP_COLLISIONS, DROP_LOST, DROP_NO_RECEIVER, DROP_QUEUE_FULL, DROP_STALE
+from netsim.network.records import (DROP_COLLISIONS, DROP_LOST, DROP_NO_RECEIVER, DROP_QUEUE_FULL, DROP_SENDER_DEAD,
+                                     DROP_STALE)
 from netsim.network.stats import BusyMeter
 from netsim.network.timing import Call, call_later, tx_time_ns
 from netsim.registry import register
@@ -134,8 +135,23 @@ class CsmaCdBus(Network):
             self._request()
 
     def _backoff_done(self, node: str) -> None:
+        if node in self._dead:  # the node halted while backing off: its frame does not go
+            self._drop_current(node)
+            return
         self._ready.append(node)
         self._request()
+
+    def _halted(self, node: str, dropped: int) -> None:
+        if node in self._ready:  # waiting for the next contention, not on the wire: dropped
+            self._ready.remove(node)
+            self._drop_current(node)
+        # a frame on the wire finishes; one in a collision or backing off is dropped when its backoff ends
+
+    def _drop_current(self, node: str) -> None:
+        frame = self._current[node]
+        if frame is not None:
+            self._drop_frame(frame, DROP_SENDER_DEAD)
+            self._current[node] = None
 
     def _tx_end(self, node: str) -> None:
         now = self.sim.now

@@ -39,6 +39,7 @@ from netsim.network.records import (
     DROP_LOST,
     DROP_NO_RECEIVER,
     DROP_QUEUE_FULL,
+    DROP_SENDER_DEAD,
     DROP_STALE,
     MessageRecord,
 )
@@ -146,6 +147,7 @@ class Network(abc.ABC):
         self._delay_max = 0
         self.drops: dict[str, int] = {r: 0 for r in self.drop_reasons}
         self._warned: set[str] = set()
+        self._dead: set[str] = set()  # nodes stopped for good (halt_node): their frames do not go
         # (wire bits, transmission time) by (payload bits, sender): what wire_bits and _frame_time give, which
         # depend on nothing else (a subclass whose framing also depends on the message must clear this cache)
         self._framing: dict[tuple[int, str], tuple[int, int]] = {}
@@ -253,11 +255,33 @@ class Network(abc.ABC):
         frame = Frame(msg, copies, sender, msg.priority, framing[0], framing[1], self._order)
         self.n_frames += 1
         self.n_copies += len(copies)
+        if self._dead and sender in self._dead:
+            self._drop_frame(frame, DROP_SENDER_DEAD)
+            return
         pre = self._pre[sender]
         if pre:
-            call_later(self.sim, pre, self._offer, frame)
+            call_later(self.sim, pre, self._offer_after_pre, frame)
         else:
             self._offer(frame)
+
+    def halt_node(self, node: str) -> None:
+        """``node`` stopped for good (its battery ran out, :mod:`netsim.energy`): its frames do not go.
+
+        The frames in its sender queue are dropped now (``sender_dead``), and so is every frame of it that is
+        still in its pre-processing delay when that ends, or that it hands over later. A frame already on the
+        medium finishes its transmission; a medium whose MAC holds a frame waiting for channel access drops it
+        too (:meth:`_halted`). Calling it again does nothing.
+        """
+        if node not in self._node_set or node in self._dead:
+            return
+        self._dead.add(node)
+        q = self.queues[node]
+        now = self.sim.now
+        n = 0
+        while q._len:
+            self._drop_frame(q.pop(now), DROP_SENDER_DEAD)
+            n += 1
+        self._halted(node, n)
 
     def utilization(self, t_end_ns: int) -> float:
         """Fraction of ``[0, t_end_ns]`` the medium carried frames (see ``utilization_mode``)."""
@@ -343,7 +367,18 @@ class Network(abc.ABC):
         """Type-specific metrics added to :meth:`metrics`."""
         return {}
 
+    def _halted(self, node: str, dropped: int) -> None:
+        """:meth:`halt_node` emptied ``node``'s sender queue (``dropped`` frames): drop what the medium holds of
+        it besides (a frame waiting for channel access) and fix its own counters."""
+
     # ------------------------------------------------------------------------------------------ helpers
+    def _offer_after_pre(self, frame: Frame) -> None:
+        """The sender's pre-processing delay of ``frame`` is over: offer it, unless the sender halted meanwhile."""
+        if self._dead and frame.sender in self._dead:
+            self._drop_frame(frame, DROP_SENDER_DEAD)
+            return
+        self._offer(frame)
+
     def _too_large(self, msg: Message, limit: int, what: str = "max_frame_bits") -> None:
         raise ConfigError(
             f"network '{self.name}': '{msg.sender}' sent a {msg.bits}-bit message (tag '{msg.tag}') but the "

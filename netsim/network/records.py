@@ -21,6 +21,7 @@ __all__ = [
     "DROP_INTERFERENCE",
     "DROP_NO_ACK",
     "DROP_CHANNEL_ACCESS",
+    "DROP_SENDER_DEAD",
     "DROP_REASONS",
 ]
 
@@ -45,6 +46,9 @@ DROP_INTERFERENCE: Final[str] = "interference"
 DROP_NO_ACK: Final[str] = "no_ack"
 #: Wireless (802.15.4): the channel was busy at every clear channel assessment allowed.
 DROP_CHANNEL_ACCESS: Final[str] = "channel_access"
+#: The sender stopped for good (its battery ran out, :meth:`Network.halt_node`) with the frame still queued, in its
+#: pre-processing delay, or waiting for channel access: a halted node's frames do not go.
+DROP_SENDER_DEAD: Final[str] = "sender_dead"
 #: Every drop reason a network can report.
 DROP_REASONS: Final[tuple[str, ...]] = (
     DROP_LOST,
@@ -57,6 +61,7 @@ DROP_REASONS: Final[tuple[str, ...]] = (
     DROP_INTERFERENCE,
     DROP_NO_ACK,
     DROP_CHANNEL_ACCESS,
+    DROP_SENDER_DEAD,
 )
 
 

@@ -48,9 +48,9 @@ Radio time (energy, :mod:`netsim.energy`)
     ``tx`` (it transmits a frame or an ACK), ``rx`` (not transmitting, it senses others' transmissions: their
     powers add up to ``carrier_sense_dbm``), ``idle`` (listening to a quiet channel) and ``sleep`` (a radio
     with ``listen: own_frames`` sleeps while its MAC holds no frame; a sleeping radio receives nothing, and a
-    copy for it fails as ``out_of_range``). A node whose battery ran out (:meth:`WirelessMedium.radio_off`)
-    neither sends nor receives from then on: its frames stay queued, copies for it fail, and its
-    transmission under way reaches no one.
+    copy for it fails as ``out_of_range``). A node whose battery ran out (:meth:`WirelessMedium.halt_node`,
+    also named ``radio_off``) neither sends nor receives from then on: its queued frames and the frame its MAC
+    holds are dropped (``sender_dead``), copies for it fail, and its transmission under way reaches no one.
 
 Why this module is long: the radio channel is one state machine over shared per-node state (positions and
 motion, what each node senses, the receptions under way, ACK waits and retries, radio time); the MAC modules
@@ -90,6 +90,7 @@ from netsim.network.records import (
     DROP_NO_RECEIVER,
     DROP_OUT_OF_RANGE,
     DROP_QUEUE_FULL,
+    DROP_SENDER_DEAD,
     DROP_STALE,
 )
 from netsim.network.stats import BusyMeter
@@ -243,6 +244,7 @@ class WirelessMedium(Network):
         self._retries: dict[str, int] = {n: 0 for n in self.nodes}
         self._ack_wait: dict[str, Call | None] = {n: None for n in self.nodes}
         self._last_end: dict[str, int] = {}  # end of the last transmission of each node's current frame
+        self._sending: set[str] = set()  # nodes whose current frame is on the air (from _send_frame to _frame_end)
         self._seen: set[tuple[int, str]] = set()  # (msg_id, receiver) delivered: later copies are duplicates
         self.attempts = 0
         self.retransmissions = 0
@@ -278,13 +280,15 @@ class WirelessMedium(Network):
         clock = self._radios[node] = RadioClock(listen, self._radio_state(node, listen), self.sim.now)
         return clock
 
-    def radio_off(self, node: str) -> None:
+    def halt_node(self, node: str) -> None:
         """``node``'s radio stops for good (its battery ran out): it neither sends nor receives from now on.
 
-        Its queued frames stay queued, receptions under way at it fail (``out_of_range``) and its own
-        transmission under way reaches no one.
+        Its queued frames, and the frame its MAC holds when it is not on the air (backing off, sensing the
+        channel, waiting for an ACK or a retry), are dropped (``sender_dead``); receptions under way at it fail
+        (``out_of_range``); its own transmission under way reaches no one, and its frame is then dropped
+        (``sender_dead``).
         """
-        if node in self._off:
+        if node in self._off or node not in self._pos:
             return
         self._off.add(node)
         for tx in self._active:
@@ -294,6 +298,30 @@ class WirelessMedium(Network):
         clock = self._radios.get(node)
         if clock is not None:
             clock.set("off", self.sim.now)
+        super().halt_node(node)
+
+    radio_off = halt_node
+
+    def _halted(self, node: str, dropped: int) -> None:
+        if self._current[node] is not None and node not in self._sending:
+            self._drop_held(node, self.sim.now)
+
+    def _drop_held(self, node: str, now: int) -> None:
+        """Drop the copies of ``node``'s current frame not delivered yet (``sender_dead``); the MAC holds none."""
+        frame = self._current[node]
+        wait = self._ack_wait[node]
+        if wait is not None and wait.live:
+            wait.cancel()
+        self._ack_wait[node] = None
+        for c in self._pending.get(node, []):
+            if (c[0].msg_id, c[0].receiver) in self._seen:
+                continue
+            if frame is not None and frame.tx_start_ns is not None:
+                self._drop_on_air(c, frame, self._last_end.get(node, now), DROP_SENDER_DEAD)
+            else:
+                self._drop_copy(c, DROP_SENDER_DEAD)
+        self._current[node] = None
+        self._pending.pop(node, None)
 
     def received_power_dbm(self, sender: str, receiver: str) -> float:
         """Power (dBm) ``receiver`` gets from a transmission of ``sender`` at their current positions."""
@@ -461,12 +489,18 @@ class WirelessMedium(Network):
         if frame.tx_start_ns is None:
             frame.tx_start_ns = now
         self.attempts += 1
+        self._sending.add(node)
         receivers = [c[0].receiver for c in self._pending[node]]
         self._start_tx(node, receivers, frame.tx_ns, self._frame_end, (node, frame, now))  # type: ignore[arg-type]
 
     def _frame_end(self, item: tuple, outcome: dict[str, str | None]) -> None:
         node, frame, _start = item
         now = self.sim.now
+        self._sending.discard(node)
+        if node in self._off:  # the sender halted during the transmission: it reached no one, and ends here
+            self._last_end[node] = now
+            self._drop_held(node, now)
+            return
         p: Any = self.params
         pending = self._pending[node]
         loss = self._loss
