@@ -210,7 +210,8 @@ def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
 
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
     F = {"delay_aware_can": _sweep("unicycle_lqr_delay_aware", out, workers),
-         "delay_aware_radio": _sweep("unicycle_radio_delay_aware", out, workers)}
+         "delay_aware_radio": _sweep("unicycle_radio_delay_aware", out, workers),
+         "delay_margin": {0.03: S.delay_margin(0.03)}}
     frame = delay_aware_frame(F["delay_aware_can"], F["delay_aware_radio"])
     frame.drop(columns=["values"], errors="ignore").to_csv(out / "delay_aware.csv", index=False)
     q, T = Quotes(), _Table()
