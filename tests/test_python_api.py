@@ -19,7 +19,7 @@ SERVO_CAN = ROOT / "scenarios" / "dc_servo_can.yaml"
 
 def test_dir_lists_the_lazy_public_api():
     names = dir(netsim)
-    for public in ("run", "load_scenario", "report", "sweep", "RunResult", "__version__"):
+    for public in ("run", "load_scenario", "run_sweep", "make_report", "RunResult", "__version__"):
         assert public in names
     assert "_LAZY" not in names and "TYPE_CHECKING" not in names
 
