@@ -11,7 +11,7 @@ import numpy as np
 
 from netsim.env import NORMAL, RECORD, schedule_call
 from netsim.errors import BuildError, ConfigError, DivergenceError, SimulationError
-from netsim.plant.disturbance import _classify, _Source, _StateNoise
+from netsim.plant.disturbance import _classify, _Source
 from netsim.plant.shared import NEVER, _names, _vector
 from netsim.timebase import format_time, to_seconds
 
@@ -239,36 +239,18 @@ class Plant(abc.ABC):
         ``plant.<name>.state_noise``). See :mod:`netsim.plant.noise` for how it composes with integration."""
         if self._started:
             raise BuildError(f"plant {self.name}: add state noise before the simulation starts")
-        idx = [self.state_index(s) for s in states]
-        if len(set(idx)) != len(idx):
-            raise ConfigError(f"plant {self.name}: state noise lists a state twice: {list(states)}")
-        sig = np.broadcast_to(np.asarray(sigma, dtype=float), (len(idx),)) if np.ndim(sigma) == 0 else \
-            np.asarray(sigma, dtype=float)
-        if sig.shape != (len(idx),) or not np.all(np.isfinite(sig)) or np.any(sig < 0):
-            raise ConfigError(f"plant {self.name}: state noise needs one finite sigma >= 0 per state, got {sigma}")
-        dt = int(sample_ns)
-        if dt <= 0:
-            raise ConfigError(f"plant {self.name}: state noise sample must be positive, got {sample_ns}")
-        self._add_source(_StateNoise(idx, sig * math.sqrt(dt / 1e9), dt))
+        from netsim.plant.noise import state_noise
+
+        self._add_source(state_noise(self.name, [self.state_index(s) for s in states], sigma, sample_ns))
 
     def set_process_noise(self, process_noise: Any) -> None:
         """Add the random disturbances of a scenario's ``process_noise`` entries before the run: held white
         noise on inputs, random-walk increments on states (:mod:`netsim.plant.noise`).
 
         LTI and discrete plants also take an intensity (a number, a vector or a matrix) here."""
-        from netsim.plant.noise import is_entry_form, noise_entries
+        from netsim.plant.noise import apply_entries
 
-        if not is_entry_form(process_noise):
-            raise ConfigError(
-                f"plant {self.name} takes process noise as entries {{states: [...], sigma: ..., sample: ...}} or "
-                f"{{inputs: [...], sigma: ..., sample: ...}}; got {process_noise!r}"
-            )
-        for entry in noise_entries(process_noise):
-            for target, sigma in zip(entry.targets, entry.sigmas()):
-                if entry.kind == "inputs":
-                    self.add_input_noise(target, sigma, entry.sample)
-            if entry.kind == "states":
-                self.add_state_noise(entry.targets, entry.sigmas(), entry.sample)
+        apply_entries(self, process_noise)
 
     def _check_source(self, src: _Source) -> None:
         """Subclasses reject disturbance kinds they cannot propagate."""

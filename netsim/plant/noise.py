@@ -33,15 +33,17 @@ noise, so adding one never moves the draws of another feature (the LTI intensity
 
 from __future__ import annotations
 
+import math
 from typing import Any, Literal
 
+import numpy as np
 from pydantic import Field, model_validator
 
 from netsim.errors import ConfigError
-from netsim.plant.disturbance import LTIDisturbance
+from netsim.plant.disturbance import LTIDisturbance, _StateNoise
 from netsim.units import Duration, StrictModel
 
-__all__ = ["HeldNoise", "NoiseEntry", "noise_entries", "normalized_entries"]
+__all__ = ["HeldNoise", "NoiseEntry", "apply_entries", "noise_entries", "normalized_entries", "state_noise"]
 
 
 class HeldNoise(LTIDisturbance):
@@ -152,3 +154,33 @@ def normalized_entries(noise: Any) -> list[dict[str, Any]]:
             raise ValueError(f"{where}{loc + ': ' if loc else ''}{msg}") from None
         out.append(entry.model_dump(mode="json", exclude_none=True))
     return out
+
+
+def state_noise(plant: str, states: list[int], sigma: Any, sample_ns: int) -> _StateNoise:
+    """The source of random-walk increments on the state indices ``states`` of plant ``plant`` (checked):
+    ``sd = sigma sqrt(sample)`` per state, ``sigma`` one number or one per state."""
+    if len(set(states)) != len(states):
+        raise ConfigError(f"plant {plant}: state noise lists a state twice: {list(states)}")
+    sig = np.full(len(states), float(sigma)) if np.ndim(sigma) == 0 else np.asarray(sigma, dtype=float)
+    if sig.shape != (len(states),) or not np.all(np.isfinite(sig)) or np.any(sig < 0):
+        raise ConfigError(f"plant {plant}: state noise needs one finite sigma >= 0 per state, got {sigma}")
+    dt = int(sample_ns)
+    if dt <= 0:
+        raise ConfigError(f"plant {plant}: state noise sample must be positive, got {sample_ns}")
+    return _StateNoise(states, sig * math.sqrt(dt / 1e9), dt)
+
+
+def apply_entries(plant: Any, noise: Any) -> None:
+    """Add ``process_noise`` entries to ``plant`` (:meth:`~netsim.plant.Plant.add_input_noise` per listed input,
+    :meth:`~netsim.plant.Plant.add_state_noise` per states entry); ConfigError for another form."""
+    if not is_entry_form(noise):
+        raise ConfigError(
+            f"plant {plant.name} takes process noise as entries {{states: [...], sigma: ..., sample: ...}} or "
+            f"{{inputs: [...], sigma: ..., sample: ...}}; got {noise!r}"
+        )
+    for entry in noise_entries(noise):
+        if entry.kind == "inputs":
+            for target, sigma in zip(entry.targets, entry.sigmas()):
+                plant.add_input_noise(target, sigma, entry.sample)
+        else:
+            plant.add_state_noise(entry.targets, entry.sigmas(), entry.sample)
