@@ -14,7 +14,9 @@ once per job: ``instance(job)`` returns the job's generator. The numerics live i
     ``analog_in(channel)``), read the reference signal, compute the PID/PD output, ``execute``, then send it to
     ``to`` on ``network`` or write ``output_channel``.
 ``actuator``
-    take the newest control value from the inbox, ``execute``, ``analog_out(channel, u)``.
+    take the newest control value from the inbox, ``execute``, ``analog_out(channel, u)``; with ``report:`` it
+    then sends ``{value: u, t_ns: the instant it wrote the DAC}`` back (tag ``applied``), for a
+    ``state_feedback`` estimator's ``applied_input`` (the input the plant really holds, issue 26).
 ``interference``
     dummy frames of ``bits`` on ``network``: per job with probability ``share`` (TrueTime's bandwidth share)
     or, with ``rate`` set, a Poisson stream from a single long-running job.
@@ -47,6 +49,7 @@ __all__ = [
     "Sampler",
     "Controller",
     "Actuator",
+    "ActuatorReport",
     "Interference",
     "PeriodicController",
 ]
@@ -294,26 +297,27 @@ class Controller:
             self.ctx.record(p.record_as, u, job.now)
 
 
+class ActuatorReport(StrictModel):
+    """Where the actuator reports each input it applies (a ``{value, t_ns}`` message, ``t_ns`` the instant it
+    wrote the DAC), for a ``state_feedback`` estimator's ``applied_input``."""
+
+    network: str = Field(description="the network the report is sent on (the actuator's node must be on it)")
+    to: str = Field(description="the node the report goes to (the controller)")
+    tag: str = Field("applied", description="tag of the report message")
+    bits: int = Field(64, ge=1, le=10**9, description="size of the report message in bits")
+    priority: int = Field(0, description="priority of the report message on the network (medium-specific)")
+
+
 @register("program", "actuator", "take the newest control value from `network`, execute, analog_out(channel)")
 class Actuator:
     """Event-driven actuator: receive, execute, write the DAC."""
-
-    class Report(StrictModel):
-        """Where the actuator reports each input it applies (a ``{value, t_ns}`` message, ``t_ns`` the instant it
-        wrote the DAC), for a ``state_feedback`` estimator's ``applied_input``."""
-
-        network: str = Field(description="the network the report is sent on (the actuator's node must be on it)")
-        to: str = Field(description="the node the report goes to (the controller)")
-        tag: str = Field("applied", description="tag of the report message")
-        bits: int = Field(64, ge=1, le=10**9, description="size of the report message in bits")
-        priority: int = Field(0, description="priority of the report message on the network (medium-specific)")
 
     class Params(StrictModel):
         network: str = Field(description="the network the control messages arrive on (the newest one is applied)")
         channel: str = Field(description="the DAC channel of the scenario's io the value is written to")
         record_as: str | None = Field(None, description="record the applied value under this name, at the "
                                                         "instant it is written")
-        report: Actuator.Report | None = Field(None, description="send back {value, t_ns} of each applied input "
+        report: ActuatorReport | None = Field(None, description="send back {value, t_ns} of each applied input "
                                                                  "(default: none)")
 
         @model_serializer(mode="wrap")

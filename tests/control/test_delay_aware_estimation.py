@@ -258,10 +258,10 @@ def test_bad_delay_options_are_located_problems(raw: dict, where: str, words: st
 
 
 def test_every_state_feedback_and_actuator_parameter_has_a_description() -> None:
-    from netsim.programs.basic import Actuator
+    from netsim.programs.basic import Actuator, ActuatorReport
     from netsim.programs.state_feedback import AppliedInputSource, MeasurementSource, ModelSpec, SolveTime, _Params
 
     missing = [f"{model.__name__}.{name}" for model in (_Params, MeasurementSource, AppliedInputSource, ModelSpec,
-                                                       SolveTime, Actuator.Params, Actuator.Report)
+                                                       SolveTime, Actuator.Params, ActuatorReport)
                for name, field in model.model_fields.items() if not (field.description or "").strip()]
     assert not missing, missing
