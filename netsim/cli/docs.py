@@ -5,13 +5,15 @@ schema, containers expanded: ``nodes.<node>.tasks[].period``) and every register
 its ``Params`` model, :func:`netsim.registry.param_rows`), one line each with type, default and unit. The
 committed ``docs/scenario-reference.md`` is this text; a test regenerates it so it never goes stale.
 
-:func:`json_schema` is a JSON Schema (draft 2020-12) that accepts a scenario file or a sweep file, for editors
-with a YAML language server (completion and errors while typing).
+:func:`json_schema` (from :mod:`netsim.cli.file_schema`) is a JSON Schema (draft 2020-12) of scenario and sweep
+files, for editors with a YAML language server (completion and errors while typing).
 """
 
 from __future__ import annotations
 
 from typing import Any, Union, get_args, get_origin
+
+from netsim.cli.file_schema import json_schema
 
 __all__ = ["scenario_reference", "json_schema", "KIND_TITLES"]
 
@@ -132,139 +134,3 @@ def scenario_reference() -> str:
                 lines.append("No parameters." if model is not None else "No `Params` model: no parameters declared.")
             lines.append("")
     return "\n".join(lines).rstrip() + "\n"
-
-
-def _reachable_models(roots: list[type]) -> list[type]:
-    """The pydantic models reachable from ``roots`` through field annotations (dict, list, union, nested)."""
-    out: list[type] = []
-    todo = list(roots)
-    while todo:
-        model = todo.pop(0)
-        if model in out:
-            continue
-        out.append(model)
-        for field in model.model_fields.values():
-            todo += [m for _, m in _models_in(field.annotation) if m not in out]
-    return out
-
-
-#: What a field of each unit type accepts besides a number (the JSON Schema pydantic derives says integer).
-_UNIT_TEXT = {"time": "a time with its unit: 20 us, 1.5 ms, 2 s", "bit rate": "a bit rate: 80 kbit/s, 1 Mbit/s"}
-
-
-def _accept_text(node: Any, text: str) -> Any:
-    """``node`` with every integer or number alternative also accepting a string (a time or bit rate with its
-    unit, which netsim parses)."""
-    if isinstance(node, list):
-        return [_accept_text(n, text) for n in node]
-    if not isinstance(node, dict):
-        return node
-    node = {k: _accept_text(v, text) for k, v in node.items()}
-    if node.get("type") in ("integer", "number"):
-        number = {k: v for k, v in node.items() if k not in ("title", "default", "description")}
-        keep = {k: v for k, v in node.items() if k in ("title", "default", "description")}
-        return {**keep, "anyOf": [number, {"type": "string", "description": text}]}
-    return node
-
-
-def _units_as_text(schema: dict[str, Any], models: list[type], refs: dict[Any, Any] | None = None) -> None:
-    """Let time and bit-rate fields take their text form (``"10 ms"``) in ``schema["$defs"]``."""
-    from netsim.registry import param_rows
-
-    defs = schema.get("$defs", {})
-    for model in models:
-        ref = (refs or {}).get((model, "validation"))
-        target = defs.get(ref["$ref"].rsplit("/", 1)[1] if ref else model.__name__)
-        if target is None or "properties" not in target:
-            continue
-        for row in param_rows(model):
-            if "." in row.name or row.name not in target["properties"]:
-                continue
-            kind = next((k for k in ("bit rate", "time", "duration") if k in row.type), None)
-            if kind is not None:
-                text = _UNIT_TEXT["bit rate" if kind == "bit rate" else "time"]
-                target["properties"][row.name] = _accept_text(target["properties"][row.name], text)
-
-
-def _inline_parameters(schema: dict[str, Any], models: list[type]) -> None:
-    """Sections that take their plugin's parameters beside ``type`` (networks, signals, a described plant: a
-    model validator gathers them before validation) accept other keys, and their ``params`` may be left out."""
-    defs = schema.get("$defs", {})
-    for model in models:
-        target = defs.get(model.__name__)
-        before = [d for d in model.__pydantic_decorators__.model_validators.values() if d.info.mode == "before"]
-        if target is None or not before or "params" not in target.get("properties", {}):
-            continue
-        target["additionalProperties"] = True
-        target["required"] = [r for r in target.get("required", []) if r == "type" and "model" not in
-                              target["properties"]]
-        if not target["required"]:
-            del target["required"]
-
-
-#: Where each plugin kind's parameters go in a scenario: (spec model, the key naming the plugin, inline or in
-#: ``params``).
-_PLUGIN_SLOTS: dict[str, tuple[str, str, bool]] = {
-    "network": ("NetworkSpec", "type", True),
-    "signal": ("SignalSpec", "type", True),
-    "plant": ("PlantSpec", "model", False),
-    "program": ("TaskSpec", "program", False),
-    "metric": ("MetricSpec", "type", False),
-}
-
-
-def _plugin_params(defs: dict[str, Any], refs: dict[Any, Any], params_of: dict[str, dict[str, type]]) -> None:
-    """Per registered plugin: ``if <key> is NAME then its parameters are ...`` in the section's definition, so
-    an editor completes and checks a plugin's own parameters (inline beside ``type``, or under ``params``)."""
-    for kind, (spec, key, inline) in _PLUGIN_SLOTS.items():
-        targets = [spec] + (["HandlerSpec"] if kind == "program" else [])
-        rules = []
-        for name, model in sorted(params_of.get(kind, {}).items()):
-            ref = refs[(model, "validation")]
-            if inline:
-                own = _resolve_def(defs, ref)
-                then = {"properties": {k: v for k, v in own.get("properties", {}).items() if k != key}}
-            else:
-                then = {"properties": {"params": ref}}
-            rules.append({"if": {"properties": {key: {"const": name}}, "required": [key]}, "then": then})
-        for target in targets:
-            if target in defs and rules:
-                defs[target]["allOf"] = rules
-
-
-def _resolve_def(defs: dict[str, Any], ref: dict[str, Any]) -> dict[str, Any]:
-    return defs[ref["$ref"].rsplit("/", 1)[1]]
-
-
-def json_schema() -> dict[str, Any]:
-    """A JSON Schema that accepts a scenario file or a sweep file (pydantic's schemas, shared definitions;
-    times and bit rates also as text with their unit), with each registered plugin's parameters."""
-    from pydantic.json_schema import models_json_schema
-
-    from netsim import registry
-    from netsim.scenario.schema import Scenario
-    from netsim.sweep.spec import SweepSpec
-
-    params_of: dict[str, dict[str, type]] = {}
-    for kind in _PLUGIN_SLOTS:
-        for entry in registry.entries(kind):
-            model = registry.params_model(entry.obj)
-            if model is not None:
-                params_of.setdefault(kind, {})[entry.name] = model
-    plugin_models = list(dict.fromkeys(m for names in params_of.values() for m in names.values()))
-    refs, schema = models_json_schema([(Scenario, "validation"), (SweepSpec, "validation"),
-                                       *((m, "validation") for m in plugin_models)],
-                                      ref_template="#/$defs/{model}")
-    models = _reachable_models([Scenario, SweepSpec, *plugin_models])
-    _units_as_text(schema, models, refs)
-    _inline_parameters(schema, models)
-    defs = schema.get("$defs", {})
-    _plugin_params(defs, refs, params_of)
-    return {
-        "$schema": "https://json-schema.org/draft/2020-12/schema",
-        "title": "netsim scenario or sweep file",
-        "description": "A netsim scenario (name, duration, plant, nodes, ...) or a sweep file (sweep, base, "
-                       "factors). Generated by `netsim schema`.",
-        "anyOf": [refs[(Scenario, "validation")], refs[(SweepSpec, "validation")]],
-        "$defs": defs,
-    }

@@ -74,6 +74,9 @@ def _problems(data: Any, node: dict, root: dict, path: str = "") -> list[str]:
     """Keys the schema does not allow, required keys that are missing, and values of the wrong JSON type (a
     minimal JSON Schema check: no jsonschema dependency)."""
     node = _resolve(node, root)
+    if "if" in node and "properties" not in node:  # the root: a sweep file or a scenario
+        branch = node["then"] if not _problems(data, node["if"], root, path) else node.get("else", {})
+        return _problems(data, branch, root, path)
     for key in ("anyOf", "oneOf"):
         if key in node:
             options = [_problems(data, alt, root, path) for alt in node[key]]
