@@ -417,7 +417,11 @@ class PlantSpec(PluginSpec):
     x0: list[float] | None = None
     disturbances: dict[PlantPort, Name] = Field(default_factory=dict)
     record_grid: Duration | None = None
-    process_noise: ProcessNoise = None
+    process_noise: ProcessNoise = Field(None, description=(
+        "LTI/discrete plants: intensity of white noise on the state (number, vector or matrix). Any plant: "
+        "entries {inputs: [...], sigma, sample} (white noise held per sample on inputs) or {states: [...], sigma, "
+        "sample} (random-walk increments sigma*sqrt(sample)*N(0,1) at each sample), one or a list "
+        "(netsim.plant.noise)"))
 
     @model_validator(mode="before")
     @classmethod
@@ -525,7 +529,9 @@ class TaskSpec(PluginSpec):
     min_interarrival: Duration | None = _KTASK.min_interarrival
     extra_interarrival: TimeDistribution | None = None
     abort_on_miss: bool = _KTASK.abort_on_miss
-    set_period: SetPeriodRule = _KTASK.set_period  # type: ignore[assignment]  # netsim.scenario.schema_task
+    set_period: SetPeriodRule = Field(_KTASK.set_period, description=(  # type: ignore[assignment]
+        "a period changed at run time: next_release (TrueTime 1.5) moves the armed release to one new period "
+        "after the last; keep_armed (TrueTime 2.0) keeps it"))
 
     @model_validator(mode="after")
     def _defaults(self) -> TaskSpec:
