@@ -254,7 +254,7 @@ def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | N
     for lg in loggers:
         lg.addHandler(capture)
     view = _metrics_view(result)  # a table a metric reads is built on the view: the run folder's CSVs are still
-    try:                           # written straight from the records (RunResult.table_rows)
+    try:                           # written straight from the records (RunResult._table_rows)
         values = generic_metrics(view, sim, t_end_ns)
         values.update(compute_metrics(view, list(scenario.metrics), baseline))
     finally:
@@ -383,7 +383,7 @@ def run(
         from netsim.run_warnings import load_warnings
 
         mode = result.traces.get("jobs", "full")  # 'never ran' is known from the rows or the summary, not when off
-        rows = result.table_rows("jobs")  # the records' columns: no DataFrame built for the warnings
+        rows = result._table_rows("jobs")  # the records' columns: no DataFrame built for the warnings
         ran = (result.jobs if rows is None else rows) if mode == "full" else result.job_summary
         extra = load_warnings(result.metrics.to_dict(), ran, scenario.nodes if mode != "off" else {},
                               scenario.networks or {})
@@ -464,7 +464,7 @@ def _metrics_view(result: RunResult) -> RunResult:
                      messages=_lazy_view(result, "messages"), metrics=result.metrics, meta=result.meta,
                      scenario=result.scenario, schedule=_lazy_view(result, "schedule"), out_dir=result.out_dir,
                      traces=result.traces, job_summary=result.job_summary, message_summary=result.message_summary,
-                     job_rows=result.job_rows, message_rows=result.message_rows, signal_source=result.signal_source)
+                     _job_rows=result._job_rows, _message_rows=result._message_rows, _signal_source=result._signal_source)
 
 
 def _shared(result: RunResult) -> RunResult:
@@ -474,7 +474,7 @@ def _shared(result: RunResult) -> RunResult:
                      meta=dict(result.meta), scenario=result.scenario,
                      schedule=_lazy_view(result, "schedule"), traces=dict(result.traces),
                      job_summary=result.job_summary, message_summary=result.message_summary,
-                     job_rows=result.job_rows, message_rows=result.message_rows, signal_source=result.signal_source)
+                     _job_rows=result._job_rows, _message_rows=result._message_rows, _signal_source=result._signal_source)
 
 
 def _lazy_view(result: RunResult, name: str) -> Any:

@@ -170,7 +170,7 @@ def _reader(result: Any) -> Chunks:
     was not built, else from the table)."""
 
     def read(names: list[str]) -> Iterator[tuple[np.ndarray, list[np.ndarray]]]:
-        got = result.signal_chunks(names) if hasattr(result, "signal_chunks") else None
+        got = result._signal_chunks(names) if hasattr(result, "_signal_chunks") else None
         if got is not None:
             yield from got
             return
@@ -182,7 +182,7 @@ def _reader(result: Any) -> Chunks:
 
 
 def _names(result: Any) -> set[str]:
-    source = getattr(result, "signal_source", None)
+    source = getattr(result, "_signal_source", None)
     if source is not None:
         return set(source.names)
     sig = result.signals

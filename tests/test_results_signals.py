@@ -101,7 +101,7 @@ def test_held_integrals_in_windows_equal_the_whole_arrays() -> None:
 
 def _result(times: dict[str, object], values: dict[str, object]) -> RunResult:
     source = SignalSource(times, values)
-    return RunResult(signals=Lazy(source.table), signal_source=source, meta={"t_end_s": 5.0})
+    return RunResult(signals=Lazy(source.table), _signal_source=source, meta={"t_end_s": 5.0})
 
 
 def test_control_error_in_windows_equals_the_table(window: int) -> None:
@@ -168,7 +168,7 @@ def test_a_pickled_result_has_its_tables_built_and_leaves_the_samples_behind() -
     root = Path(__file__).resolve().parents[1]
     res = netsim.run(root / "scenarios" / "dc_servo_can.yaml", write=False, overrides={"duration": "0.2 s"})
     back = pickle.loads(pickle.dumps(res))
-    assert back.signal_source is None and back.job_rows is None and back.message_rows is None
+    assert back._signal_source is None and back._job_rows is None and back._message_rows is None
     assert back.signals.equals(res.signals) and back.jobs.equals(res.jobs) and back.messages.equals(res.messages)
     assert len(back.jobs) > 0 and len(back.signals) > 0
 

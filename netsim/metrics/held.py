@@ -1,7 +1,7 @@
 """Integrals of a held signal read window by window, with the same numbers as over the whole table (issue 19).
 
 ``control_error`` integrates ``|r - y|`` and ``(r - y)²`` over the rows of the signals table. A long run's table
-is read in windows (:meth:`netsim.results.RunResult.signal_chunks`) so that it is never whole in memory; the sums
+is read in windows (:meth:`netsim.results.RunResult._signal_chunks`) so that it is never whole in memory; the sums
 must still be the ones ``np.sum`` gives over the whole column, bit for bit (the run folder's ``metrics.csv`` is
 compared byte for byte). :func:`pairwise_sum` gets them: numpy sums a contiguous float64 array pairwise (halves
 cut at a multiple of 8 elements, blocks of up to 128 summed with 8 accumulators), so the sum of the whole is the
@@ -112,10 +112,10 @@ def held_integrals_chunked(chunks: Callable[[], Iterable[tuple[np.ndarray, np.nd
 
 
 def control_error_chunked(result: Any, p: Any) -> dict[str, float] | None:
-    """:func:`netsim.metrics.runtime.control_error` (``p``: its checked parameters) from the signals table read window by window (``result.signal_chunks``, issue 19:
+    """:func:`netsim.metrics.runtime.control_error` (``p``: its checked parameters) from the signals table read window by window (``result._signal_chunks``, issue 19:
     a long run's table is never whole in memory), with the same numbers; None when the result has no windows
     (a table already built, or read back from a folder)."""
-    fn = getattr(result, "signal_chunks", None)
+    fn = getattr(result, "_signal_chunks", None)
     names = [p.output] + ([p.reference] if p.reference else [])
     if not callable(fn) or "time_s" in names:
         return None

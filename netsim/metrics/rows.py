@@ -18,8 +18,8 @@ __all__ = ["arrival_metrics", "network_metrics_rows", "table_rows", "task_metric
 
 def table_rows(result: Any, name: str) -> Any:
     """The records' columns of ``result``'s table ``name`` while its DataFrame is unbuilt
-    (:meth:`netsim.results.RunResult.table_rows`), else None (a result read back, or a table built)."""
-    fn = getattr(result, "table_rows", None)
+    (:meth:`netsim.results.RunResult._table_rows`), else None (a result read back, or a table built)."""
+    fn = getattr(result, "_table_rows", None)
     return fn(name) if callable(fn) else None
 
 

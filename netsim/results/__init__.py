@@ -134,7 +134,7 @@ class RunResult:
         """Pickled and copied with every table built (a :class:`Lazy` holds a closure, which does not pickle); the
         records and samples the tables were built from are left behind."""
         state = {name: getattr(self, name) for name in object.__getattribute__(self, "__dict__")}
-        state.update(job_rows=None, message_rows=None, signal_source=None, schedule_source=None)
+        state.update(_job_rows=None, _message_rows=None, _signal_source=None, _schedule_source=None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -157,21 +157,21 @@ class RunResult:
     message_summary: pd.DataFrame | None = None
     #: The jobs table's columns straight from the records (:class:`netsim.results.rows.Rows`; this run's, not one
     #: read back): ``jobs.csv`` and the metrics are made from them, ``jobs`` is built from them when read.
-    job_rows: Any = None
-    #: The messages table's columns straight from the records (as :attr:`job_rows`).
-    message_rows: Any = None
+    _job_rows: Any = None
+    #: The messages table's columns straight from the records (as :attr:`_job_rows`).
+    _message_rows: Any = None
     #: The recorded samples (:class:`netsim.results.signals.SignalSource`): ``signals.csv`` and the metrics read
     #: the table from them window by window, ``signals`` is built from them when read.
-    signal_source: Any = None
+    _signal_source: Any = None
     #: The kernels' schedule traces ``[(node, [(task, state, t0_ns, t1_ns), ...]), ...]`` (this run's): ``schedule.csv``
     #: is written from them, ``schedule`` is built from them when read.
-    schedule_source: Any = None
+    _schedule_source: Any = None
 
-    def signal_chunks(self, names: list[str]) -> Any:
+    def _signal_chunks(self, names: list[str]) -> Any:
         """The signals table's rows in windows, ``(t_ns, [column of each name, ...])`` per window
         (:meth:`netsim.results.signals.SignalSource.chunks`), while ``signals`` has not been built; else None
         (read ``signals``). A name that was not recorded raises ``KeyError``."""
-        source = object.__getattribute__(self, "signal_source")
+        source = object.__getattribute__(self, "_signal_source")
         if source is None or type(object.__getattribute__(self, "signals")) is not Lazy:
             return None
         missing = [n for n in names if n not in source.names]
@@ -179,12 +179,12 @@ class RunResult:
             raise KeyError(missing[0])
         return source.chunks(names)
 
-    def table_rows(self, name: str) -> Any:
+    def _table_rows(self, name: str) -> Any:
         """The :class:`~netsim.results.rows.Rows` of table ``name`` (``"jobs"`` or ``"messages"``) while its
         DataFrame has not been built (nothing can have changed it), else None: read the DataFrame."""
         if type(object.__getattribute__(self, name)) is not Lazy:
             return None
-        return object.__getattribute__(self, "job_rows" if name == "jobs" else "message_rows")
+        return object.__getattribute__(self, "_job_rows" if name == "jobs" else "_message_rows")
 
     @property
     def status(self) -> str:
@@ -253,14 +253,14 @@ class RunResult:
             dumper = getattr(yaml, "CSafeDumper", yaml.SafeDumper)  # libyaml's emitter: ~4x faster
             write_atomic(out / "scenario.yaml",
                          yaml.dump(self.scenario, Dumper=dumper, sort_keys=False, allow_unicode=True))
-        source = object.__getattribute__(self, "signal_source")
+        source = object.__getattribute__(self, "_signal_source")
         if source is not None and type(object.__getattribute__(self, "signals")) is Lazy and source.csv_plain():
             write_atomic(out / "signals.csv", source.csv_chunks())  # window by window, never the whole table
         else:
             write_csv(self.signals, out / "signals.csv")
         for name, summary in (("jobs", self.job_summary), ("messages", self.message_summary)):
             if self.traces.get(name, "full") == "full":
-                rows = self.table_rows(name)
+                rows = self._table_rows(name)
                 chunks = rows.csv_chunks() if rows is not None else None
                 if chunks is not None:  # straight from the records: the same bytes as the DataFrame's
                     write_atomic(out / f"{name}.csv", chunks)
@@ -270,7 +270,7 @@ class RunResult:
                 write_csv(summary, out / f"{name}_summary.csv")
         sched = out / "schedule.csv"
         if self.traces.get("schedule", "on") == "on":
-            source = object.__getattribute__(self, "schedule_source")
+            source = object.__getattribute__(self, "_schedule_source")
             if source is None or type(object.__getattribute__(self, "schedule")) is not Lazy:
                 source = schedule_intervals(self.schedule)
             write_atomic(sched, schedule_csv_chunks(source))

@@ -52,7 +52,7 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
     schedule = Lazy(schedule_frame)
     traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
     return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
-                     job_rows=job_cols, message_rows=msg_cols, signal_source=source, schedule_source=traces_kept,
+                     _job_rows=job_cols, _message_rows=msg_cols, _signal_source=source, _schedule_source=traces_kept,
                      job_summary=summary_table(job_stats, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
                      message_summary=summary_table(msg_stats, MESSAGE_SUMMARY_COLUMNS)
                      if output.messages == "summary" else None)

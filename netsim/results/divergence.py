@@ -47,18 +47,18 @@ def first_runaway_error_chunked(windows: Any, ratio: float) -> tuple[float, floa
 
 def find_divergence_chunked(result: Any, recorder: Any, metric_specs: Iterable[Any]) -> tuple[float, str] | None:
     """:func:`netsim.divergence.find_divergence` of ``result``, reading its signals window by window when it can
-    (``result.signal_chunks``); the whole table otherwise."""
+    (``result._signal_chunks``); the whole table otherwise."""
     from netsim.divergence import DEFAULT_RATIO, find_divergence
 
     specs = [s.model_dump() if hasattr(s, "model_dump") else dict(s) for s in metric_specs or []]
     checks = [s for s in specs if s.get("type") == "control_error"]
-    source = getattr(result, "signal_source", None)
+    source = getattr(result, "_signal_source", None)
     names = set(source.names) if source is not None else set()
     for spec in checks:
         params = dict(spec.get("params") or {})
         if "time_s" in (params.get("output"), params.get("reference")):
             return find_divergence(result, recorder, specs)
-    if source is None or result.signal_chunks([]) is None:
+    if source is None or result._signal_chunks([]) is None:
         return find_divergence(result, recorder, specs)
     found = []
     hit = find_divergence(_NoSignals(), recorder, [])  # a NaN or infinite recorded sample
@@ -73,7 +73,7 @@ def find_divergence_chunked(result: Any, recorder: Any, metric_specs: Iterable[A
         wanted = [out, ref] if ref else [out]
 
         def windows(wanted: list[str] = wanted) -> Any:
-            for t_ns, cols in result.signal_chunks(wanted):
+            for t_ns, cols in result._signal_chunks(wanted):
                 yield t_ns, (cols[0], cols[1] if len(cols) > 1 else None)
 
         runaway = first_runaway_error_chunked(windows, float(ratio))
