@@ -8,7 +8,7 @@ nothing but plain values, lists and mappings is ever built. Positions are not ke
 a problem to report, :func:`line_table` parses the text again, keeping the line of every key and list item.
 
 Before anything is built, the limits of :mod:`netsim.scenario.yaml_limits` apply (regular files only, size,
-nesting depth, tags, alias expansion; its names are available here too). While building, a mapping that holds
+over-long numbers, nesting depth, tags, alias expansion; its names are available here too). While building, a mapping that holds
 a key twice is refused with the lines of both (a merge key ``<<: *a`` brings keys in without that check: keys
 written in the mapping override them, and among ``<<: [*a, *b]`` the first mapping wins).
 """
@@ -33,6 +33,7 @@ from netsim.scenario.yaml_limits import (
     YamlRefused,
     check_events,
     check_flow_depth,
+    check_long_numbers,
     needs_event_check,
     read_text,
 )
@@ -51,7 +52,8 @@ def _short(text: str, limit: int = 30) -> str:
 # --------------------------------------------------------------------------------------------- the loader
 _BOOL_1_2 = re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$")
 _NULL_1_2 = re.compile(r"^(?:~|null|Null|NULL|)$")
-_INT_1_2 = re.compile(r"^[-+]?(?:0b[01_]+|0o?[0-7_]+|[0-9_]*[0-9][0-9_]*|0x[0-9a-fA-F_]+)$")
+# '_*[0-9]' rather than '[0-9_]*[0-9]': the same texts, without backtracking quadratic in a long digit run
+_INT_1_2 = re.compile(r"^[-+]?(?:0b[01_]+|0o?[0-7_]+|_*[0-9][0-9_]*|0x[0-9a-fA-F_]+)$")
 _FLOAT_1_2 = re.compile(r"""^(?:[-+]?[0-9][0-9_]*\.[0-9_]*(?:[eE][-+]?[0-9]+)?
                               |[-+]?[0-9][0-9_]*[eE][-+]?[0-9]+
                               |[-+]?\.[0-9_]+(?:[eE][-+][0-9]+)?
@@ -225,6 +227,7 @@ def load_text(text: str) -> Any:
         error (``syntax=True``) or a value that cannot be built; always one line, with the line when known.
     """
     try:
+        check_long_numbers(text)
         check_flow_depth(text)
         if needs_event_check(text):
             check_events(yaml.parse(text, Loader=ScenarioLoader))  # depth, tags, aliases: before anything is built

@@ -12,7 +12,10 @@ never echoes the file:
   ``!!int`` / ``!!float`` tag on a value that is not such a number;
 * an alias inside its own anchor (a recursive merge key ``&a {<<: *a}``);
 * aliases that expand to more than :data:`MAX_VALUES` values or :data:`MAX_CHARS` characters of text
-  ("billion laughs": nine lines that expand to 10^9 values, or one 1 MB string aliased 1000 times).
+  ("billion laughs": nine lines that expand to 10^9 values, or one 1 MB string aliased 1000 times);
+* a run of more than :data:`MAX_DIGITS` digits (:func:`check_long_numbers`, one linear pass over the text before
+  the parser sees it): no usable number has that many, and converting or matching such a scalar cost time
+  quadratic in its length (a 20000-digit number took 6 s to load, tens of thousands over 30 s).
 
 The checks walk the parser's event stream once (no tree is built): the expanded size of every anchor is counted
 as its events go by, so an alias costs one addition, never an expansion.
@@ -26,8 +29,8 @@ import stat
 from dataclasses import dataclass
 from typing import Any, Iterable
 
-__all__ = ["MAX_FILE_BYTES", "MAX_DEPTH", "MAX_VALUES", "MAX_CHARS", "YamlRefused", "read_text", "check_flow_depth",
-           "needs_event_check", "check_events"]
+__all__ = ["MAX_FILE_BYTES", "MAX_DEPTH", "MAX_VALUES", "MAX_CHARS", "MAX_DIGITS", "YamlRefused", "read_text",
+           "check_flow_depth", "check_long_numbers", "needs_event_check", "check_events"]
 
 #: Largest scenario file read (bytes). The shipped scenarios are under 20 kB.
 MAX_FILE_BYTES = 2 * 1024 * 1024
@@ -37,6 +40,10 @@ MAX_DEPTH = 64
 MAX_VALUES = 200_000
 #: Most characters of scalar text a document may hold once its aliases are expanded.
 MAX_CHARS = 8 * 1024 * 1024
+#: Most digits (``_`` separators counted) written in a row. Numbers are at most 1e15 in size (``NUMBER_LIMIT``),
+#: so a real one has a few dozen digits; Python itself reads integers of at most 4300 digits from text (longer
+#: ones reach the number-limit check through ``safe_yaml.long_integer_placeholder``).
+MAX_DIGITS = 10_000
 
 _CORE = "tag:yaml.org,2002:"
 _ALLOWED_TAGS = {None, "!", *(_CORE + t for t in ("str", "int", "float", "bool", "null", "seq", "map"))}
@@ -137,6 +144,30 @@ def check_flow_depth(text: str) -> None:
                                   text.count("\n", 0, m.start()) + 1)
         elif depth:
             depth -= 1
+
+
+_NOT_DIGITS = re.compile(r"[^0-9_]+")
+_DIGIT_RUN = re.compile(r"[0-9_]+")
+
+
+def check_long_numbers(text: str) -> None:
+    """Refuse text with more than :data:`MAX_DIGITS` digits in a row, in time linear in its length.
+
+    Runs before the YAML parser (whose scalar resolution and number conversion are slower than linear on such a
+    scalar), on the raw text, so it also refuses such a run inside quoted text.
+
+    Raises
+    ------
+    YamlRefused
+        With the line where the run starts.
+    """
+    if len(text) <= MAX_DIGITS or max(map(len, _NOT_DIGITS.split(text)), default=0) <= MAX_DIGITS:
+        return
+    for m in _DIGIT_RUN.finditer(text):  # only on the error path: find where the run is
+        if m.end() - m.start() > MAX_DIGITS:
+            raise YamlRefused(f"a number written with {m.end() - m.start()} digits (at most {MAX_DIGITS} are read; "
+                              "netsim's numbers are at most 1e15 in size): write a smaller value",
+                              text.count("\n", 0, m.start()) + 1)
 
 
 _INDENT = re.compile(r"^[ ]+", re.MULTILINE)

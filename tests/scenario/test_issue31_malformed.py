@@ -65,3 +65,30 @@ def test_every_shipped_scenario_still_validates() -> None:
         if "nodes" not in raw:  # sweep files
             continue
         assert not [p for p in check_scenario(raw) if p.severity == "error" and "no period" in p.message], path
+
+
+# ------------------------------------------------------------------------------------------- over-long numbers
+@pytest.mark.parametrize("tail", [" s", ""])
+def test_a_number_of_tens_of_thousands_of_digits_is_refused_quickly_with_its_line(tmp_path: Path, tail: str) -> None:
+    """50000 digits took well over 30 s to validate before (the YAML resolver's integer pattern backtracked
+    quadratically on the digit run); the lexer now refuses it in one linear pass. 20 s is generous: the refusal
+    itself takes milliseconds, the rest is the CLI starting."""
+    text = (SCENARIOS / "dc_servo_ideal.yaml").read_text()
+    f = tmp_path / "long.yaml"
+    f.write_text(text.replace("duration: 2 s", "duration: " + "1" * 50_000 + tail))
+    line = next(i for i, t in enumerate(text.splitlines(), 1) if t.startswith("duration:"))
+    done = _cli("validate", str(f), cwd=tmp_path, timeout=20.0)
+    assert done.returncode != 0
+    assert f"long.yaml:{line}: duration: a number written with 50000 digits" in done.stdout + done.stderr
+    assert "write a smaller value" in done.stdout + done.stderr
+
+
+def test_a_long_digit_run_below_the_lexer_limit_loads_in_linear_time() -> None:
+    """9000 digits followed by a unit: the integer pattern's backtracking cost about 1 s here before."""
+    import time
+
+    from netsim.scenario.safe_yaml import load_text
+
+    start = time.perf_counter()
+    assert load_text("a: " + "1" * 9000 + " s\n") == {"a": "1" * 9000 + " s"}
+    assert time.perf_counter() - start < 0.5

@@ -265,15 +265,14 @@ def test_a_non_finite_radio_position_is_refused(bad):
     assert "write a finite number" in problems[0].message
 
 
-def test_a_task_without_period_and_release_warns_that_nothing_releases_it(base):
+def test_a_task_without_period_and_release_is_refused_as_nothing_releases_it(base):
     """Deleting the period of a task that had no 'release:' left an aperiodic task no netsim program ever releases
-    (issue 14 B: a deleted required key that validate accepted without a word)."""
+    (issue 14 B: a deleted required key that validate accepted without a word; a warning until issue 31)."""
     raw = base()
     del raw["nodes"]["sensor"]["tasks"][0]["period"]
-    assert _errors(raw) == {}
-    assert "add e.g. 'period: 10 ms'" in _warnings(raw)["nodes.sensor.tasks[0]"]
-    raw["nodes"]["sensor"]["tasks"][0]["release"] = "aperiodic"  # said on purpose: no warning
-    assert "nodes.sensor.tasks[0]" not in _warnings(raw)
+    assert "add e.g. 'period: 10 ms'" in _errors(raw)["nodes.sensor.tasks[0]"]
+    raw["nodes"]["sensor"]["tasks"][0]["release"] = "aperiodic"  # said on purpose: accepted
+    assert "nodes.sensor.tasks[0]" not in _errors(raw) and "nodes.sensor.tasks[0]" not in _warnings(raw)
 
 
 def test_a_5000_digit_integer_from_python_gets_the_same_message_as_from_a_file(base):
