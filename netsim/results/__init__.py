@@ -302,7 +302,8 @@ class RunResult:
         trace: the chart then says so in its title."""
         from netsim.plotting import schedule_figure
 
-        title = "schedule: not kept (output.schedule: off)" if self.traces.get("schedule") == "off" else ""
+        title = ("schedule: not kept (output.schedule: off, or a folder written before schedule.csv existed)"
+                 if self.traces.get("schedule") == "off" else "")
         return schedule_figure(self.schedule, self.jobs, window=window, end_s=float(self.meta.get("t_end_s") or 0),
                                title=title)
 
