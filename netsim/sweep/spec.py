@@ -44,29 +44,48 @@ __all__ = [
     "expand_points",
     "derive_seed",
     "canonical_json",
+    "grid_value",
 ]
 
 
+#: Significant digits a generated grid value is rounded to (see :func:`grid_value`).
+GRID_DIGITS = 12
+
+
+def grid_value(value: float) -> float:
+    """A generated grid value rounded to :data:`GRID_DIGITS` significant digits.
+
+    ``np.logspace(-9, -1, 11)[5]`` is ``1e-05`` with one numpy build and ``9.999999999999999e-06`` with
+    another (its power function differs in the last bit). A point's seed is derived from the exact text of
+    its values (:func:`derive_seed`), so that last bit would change the noise a point draws. Rounded, the
+    grid's points are the round decimal values themselves (``1e-05``), the same with every numpy, and a
+    point gets the same seed as the same value written in ``values:``.
+    """
+    return float(f"{float(value):.{GRID_DIGITS}g}")
+
+
 class Grid(StrictModel):
-    """``linspace``: ``num`` evenly spaced values from ``start`` to ``stop`` (both included)."""
+    """``linspace``: ``num`` evenly spaced values from ``start`` to ``stop`` (both included), each rounded to
+    12 significant digits (:func:`grid_value`)."""
 
     start: float
     stop: float
     num: int = Field(ge=1)
 
     def values(self) -> list[float]:
-        """The grid values as Python floats."""
-        return [float(v) for v in np.linspace(self.start, self.stop, self.num)]
+        """The grid values as Python floats (12 significant digits)."""
+        return [grid_value(v) for v in np.linspace(self.start, self.stop, self.num)]
 
 
 class LogGrid(Grid):
-    """``logspace``: ``base**x`` for ``num`` evenly spaced exponents ``x`` from ``start`` to ``stop``."""
+    """``logspace``: ``base**x`` for ``num`` evenly spaced exponents ``x`` from ``start`` to ``stop``, each
+    rounded to 12 significant digits (:func:`grid_value`)."""
 
     base: float = Field(default=10.0, gt=0)
 
     def values(self) -> list[float]:
-        """The grid values as Python floats."""
-        return [float(v) for v in np.logspace(self.start, self.stop, self.num, base=self.base)]
+        """The grid values as Python floats (12 significant digits)."""
+        return [grid_value(v) for v in np.logspace(self.start, self.stop, self.num, base=self.base)]
 
 
 class Factor(StrictModel):
