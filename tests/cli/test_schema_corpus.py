@@ -76,6 +76,7 @@ CAN = "dc_servo_can.yaml"
 SS = "dc_servo_lqr_kalman.yaml"  # a described state-space plant (1-D B and C), the state_feedback program
 BATTERY = "wireless_battery.yaml"
 SWEEP = "hdd_gpi_sweep.yaml"
+HDD = "hdd_case2.yaml"  # interrupt handlers, a baseline
 SENSOR = "nodes.sensor.tasks.0"
 
 #: (case id, file, mutation): one mistake each, none needing a cross-reference to another part of the file.
@@ -132,6 +133,19 @@ CORPUS: list[tuple[str, str, Callable[[dict[str, Any]], None]]] = [
     ("radio listen", BATTERY, _set("nodes.sensor.energy.radio.listen", "sometimes")),
     ("sweep mode", SWEEP, _set("mode", "random")),
     ("sweep runs", SWEEP, _set("runs", "some")),
+    ("handler key", HDD, _rename("nodes.sensor.handlers.0.trigger", "triger")),
+    ("handler trigger key", HDD, _rename("nodes.sensor.handlers.0.trigger.timer.period", "perod")),
+    ("handler program", HDD, _set("nodes.sensor.handlers.0.program", "et_sensr")),
+    ("handler program param", HDD, _set("nodes.sensor.handlers.0.params.sigma", 1e-5)),
+    ("baseline key", HDD, _rename("baseline.overrides", "override")),
+    ("sweep surface key", SWEEP, _rename("surface.z", "zz")),
+    ("sweep logspace type", SWEEP, _set("factors.sigma_s.logspace.num", "many")),
+    ("task deadline without unit", CAN, _set("nodes.controller.tasks.0.deadline", 10)),
+    ("signal param type", CAN, _set("signals.r.amplitude", "big")),
+    ("metric param type", CAN, _set("metrics.1.params.chain", {"first": "sensor.sample"})),
+    ("network nodes type", CAN, _set("networks.can.nodes", 3)),
+    ("plant x0 type", CAN, _set("plant.x0", "zero")),
+    ("estimator param type", SS, _set("nodes.controller.tasks.0.params.estimator.R", "small")),
     # malformed matrices (no cross-reference: the shape of the value alone is wrong)
     ("matrix of three levels", SS, _set("plant.A", [[[0, 1]], [[0, -1]]])),
     ("matrix as text", SS, _set("plant.A", "identity")),
