@@ -11,7 +11,7 @@ suits no scenario in particular). Two checks after the run judge it on its own s
 
 Either makes the run's status ``diverged at t = ... s`` (the run itself went on to its end: the tables show the
 whole of it). A loop that leaves its operating region without running away that far (a growing error envelope, a
-fallen pendulum) is judged by :mod:`netsim.verdict`: ``unstable at t = ... s``.
+fallen pendulum) is judged by :mod:`netsim.results.verdict`: ``unstable at t = ... s``.
 """
 
 from __future__ import annotations

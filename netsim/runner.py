@@ -9,10 +9,7 @@ Failures are recorded, never lost:
 
 * a :class:`~netsim.errors.DivergenceError` (unstable loop) ends the simulation at that instant; the tables
   up to that time are written and ``meta.json`` says ``status: "diverged at t = ... s"``; ``run`` returns
-  the result normally (``result.ok`` is False);
-* a run that went to its end but whose loop left its operating region (:mod:`netsim.verdict`: a growing error
-  envelope, a signal past ``verdict.bound``, a metric's own verdict) has ``status: "unstable at t = ... s"``
-  and the reason as ``error``; ``run`` returns the result normally (``result.ok`` is False);
+  the result normally (``result.ok`` is False), as for a loop that left its operating region (``unstable``);
 * any other exception during the simulation or the metrics writes what exists with ``status: "error"``
   and the error text, but no ``metrics.csv`` (a run that failed has no metrics), then re-raises;
 * Ctrl-C (``KeyboardInterrupt``; the CLI turns SIGTERM into one) during the simulation writes the tables up to
@@ -185,12 +182,9 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
     warnings = design_warnings(sim) + _unrecorded(scenario, sim.env.recorder)
     # a program's own warnings about its setting (e.g. models.unicycle's filter and plant disagreeing)
     warnings += [w for prog in getattr(sim, "programs", {}).values() for w in getattr(prog, "build_warnings", ())]
-    finding = None
-    if failure is None and status == "ok":  # stable? growth of the errors, verdict.bound (netsim.verdict)
-        from netsim.verdict import judge_signals
-
-        finding, notes = judge_signals(result, scenario, t_end)
-        warnings += notes
+    from netsim.results.verdict import apply_finding, judge_signals  # is the loop stable?
+    finding, notes = judge_signals(result, scenario, t_end) if failure is None and status == "ok" else (None, [])
+    warnings += notes  # the loop's growth and verdict.bound
     for text in warnings:
         log.warning("%s: %s", scenario.name, text)
     result.meta.update(
@@ -204,20 +198,8 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
             "warnings": warnings,
         }
     )
-    _apply_verdict(result, finding, scenario)
+    apply_finding(result.meta, finding, scenario)
     return result, sim, failure
-
-
-def _apply_verdict(result: RunResult, finding: Any, scenario: Any) -> None:
-    """Record a :class:`netsim.verdict.Finding` in ``result.meta`` (status ``unstable at t = ... s``, or a warning
-    with ``verdict.action: warn``)."""
-    if finding is None:
-        return
-    from netsim.verdict import apply_finding
-
-    text = apply_finding(result.meta, finding, scenario)
-    if text is not None:
-        log.warning("%s: %s", scenario.name, text)
 
 
 def _unrecorded(scenario: Any, recorder: Any) -> list[str]:
@@ -262,10 +244,8 @@ def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | N
             lg.removeHandler(capture)
     if capture.texts:
         result.meta["warnings"] = list(result.meta.get("warnings") or []) + capture.texts
-    if result.status == "ok":  # a metric's own verdict (the pendulum fell; netsim.verdict)
-        from netsim.verdict import judge_metrics
-
-        _apply_verdict(result, judge_metrics(view, scenario), scenario)
+    from netsim.results.verdict import apply_finding, judge_metrics
+    apply_finding(result.meta, judge_metrics(view, scenario) if result.ok else None, scenario)  # the pendulum fell
     return values
 
 
@@ -317,8 +297,7 @@ def run(
     Returns
     -------
     RunResult
-        ``meta["status"]`` is ``"ok"``, ``"diverged at t = ... s"`` or ``"unstable at t = ... s"`` (the loop
-        left its operating region: :mod:`netsim.verdict`).
+        ``meta["status"]`` is ``"ok"``, ``"diverged at t = ... s"`` or ``"unstable at t = ... s"``.
 
     Raises
     ------

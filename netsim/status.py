@@ -8,7 +8,7 @@ A run's status (``meta.json``, the ``status`` column of every summary) is one of
     the loop went unstable and the run stopped there (its tables up to that instant are written), or a signal
     became non-finite or ran away past ``diverged_above`` times the loop's scale;
 ``unstable at t = ... s``
-    the run went to its end, but the loop left its operating region (:mod:`netsim.verdict`): an error envelope
+    the run went to its end, but the loop left its operating region (:mod:`netsim.results.verdict`): an error envelope
     that kept growing, a signal past its ``verdict.bound``, or a metric's own verdict (a fallen pendulum);
 ``error``
     the run could not be built or raised (the error text is recorded);

@@ -1,4 +1,4 @@
-"""The growth and bound checks of netsim.verdict on synthetic error signals: an unstable loop (exponential growth,
+"""The growth and bound checks of netsim.results.verdict on synthetic error signals: an unstable loop (exponential growth,
 a growing oscillation) is found; a converging loop, a step response, a square-wave reference, a bounded limit
 cycle, noise and a rise from rest are not (issue 26 section 1)."""
 
@@ -13,7 +13,7 @@ import pytest
 from netsim.scenario.schema_verdict import VerdictSettings
 from netsim.status import EXIT_FAILED, UNSTABLE, count_statuses, kind_of
 from netsim.timebase import S
-from netsim.verdict import apply_finding, find_growth, judge_signals, window_envelope
+from netsim.results.verdict import apply_finding, find_growth, judge_signals, window_envelope
 
 T_END = 2.0  # s: the default window is 2 s / 20 = 0.1 s
 T = np.round(np.arange(0.0, T_END + 1e-9, 1e-3), 9)  # 1 ms record grid

@@ -22,7 +22,7 @@ samples ``t_k = k period``:
     ``x_hat[2]`` (the estimate made from each sample, the last one recorded before the next sample) stay within
     ``est_tol`` of the true angles (0 when they always are; the run's length when they never settle).
 
-The metric also judges the run (:mod:`netsim.verdict`, ``pendulum_metric.verdict``): a pendulum whose ``|alpha|``
+The metric also judges the run (:mod:`netsim.results.verdict`, ``pendulum_metric.verdict``): a pendulum whose ``|alpha|``
 reaches :data:`FALLEN_ALPHA` (pi/2, below the horizontal) has fallen, and the run's status is ``unstable at t = ...
 s`` from the first such sample, bounded as its states may be (``verdict.metrics: false`` turns it off).
 """

@@ -1,4 +1,4 @@
-"""How a scenario's run is judged stable or not (the top-level ``verdict:`` block; :mod:`netsim.verdict` does it).
+"""How a scenario's run is judged stable or not (the top-level ``verdict:`` block; :mod:`netsim.results.verdict` does it).
 
 Kept apart from :mod:`netsim.scenario.schema` (whose ``Scenario`` has the ``verdict`` field) so the block reads in
 one place::

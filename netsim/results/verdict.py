@@ -361,6 +361,7 @@ def apply_finding(meta: dict[str, Any], finding: Finding | None, scenario: Any) 
     if settings_of(scenario).action == "warn":
         text = f"{status}: {finding.text} (verdict.action: warn)"
         meta["warnings"] = list(meta.get("warnings") or []) + [text]
+        log.warning("%s: %s", getattr(scenario, "name", "run"), text)
         return text
     meta["status"] = status
     meta["error"] = finding.text
