@@ -227,3 +227,26 @@ def test_the_one_dimensional_matrix_forms_validate_accepts_are_valid(tmp_path, v
     data["plant"]["D"] = 0  # a scalar 0: zeros
     assert _validate_refuses(tmp_path, SS, copy.deepcopy(data)) == []
     assert _schema_refuses(validator, data) == []
+
+
+def test_a_scenario_with_its_own_plugin_files_is_checked_at_its_top_level_only(validator):
+    # names its plugin files register are unknown to the schema: no false positive on them, a top-level typo
+    # is still refused
+    data = _read(CAN)
+    data["plugins"] = ["my_plugins.py"]
+    data["nodes"]["sensor"]["tasks"][0]["program"] = "my_sampler"
+    assert _schema_refuses(validator, data) == []
+    data["duraton"] = data.pop("duration")
+    assert _schema_refuses(validator, data)
+
+
+def test_every_resolved_shipped_scenario_is_valid_under_the_schema(validator):
+    # the resolved form (every default written out, times as text) is what a run folder's scenario.yaml holds
+    from netsim.scenario import load_scenario
+
+    for path in sorted(SCENARIOS.glob("*.yaml")):
+        if "sweep" in _read(path.name):
+            continue
+        resolved = load_scenario(path).resolved_dict()
+        errors = _schema_refuses(validator, resolved)
+        assert errors == [], (path.name, errors[:5])
