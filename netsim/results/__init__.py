@@ -313,6 +313,38 @@ class RunResult:
 
         return network_figure(self.messages, window=window, end_s=float(self.meta.get("t_end_s") or 0))
 
+    def to_timeresponse(self, *, outputs: list[str] | None = None, inputs: list[str] | None = None,
+                        states: list[str] | None = None) -> Any:
+        """The recorded signals as a python-control ``TimeResponseData`` (:func:`netsim.results.interop.to_timeresponse`).
+
+        Parameters
+        ----------
+        outputs : list of str, optional
+            Recorded columns to use as the outputs (default: the plant's outputs recorded on
+            ``plant.record_grid``, else the ``io`` sensor channels).
+        inputs : list of str, optional
+            Columns to use as the inputs (default: the plant's held inputs ``<plant>.u[i]``, else the DAC channels).
+        states : list of str, optional
+            Columns to use as the states (default: ``<plant>.x[i]`` when recorded, labelled with the plant's state
+            names; ``[]``: none).
+
+        Returns
+        -------
+        control.TimeResponseData
+            ``time`` in seconds, ``outputs``, ``inputs`` and ``states`` with their signal names as labels.
+
+        Examples
+        --------
+        >>> result = netsim.run("scenarios/pendulum_lqr.yaml", overrides={"record": None})  # doctest: +SKIP
+        >>> resp = result.to_timeresponse()                                                 # doctest: +SKIP
+        >>> resp.output_labels, resp.state_labels[:2]                                       # doctest: +SKIP
+        (['theta', 'alpha'], ['theta', 'theta_dot'])
+        """
+        from netsim.results.interop import to_timeresponse
+
+        return to_timeresponse(self.signals, self.scenario, name=str(self.meta.get("scenario", "")), outputs=outputs,
+                               inputs=inputs, states=states)
+
     def to_pandas(self) -> pd.DataFrame:
         """The recorded signals indexed by time in seconds (a copy; python-control's ``to_pandas``)."""
         return self.signals.set_index("time_s")
