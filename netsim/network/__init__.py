@@ -4,7 +4,8 @@ Build one with :func:`make_network` (``type_name`` registered under kind ``"netw
 receiver with :meth:`Network.attach`, and let kernels call :meth:`Network.send`. Every medium shares the
 pipeline in :mod:`netsim.network.pipeline`; the modules :mod:`~netsim.network.link`,
 :mod:`~netsim.network.can`, :mod:`~netsim.network.tdma`, :mod:`~netsim.network.csma_cd`,
-:mod:`~netsim.network.ethernet`, :mod:`~netsim.network.round_robin`, :mod:`~netsim.network.fdma` and
+:mod:`~netsim.network.ethernet`, :mod:`~netsim.network.round_robin`, :mod:`~netsim.network.fdma`,
+:mod:`~netsim.network.flexray` (static TDMA slots and a dynamic minislot segment) and
 :mod:`~netsim.network.wireless` (IEEE 802.15.4 and 802.11b radios) model the media.
 
 A new medium is one module here with a ``@register("network", NAME)`` class (copy
@@ -23,6 +24,7 @@ _EXPORTS = {
     "DelaySpec": "netsim.network.delay",
     "SwitchedEthernet": "netsim.network.ethernet",
     "FdmaMedium": "netsim.network.fdma",
+    "FlexRayBus": "netsim.network.flexray",
     "make_network": "netsim.network.factory",
     "network_class": "netsim.network.factory",
     "Link": "netsim.network.link",
@@ -65,6 +67,7 @@ __all__ = [
     "SwitchedEthernet",
     "RoundRobinBus",
     "FdmaMedium",
+    "FlexRayBus",
     "WirelessMedium",
     "Ieee802154",
     "Ieee80211b",

@@ -43,7 +43,7 @@ def make_network(env: SimEnv, name: str, type_name: str, params: Mapping[str, An
         The network's name (scenario key; names its random streams ``network.<name>.*``).
     type_name
         A registered network type (``link``, ``ideal``, ``can``, ``tdma``, ``csma_cd``, ``ethernet``,
-        ``round_robin``, ``fdma``, ``ieee802154``, ``ieee80211b``) or a ``"module:Class"`` path.
+        ``round_robin``, ``fdma``, ``flexray``, ``ieee802154``, ``ieee80211b``) or a ``"module:Class"`` path.
     params
         The type's parameters: a mapping (validated against ``cls.Params``; a ``type`` key equal to
         ``type_name`` is ignored) or an already validated ``Params`` instance.

@@ -55,20 +55,24 @@ class NetworkParams(StrictModel):
         Bin width of the utilization-over-time series.
     """
 
-    nodes: list[str] = Field(min_length=1)
-    bitrate: Bitrate
-    min_frame_bits: int = Field(0, ge=0)
-    max_frame_bits: int | None = Field(None, gt=0)
-    pre_delay: Time = 0
-    post_delay: Time = 0
-    node_delays: dict[str, NodeDelays] = Field(default_factory=dict)
-    queue_limit: int | None = Field(1000, ge=1)
-    queue_discipline: QueueDiscipline = "fifo"
-    loss_probability: float = Field(0.0, ge=0.0, le=1.0)
-    loss: LossSpec | None = None
-    drop_stale: bool = False
-    record_messages: bool = True
-    utilization_bin: Duration = 10 * MS
+    nodes: list[str] = Field(min_length=1, description="names of the nodes on the network")
+    bitrate: Bitrate = Field(description="data rate ('80 kbit/s')")
+    min_frame_bits: int = Field(0, ge=0, description="shorter frames are padded to this size, overhead included")
+    max_frame_bits: int | None = Field(None, gt=0, description="largest message the medium carries (null: no limit)")
+    pre_delay: Time = Field(0, description="sender interface (pre-processing) delay, every node")
+    post_delay: Time = Field(0, description="receiver interface (post-processing) delay, every node")
+    node_delays: dict[str, NodeDelays] = Field(
+        default_factory=dict, description="per-node overrides {node: {pre_delay: .., post_delay: ..}}")
+    queue_limit: int | None = Field(1000, ge=1, description="most frames waiting in one sender queue; more are "
+                                                            "dropped as queue_full (null: unbounded)")
+    queue_discipline: QueueDiscipline = Field("fifo", description="sender queue order: fifo, or priority (lowest "
+                                                                  "message priority first)")
+    loss_probability: float = Field(0.0, ge=0.0, le=1.0, description="independent loss probability of each copy")
+    loss: LossSpec | None = Field(None, description="loss model instead of loss_probability: {model: bernoulli, "
+                                                    "p: ..} or {model: gilbert_elliott, ..} (docs/loss.md)")
+    drop_stale: bool = Field(False, description="receivers discard a message older than one already delivered")
+    record_messages: bool = Field(True, description="keep one record per message copy (messages.csv)")
+    utilization_bin: Duration = Field(10 * MS, description="bin width of the utilization-over-time series")
 
     @model_validator(mode="after")
     def _check_common(self) -> "NetworkParams":
