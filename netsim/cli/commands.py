@@ -26,6 +26,7 @@ LIST_KINDS: dict[str, str] = {
     "programs": "program",
     "signals": "signal",
     "metrics": "metric",
+    "path_losses": "path_loss",
     "reports": "report",
 }
 

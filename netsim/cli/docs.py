@@ -27,6 +27,7 @@ KIND_TITLES: dict[str, tuple[str, str]] = {
     "metric": ("Metrics", "metrics[]: {type: NAME, params: {...}}"),
     "controller": ("Controller designs", "a program's design: NAME"),
     "estimator": ("Estimators", "a program's estimator: NAME"),
+    "path_loss": ("Path-loss models", "networks.<net>.path_loss: {type: NAME, ...} (radio networks)"),
     "report": ("Reports", "netsim report NAME"),
 }
 

@@ -46,6 +46,9 @@ Kinds (:data:`KINDS`), each looked up where a scenario names it:
 ``network``, ``policy``, ``program``, ``signal``, ``metric``
     ``networks: {x: {type: NAME}}``, a node's ``policy:``, a task's ``program:``, ``signals: {x: {type: NAME}}``,
     ``metrics: [{type: NAME}]``.
+``path_loss``
+    a radio network's ``path_loss: {type: NAME, ...}`` (:mod:`netsim.network.path_loss`: TrueTime's user
+    path-loss function).
 ``report``
     ``netsim report NAME`` (case-study report generators).
 
@@ -86,6 +89,7 @@ KINDS = (
     "controller",
     "estimator",
     "network",
+    "path_loss",
     "policy",
     "program",
     "signal",
@@ -101,6 +105,7 @@ KIND_BASES: dict[str, tuple[str, str]] = {
     "signal": ("netsim.io.signals", "Signal"),
     "network": ("netsim.network.pipeline", "Network"),
     "policy": ("netsim.kernel.policies", "Policy"),
+    "path_loss": ("netsim.network.path_loss", "PathLoss"),
 }
 
 #: Entry-point group of installed packages that bring netsim plugins (each entry point names a module).
