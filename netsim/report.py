@@ -28,7 +28,9 @@ returns, and writes as CSV into ``out`` (default ``<DIR>/report/``):
 ``summary`` (sweeps)
     ``summary.csv`` as written by the sweep; ``optimum`` (sweeps with a surface) one row.
 
-Figures (``plots=True``): ``utilization.png`` (Uc, Ua, NE and GPI per case, up to 40 cases),
+Figures (``plots=True``, paper style, in the format of :func:`netsim.figure_style.plot_format`):
+``utilization.png`` (Uc, Ua, NE and GPI: for a sweep over two numeric factors a heat map per index over
+them, else bars per case, up to 40 cases),
 ``response_times.png`` and ``network_delays.png`` (mean and max per task/network, up to 40 rows), and for
 sweeps with a ``surface:`` the surface figure again.
 
@@ -276,18 +278,50 @@ def node_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame
 
 
 # --------------------------------------------------------------------------------------------- figures
-def _bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: list[str], title: str, path: Path,
+def _bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: dict[str, str], title: str, path: Path,
                 xlabel: str = "") -> Path | None:
     """Save :func:`netsim.plotting.bar_figure` of the first ``_MAX_PLOTTED`` rows (log axis when the values
-    span decades); None when nothing has a value."""
+    span decades), the value columns shown by their names in ``value_cols`` (column -> legend text); None
+    when nothing has a value."""
+    from netsim.figure_style import save_figure
     from netsim.plotting import bar_figure
 
-    data = frame.dropna(subset=value_cols, how="all").head(_MAX_PLOTTED)
-    fig = bar_figure(data, label_cols, value_cols, title=title, xlabel=xlabel)
+    data = frame.dropna(subset=list(value_cols), how="all").head(_MAX_PLOTTED).rename(columns=value_cols)
+    fig = bar_figure(data, label_cols, list(value_cols.values()), title=title, xlabel=xlabel)
     if fig is None:
         return None
-    fig.savefig(path, dpi=110)
-    return path
+    return save_figure(fig, path)
+
+
+#: The metrics of ``utilization.png`` (summary column -> legend text of the bar figure).
+_UTIL_FIGURE = {"Uc_ratio": "$U_c$", "Ua_ratio": "$U_a$", "NE_ratio": "NE", "GPI": "GPI"}
+
+
+def _sweep_heatmaps(folder: Path, out: Path) -> Path | None:
+    """``utilization.png`` of a sweep: a heat map per index (Uc, Ua, NE, GPI) over two numeric factors (the
+    surface's, else the first two with several values), mean over replicates; None when the sweep has fewer
+    than two such factors or none of the indices."""
+    from netsim.figure_style import save_figure
+    from netsim.sweep.spec import SweepSpec
+    from netsim.sweep.surface import metric_heatmaps
+
+    try:
+        spec = SweepSpec.model_validate(json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["spec"])
+        summary = pd.read_csv(folder / "summary.csv", keep_default_na=False, na_values=[""])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if spec.surface is not None:
+        axes = [spec.surface.x, spec.surface.y]
+    else:
+        axes = [n for n in spec.factors
+                if pd.to_numeric(summary.get(n), errors="coerce").notna().all() and summary[n].nunique() > 1][:2]
+    if len(axes) < 2:
+        return None
+    given = [spec.surface.logx, spec.surface.logy] if spec.surface is not None else [None, None]
+    logs = [spec.factors[n].is_log if g is None else bool(g) for g, n in zip(given, axes)]
+    fig = metric_heatmaps(summary, x=axes[0], y=axes[1], metrics=["et.Uc", "et.Ua", "et.NE", "et.GPI"],
+                          logx=logs[0], logy=logs[1])
+    return None if fig is None else save_figure(fig, out / "utilization.png")
 
 
 def _sweep_surface(folder: Path, out: Path, plots: bool) -> pd.DataFrame | None:
@@ -310,16 +344,50 @@ def _sweep_surface(folder: Path, out: Path, plots: bool) -> pd.DataFrame | None:
     return pd.DataFrame([row])
 
 
+def _by_values(frame: pd.DataFrame, folder: Path) -> pd.DataFrame:
+    """A copy of a sweep table whose ``case`` column reads ``sigma_s = 1e-05, sigma_c = 0.0132`` (symbols),
+    plus ``#r`` for replicates after the first."""
+    from netsim.figure_style import symbol
+
+    try:
+        factors = list(json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["factors"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return frame
+    names = [f for f in factors if f in frame.columns]
+    if "case" not in frame.columns or not names or frame.empty:
+        return frame
+    out = frame.copy()
+
+    def label(row: pd.Series) -> str:
+        text = ", ".join(f"{symbol(n)} = {row[n]:.3g}" if isinstance(row[n], float) else f"{symbol(n)} = {row[n]}"
+                         for n in names)
+        rep = row.get("replicate", 0)
+        return text + (f" #{int(rep)}" if pd.notna(rep) and int(rep) else "")
+
+    out["case"] = out.apply(label, axis=1)
+    return out
+
+
 def _figures(tables: dict[str, pd.DataFrame], out: Path, folder: Path, kind: str) -> list[Path]:
+    from netsim.figure_style import paper_style
+
     made: list[Path | None] = []
+    if kind == "sweep":  # rows named by their factor values, not by the point folder's hash
+        tables = {k: _by_values(v, folder) for k, v in tables.items()}
     util = tables["utilization"]
-    if kind != "sweep" or len(util) <= _MAX_PLOTTED:
-        made.append(_bar_figure(util, ["case"], ["Uc_ratio", "Ua_ratio", "NE_ratio", "GPI"],
-                                "Utilization and performance indices", out / "utilization.png", "value [ratio]"))
-        made.append(_bar_figure(tables["tasks"], ["case", "node", "task"], ["response_mean_s", "response_max_s"],
-                                "Task response times", out / "response_times.png", "response time [s]"))
-        made.append(_bar_figure(tables["networks"], ["case", "network"], ["delay_mean_s", "delay_max_s"],
-                                "Network delays", out / "network_delays.png", "delay [s]"))
+    with paper_style():
+        heat = _sweep_heatmaps(folder, out) if kind == "sweep" else None
+        made.append(heat)
+        if kind != "sweep" or len(util) <= _MAX_PLOTTED:
+            if heat is None:
+                made.append(_bar_figure(util, ["case"], _UTIL_FIGURE, "Utilization and performance indices",
+                                        out / "utilization.png", "value (ratio)"))
+            made.append(_bar_figure(tables["tasks"], ["case", "node", "task"],
+                                    {"response_mean_s": "mean", "response_max_s": "max"}, "Task response times",
+                                    out / "response_times.png", "response time (s)"))
+            made.append(_bar_figure(tables["networks"], ["case", "network"],
+                                    {"delay_mean_s": "mean", "delay_max_s": "max"}, "Network delays",
+                                    out / "network_delays.png", "delay (s)"))
     return [p for p in made if p is not None]
 
 

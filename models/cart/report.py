@@ -190,62 +190,16 @@ def _agg(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
     return d.groupby(by)[cols + ["oscillating"]].mean().reset_index()
 
 
-def _plots(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, trace: dict[str, Any]) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def _plots(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, trace: dict[str, Any]) -> list[Path]:
+    """Write :func:`models.cart.figures.cart_figures` into ``out`` in the paper style and the current plot
+    format (:mod:`netsim.figure_style`)."""
+    from models.cart.figures import cart_figures
+    from netsim.figure_style import paper_style, save_figure
 
     a = _agg(f2, ["controller", "wc"])
-    fig, ax = plt.subplots(figsize=(7, 5))
-    for c in CONTROLLERS:
-        d = a[a.controller == c].sort_values("wc")
-        ax.plot(d.Ev_jmap, d.sigma_u_pooled, "o-", label=c)
-        for _, r in d.iterrows():
-            ax.annotate(str(int(r.wc)), (r.Ev_jmap, r.sigma_u_pooled), fontsize=7, xytext=(3, 3),
-                        textcoords="offset points")
-        raw = f2[f2.controller == c]
-        ax.plot(raw.Ev_jmap, raw.sigma_u_pooled, ".", color=ax.lines[-1].get_color(), alpha=0.4)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("Ev (JMAP reconstruction, RMS of v/vref - 1)")
-    ax.set_ylabel("sigma_u = std(u)/mean(u), mean over the runs")
-    ax.set_title("Fig. 2: q = 6, vref = 0.8 m/s (numbers: wc in rad/s)")
-    ax.legend(fontsize=8)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.savefig(out / "fig2_sigma_vs_ev.png", dpi=120, bbox_inches="tight")
-    plt.close(fig)
-    if not fq.empty:
-        b = _agg(fq, ["controller", "q"])
-        for col, name, title in (("Ev_jmap", "fig3_ev_vs_q.png", "Fig. 3: JMAP Ev vs q (wc = 40, vref = 0.4)"),
-                                 ("sigma_u_pooled", "fig4_sigma_vs_q.png", "Fig. 4: sigma_u vs q (wc = 40, vref = 0.4)")):
-            fig, ax = plt.subplots(figsize=(6, 4))
-            for c in b.controller.unique():
-                d = b[b.controller == c].sort_values("q")
-                ax.plot(d.q, d[col], "o-", label=c)
-            ax.set_yscale("log")
-            ax.set_xlabel("q (dropped encoder bits)")
-            ax.set_ylabel(col)
-            ax.set_title(title)
-            ax.legend(fontsize=8)
-            ax.grid(True, which="both", alpha=0.3)
-            fig.savefig(out / name, dpi=120, bbox_inches="tight")
-            plt.close(fig)
-    if trace:
-        fig, axs = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-        for name, run in trace.items():
-            axs[0].plot(run.p, run.v, label=f"{name} true v", lw=0.8)
-            axs[1].plot(run.p, run.u, label=name, lw=0.6)
-        axs[0].axhline(0.8, ls=":", color="k")
-        axs[0].set_ylabel("v (m/s)")
-        axs[1].set_ylabel("u = Ku uV (m/s^2)")
-        axs[1].set_xlabel("position p (m)")
-        axs[0].set_title("Fig. 1: Pure PI and Full Event, q = 6, wc = 20, vref = 0.8 (numpy reference loop)")
-        axs[0].legend(fontsize=8)
-        axs[1].legend(fontsize=8)
-        axs[0].set_ylim(0.6, 1.0)
-        fig.savefig(out / "fig1_time.png", dpi=120, bbox_inches="tight")
-        plt.close(fig)
+    b = _agg(fq, ["controller", "q"]) if not fq.empty else fq
+    with paper_style():
+        return [save_figure(fig, out / name) for name, fig in cart_figures(f2, fq, trace, a, b).items()]
 
 
 def _seed_span(df: pd.DataFrame) -> str:
@@ -409,7 +363,11 @@ def _readme(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, claims: list[dict[str
         for _, r in b.iterrows():
             lines.append(f"| {r.controller} | {int(r.q)} | {_fmt(r.sigma_u_pooled)} | {_fmt(r.sigma_u)} | "
                          f"{_fmt(r.Ev_jmap)} | {_fmt(r.Ev)} | {_fmt(r.Ev_jmap0)} |")
-    lines += ["", "Figures: `fig1_time.png`, `fig2_sigma_vs_ev.png`, `fig3_ev_vs_q.png`, `fig4_sigma_vs_q.png`. "
+    from netsim.figure_style import current_format
+
+    shown = ", ".join(f"`{n}.{current_format()}`" for n in ("fig1_time", "fig2_sigma_vs_ev", "fig3_ev_vs_q",
+                                                             "fig4_sigma_vs_q"))
+    lines += ["", f"Figures: {shown}. "
               "Tables: `fig2.csv`, `quant.csv`, `sensitivity_runs.csv` (one row per run), `sensitivity.csv`, "
               "`claims.csv`.", "",
               "Absolute sigma_u values depend on our friction level (sigma_u ~ 1/mean(u)); the paper gives no "

@@ -329,18 +329,20 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
                           "`dask scheduler --dashboard-address ADDR`)")
     if not Path(args.file).exists():
         raise ConfigError(f"file not found: {args.file}")
+    from netsim.figure_style import plot_format
     from netsim.sweep import run_sweep
 
-    result = run_sweep(
-        args.file,
-        out=args.out,
-        workers=args.workers,
-        scheduler=args.scheduler,
-        local_dask=args.dask_local,
-        dashboard=args.dask_dashboard,
-        overwrite=args.overwrite,
-        progress=not (args.no_progress or args.quiet),
-    )
+    with plot_format(getattr(args, "plot_format", None)):
+        result = run_sweep(
+            args.file,
+            out=args.out,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            local_dask=args.dask_local,
+            dashboard=args.dask_dashboard,
+            overwrite=args.overwrite,
+            progress=not (args.no_progress or args.quiet),
+        )
     print(result.describe())
     from netsim.status import count_statuses
 
@@ -357,7 +359,10 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
     if not args.quiet:  # case-study reports log their progress under netsim.progress.<name>
         logging.getLogger("netsim.progress").setLevel(logging.INFO)
-    tables = report(args.target, out=args.out, plots=not args.no_plots)
+    from netsim.figure_style import plot_format
+
+    with plot_format(getattr(args, "plot_format", None)):
+        tables = report(args.target, out=args.out, plots=not args.no_plots)
     for name, frame in (tables or {}).items():
         rows = getattr(frame, "shape", (0,))[0]
         print(f"{name}: {rows} row{'s' if rows != 1 else ''}")

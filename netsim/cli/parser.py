@@ -215,6 +215,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="with --dask-local: serve its dashboard at ADDR, e.g. 127.0.0.1:8787 (default: off)")
     p.add_argument("--overwrite", action="store_true", help="rerun points that already have results")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--plot-format", choices=("png", "pdf", "svg"), default="png",
+                   help="file format of the surface figure (default: png)")
     p.set_defaults(func=_cmd_sweep)
 
     p = sub.add_parser("report", parents=[common], help="tables and figures from a run/sweep folder or a case study",
@@ -223,6 +225,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("target", metavar="DIR|NAME", help="a run or sweep folder, or a registered report name")
     p.add_argument("--out", metavar="DIR", help="where to write (default: next to the input)")
     p.add_argument("--no-plots", action="store_true", help="tables only")
+    p.add_argument("--plot-format", choices=("png", "pdf", "svg"), default="png",
+                   help="file format of the figures (default: png)")
     p.set_defaults(func=_cmd_report)
 
     p = sub.add_parser("validate", parents=[common, trust], help="check scenario files; exit code = number of problems",

@@ -3,8 +3,8 @@
 From a sweep's ``summary.csv`` (one row per run), :func:`load_surface` builds ``z`` over the grid of the two
 factors ``x`` and ``y`` (mean over replicates, failed runs left out); :func:`find_optimum` returns the cell
 with the lowest ``z`` (ties: the first cell in sweep order); :func:`surface_from_summary` writes
-``surface.csv`` (the stored surface, long form), ``optimum.json`` and ``surface.png`` (a 3-D surface and a
-heat map with the optimum marked, log axes for log-spaced factors).
+``surface.csv`` (the stored surface, long form), ``optimum.json`` and ``surface.png`` (a heat map with the
+optimum starred, log axes for log-spaced factors); :func:`metric_heatmaps` draws one heat map per metric.
 
 Examples
 --------
@@ -33,6 +33,7 @@ __all__ = [
     "find_optimum",
     "plot_surface",
     "surface_figure",
+    "metric_heatmaps",
     "cell_edges",
     "surface_from_summary",
     "describe_optimum",
@@ -161,13 +162,6 @@ def describe_optimum(opt: dict[str, Any]) -> str:
     )
 
 
-def _log_ticks(ax: Any, axis: str, values: np.ndarray) -> None:
-    lo, hi = math.floor(np.log10(values.min())), math.ceil(np.log10(values.max()))
-    ticks = np.arange(lo, hi + 1)
-    getattr(ax, f"set_{axis}ticks")(ticks)
-    getattr(ax, f"set_{axis}ticklabels")([f"1e{t:d}" for t in ticks])
-
-
 def cell_edges(centres: np.ndarray, log: bool) -> np.ndarray:
     """Edges of the heat-map cells around sorted grid values: midpoints between neighbours, half a step
     beyond the ends; on a log axis the midpoints are geometric (midpoints of log10), so each cell of a
@@ -184,58 +178,80 @@ def cell_edges(centres: np.ndarray, log: bool) -> np.ndarray:
     return np.concatenate([[v[0] - (mid[0] - v[0])], mid, [v[-1] + (v[-1] - mid[-1])]])
 
 
-def surface_figure(surface: Surface, optimum: dict[str, Any] | None = None) -> Any:
-    """A :class:`matplotlib.figure.Figure`: 3-D surface (left) and heat map with the optimum marked (right).
+def _heat_panel(fig: Any, ax: Any, xs: np.ndarray, ys: np.ndarray, Z: np.ndarray, *, x: str, y: str, z: str,
+                logx: bool, logy: bool) -> None:
+    """One heat map of ``Z`` (rows ``ys``, columns ``xs``) on ``ax`` with its colour bar; axes named by the
+    factors' symbols, log scale for log-spaced factors (matplotlib's one tick style: powers of ten)."""
+    from netsim.figure_style import symbol
 
-    The heat map's cells span :func:`cell_edges` (log-spaced edges on a log axis); the optimum's legend sits
-    below the axes, never over a cell.
+    mesh = ax.pcolormesh(cell_edges(xs, logx), cell_edges(ys, logy), np.ma.masked_invalid(Z), shading="flat",
+                         cmap="viridis")
+    fig.colorbar(mesh, ax=ax, label=symbol(z))
+    if logx:
+        ax.set_xscale("log")
+    if logy:
+        ax.set_yscale("log")
+    ax.set_xlabel(symbol(x))
+    ax.set_ylabel(symbol(y))
+
+
+def surface_figure(surface: Surface, optimum: dict[str, Any] | None = None) -> Any:
+    """A :class:`matplotlib.figure.Figure`: the heat map of ``z`` over the two factors, the optimum starred.
+
+    The cells span :func:`cell_edges` (log-spaced edges on a log axis), so a corner optimum's star sits inside
+    its cell, half a cell from the frame; the star is drawn unclipped as well. The optimum is written in the
+    title, never over a cell.
     """
     from matplotlib.figure import Figure
 
-    xs, ys, Z = surface.xs, surface.ys, surface.Z
-    px = np.log10(xs) if surface.logx else xs
-    py = np.log10(ys) if surface.logy else ys
-    X, Y = np.meshgrid(px, py)
-    fig = Figure(figsize=(13, 5.6), layout="constrained")
-    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
-    finite = np.isfinite(Z)
-    lo, hi = (float(np.nanmin(Z)), float(np.nanmax(Z))) if finite.any() else (0.0, 1.0)
-    # plot_surface mis-colours masked arrays: draw missing cells at NaN (left as holes)
-    ax3.plot_surface(X, Y, np.where(finite, Z, np.nan), cmap="viridis", vmin=lo, vmax=hi, rstride=1, cstride=1,
-                     linewidth=0.2, edgecolor="k", antialiased=True)
-    ax3.set_xlabel(surface.x)
-    ax3.set_ylabel(surface.y)
-    ax3.set_zlabel(surface.z)
-    if surface.logx:
-        _log_ticks(ax3, "x", xs)
-    if surface.logy:
-        _log_ticks(ax3, "y", ys)
-    ax = fig.add_subplot(1, 2, 2)
-    mesh = ax.pcolormesh(cell_edges(xs, surface.logx), cell_edges(ys, surface.logy), np.ma.masked_invalid(Z),
-                         shading="flat", cmap="viridis")
-    fig.colorbar(mesh, ax=ax, label=surface.z)
-    if surface.logx:
-        ax.set_xscale("log")
-    if surface.logy:
-        ax.set_yscale("log")
-    ax.set_xlabel(f"{surface.x} (log axis)" if surface.logx else surface.x)
-    ax.set_ylabel(f"{surface.y} (log axis)" if surface.logy else surface.y)
+    from netsim.figure_style import COLUMN_WIDTH_IN, symbol
+
+    fig = Figure(figsize=(COLUMN_WIDTH_IN, 2.8), layout="constrained")
+    ax = fig.add_subplot(1, 1, 1)
+    _heat_panel(fig, ax, surface.xs, surface.ys, surface.Z, x=surface.x, y=surface.y, z=surface.z,
+                logx=surface.logx, logy=surface.logy)
     if optimum is not None:
         ox, oy, oz = optimum["x_value"], optimum["y_value"], optimum["z_value"]
-        ax.plot([ox], [oy], marker="*", color="red", markersize=16, markeredgecolor="white", linestyle="none",
-                label=f"min {surface.z} = {oz:.4g} at {surface.x} = {ox:.3g}, {surface.y} = {oy:.3g}")
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), fontsize=8, frameon=False)
-        ax3.scatter([math.log10(ox) if surface.logx else ox], [math.log10(oy) if surface.logy else oy], [oz],
-                    color="red", s=60, depthshade=False)
-    ax.set_title(f"{surface.z} over {surface.x} x {surface.y}")
+        ax.plot([ox], [oy], marker="*", color="red", markersize=9, markeredgecolor="white", markeredgewidth=0.6,
+                linestyle="none", clip_on=False)
+        ax.set_title(f"min {symbol(surface.z)} = {oz:.3g} at {symbol(surface.x)} = {ox:.3g}, "
+                     f"{symbol(surface.y)} = {oy:.3g}")
+    return fig
+
+
+def metric_heatmaps(summary: pd.DataFrame, *, x: str, y: str, metrics: list[str], logx: bool = False,
+                    logy: bool = False) -> Any:
+    """One heat map per metric over the factors ``x`` and ``y`` (mean over replicates and other factors).
+
+    Columns of ``metrics`` missing from ``summary`` or without any value are left out; None when none is
+    left. Two panels per row, each half a paper column wide.
+    """
+    from matplotlib.figure import Figure
+
+    from netsim.figure_style import COLUMN_WIDTH_IN
+
+    surfaces = []
+    for name in metrics:
+        if name in summary.columns and pd.to_numeric(summary[name], errors="coerce").notna().any():
+            surfaces.append(load_surface(summary, x=x, y=y, z=name, logx=logx, logy=logy))
+    if not surfaces:
+        return None
+    cols = 1 if len(surfaces) == 1 else 2
+    rows = math.ceil(len(surfaces) / cols)
+    fig = Figure(figsize=(COLUMN_WIDTH_IN * (1 if cols == 1 else 2), 2.4 * rows), layout="constrained")
+    for k, surf in enumerate(surfaces):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        _heat_panel(fig, ax, surf.xs, surf.ys, surf.Z, x=x, y=y, z=surf.z, logx=logx, logy=logy)
     return fig
 
 
 def plot_surface(surface: Surface, optimum: dict[str, Any] | None, path: str | Path) -> Path:
-    """Save :func:`surface_figure` as a PNG at ``path``; returns the path."""
-    out = Path(path)
-    surface_figure(surface, optimum).savefig(out, dpi=110)
-    return out
+    """Save :func:`surface_figure` at ``path`` in the paper style and the current plot format
+    (:mod:`netsim.figure_style`); returns the written path."""
+    from netsim.figure_style import paper_style, save_figure
+
+    with paper_style():
+        return save_figure(surface_figure(surface, optimum), path)
 
 
 def surface_from_summary(
