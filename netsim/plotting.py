@@ -1,7 +1,10 @@
 """Figures of one run: responses and control signals, the schedule (Gantt chart), the network timeline.
 
-Each ``*_figure`` function returns a :class:`matplotlib.figure.Figure` (no pyplot state, no display needed; a
-notebook shows it inline, ``fig.savefig(path)`` saves it). :meth:`netsim.results.RunResult.plot`,
+Each ``*_figure`` function returns a :class:`matplotlib.figure.Figure` (no pyplot state, no display needed;
+``fig.savefig(path)`` saves it). A figure made here is an :class:`InlineFigure`, which a fresh Jupyter kernel shows
+inline without ``%matplotlib inline`` (a bare ``Figure`` shows there as its text repr unless the inline backend
+is active). Each takes the axes (``ax=``) or, with several panels, the figure (``fig=``) to draw into, and returns
+the figure drawn on. :meth:`netsim.results.RunResult.plot`,
 ``plot_schedule`` and ``plot_network`` call them; :func:`save_figures` (``netsim run --plot``,
 ``result.plot(save=DIR)``) writes ``responses.png``, ``schedule.png`` and ``network.png``.
 
@@ -30,8 +33,10 @@ from typing import Any, Mapping
 
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure  # not pyplot: no backend, no global figure list
 
 __all__ = [
+    "InlineFigure",
     "bar_figure",
     "responses_figure",
     "schedule_figure",
@@ -56,10 +61,37 @@ _PANELS = (
 )
 
 
-def _figure(width: float, height: float) -> Any:
-    from matplotlib.figure import Figure
+class InlineFigure(Figure):
+    """A matplotlib ``Figure`` that IPython and Jupyter show as a PNG, without pyplot or the inline backend.
 
-    return Figure(figsize=(width, height), dpi=100, layout="constrained")
+    Examples
+    --------
+    >>> fig = InlineFigure(figsize=(2, 1))
+    >>> fig._repr_png_()[:4] == bytes([0x89]) + b"PNG"
+    True
+    """
+
+    def _repr_png_(self) -> bytes:
+        import io
+
+        buf = io.BytesIO()
+        self.savefig(buf, format="png", bbox_inches="tight")
+        return buf.getvalue()
+
+
+def _figure(width: float, height: float) -> Any:
+    return InlineFigure(figsize=(width, height), dpi=100, layout="constrained")
+
+
+def _axes(ax: Any, width: float, height: float) -> tuple[Any, Any]:
+    """``(figure, axes)``: the given axes and their figure, else one new axes on a new figure of this size."""
+    if ax is not None:
+        try:
+            return ax.get_figure(root=True), ax  # the figure itself, also for axes in a subfigure
+        except TypeError:  # matplotlib < 3.10: no root argument
+            return ax.figure, ax
+    fig = _figure(width, height)
+    return fig, fig.subplots()
 
 
 def signal_roles(scenario: Mapping[str, Any] | None) -> dict[str, str]:
@@ -175,20 +207,27 @@ def _clip_to_scale(ax: Any, t: np.ndarray, series: dict[str, np.ndarray], colour
 
 
 def responses_figure(signals: pd.DataFrame, scenario: Mapping[str, Any] | None = None, *, status: str = "ok",
-                     title: str = "") -> Any:
+                     title: str = "", fig: Any = None) -> Any:
     """Recorded signals over time (held between samples), in panels by declared kind, one colour per loop.
 
     Parameters
     ----------
-    signals
+    signals : pandas.DataFrame
         The run's signals table (``time_s`` first).
-    scenario
+    scenario : Mapping, optional
         The resolved scenario (``RunResult.scenario``): the source of each signal's kind and loop. Without it
         every signal is drawn in one panel.
-    status
+    status : str, default "ok"
         The run's status; a ``diverged at t = ...`` run is clipped to its scale before divergence.
-    title
+    title : str, optional
         Figure title (default: ``responses``).
+    fig : matplotlib.figure.Figure or SubFigure, optional
+        An empty figure to draw the panels into (default: a new :class:`InlineFigure`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``, or the new figure.
     """
     names = [c for c in signals.columns if c != "time_s"]
     roles = signal_roles(scenario)
@@ -203,7 +242,8 @@ def responses_figure(signals: pd.DataFrame, scenario: Mapping[str, Any] | None =
         panels = [("recorded signals\n[their own units]", names)]
     if not panels:
         panels = [("nothing recorded", [])]
-    fig = _figure(9, 2.8 * len(panels) + 0.6)
+    if fig is None:
+        fig = _figure(9, 2.8 * len(panels) + 0.6)
     axes = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
     t = signals["time_s"].to_numpy(dtype=float)
     t_div = _diverged_at(status)
@@ -254,11 +294,11 @@ def _window_note(t0: float, t1: float, end_s: float) -> str:
 
 
 def schedule_figure(schedule: pd.DataFrame, jobs: pd.DataFrame | None = None, *, window: Any = None,
-                    end_s: float = 0.0, title: str = "") -> Any:
+                    end_s: float = 0.0, title: str = "", ax: Any = None) -> Any:
     """Gantt chart: per node and task, running intervals (solid), ready intervals (light), deadline misses
-    (red triangles), over ``window`` (see :func:`resolve_window`)."""
-    fig = _figure(10, 0.5 * max(1, len(set(zip(schedule["node"], schedule["task"])))) + 1.8)
-    ax = fig.subplots()
+    (red triangles), over ``window`` (see :func:`resolve_window`), on ``ax`` (default: a new figure's axes).
+    Returns the figure drawn on."""
+    fig, ax = _axes(ax, 10, 0.5 * max(1, len(set(zip(schedule["node"], schedule["task"])))) + 1.8)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("node.task")
     if schedule is None or schedule.empty:
@@ -300,13 +340,14 @@ def schedule_figure(schedule: pd.DataFrame, jobs: pd.DataFrame | None = None, *,
     return fig
 
 
-def network_figure(messages: pd.DataFrame, *, window: Any = None, end_s: float = 0.0, title: str = "") -> Any:
+def network_figure(messages: pd.DataFrame, *, window: Any = None, end_s: float = 0.0, title: str = "",
+                   ax: Any = None) -> Any:
     """Per network and sender: transmissions (tx start to end) or, for media without a bit rate, the delay
-    (sent to delivered) as bars; each dropped copy a red cross at its send instant. Over ``window``."""
+    (sent to delivered) as bars; each dropped copy a red cross at its send instant. Over ``window``, on ``ax``
+    (default: a new figure's axes). Returns the figure drawn on."""
     rows = sorted({(n, s) for n, s in zip(messages["network"], messages["sender"])}) if messages is not None \
         and not messages.empty else []
-    fig = _figure(10, 0.5 * max(1, len(rows)) + 1.8)
-    ax = fig.subplots()
+    fig, ax = _axes(ax, 10, 0.5 * max(1, len(rows)) + 1.8)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("network: sender")
     if not rows:

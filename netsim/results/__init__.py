@@ -38,7 +38,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -55,6 +55,9 @@ from netsim.results.files import (
     write_csv,
 )
 from netsim.results.summary import key_metrics
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 from netsim.results.tables import (
     JOB_COLUMNS,
     JOB_SUMMARY_COLUMNS,
@@ -277,41 +280,91 @@ class RunResult:
         else:
             sched.unlink(missing_ok=True)  # a folder written before: its trace is not this run's
 
-    def plot(self, save: str | Path | None = None, *, window: Any = None) -> Any:
-        """The responses figure (:func:`netsim.plotting.responses_figure`): a matplotlib ``Figure``.
+    def plot(self, save: str | Path | None = None, *, window: Any = None, fig: Any = None) -> Figure:
+        """The responses figure (:func:`netsim.plotting.responses_figure`): outputs and references, actuator values,
+        other signals, in panels.
 
         Parameters
         ----------
-        save
+        save : str or pathlib.Path, optional
             A folder: also write ``responses.png``, ``schedule.png`` and ``network.png`` there (otherwise save
             the returned figure yourself with ``fig.savefig(path)``).
-        window
+        window : float or tuple of float, optional
             Time window of the saved Gantt chart and network timeline: ``(t0, t1)`` or a length in seconds
             (default: the whole run when it is short, see :func:`netsim.plotting.resolve_window`).
+        fig : matplotlib.figure.Figure or SubFigure, optional
+            An empty figure to draw the panels into (default: a new one).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure drawn on; a new one shows inline in a Jupyter notebook without ``%matplotlib inline``.
+
+        Examples
+        --------
+        >>> result = netsim.run("scenarios/dc_servo_can.yaml")                 # doctest: +SKIP
+        >>> result.plot().savefig("responses.pdf")                              # doctest: +SKIP
         """
         from netsim.plotting import responses_figure, save_figures
 
         if save is not None:
             save_figures(self, save, window=window)
         return responses_figure(self.signals, self.scenario, status=self.status,
-                                title=str(self.meta.get("scenario", "")))
+                                title=str(self.meta.get("scenario", "")), fig=fig)
 
-    def plot_schedule(self, window: Any = None) -> Any:
-        """Gantt chart of the kernels' schedules over ``window`` (``(t0, t1)`` or a length in seconds; default:
-        the whole run when it is short): a matplotlib ``Figure``. A run made with ``output.schedule: off`` kept no
-        trace: the chart then says so in its title."""
+    def plot_schedule(self, window: Any = None, *, ax: Any = None) -> Figure:
+        """Gantt chart of the kernels' schedules (:func:`netsim.plotting.schedule_figure`).
+
+        A run made with ``output.schedule: off`` kept no trace: the chart then says so in its title.
+
+        Parameters
+        ----------
+        window : float or tuple of float, optional
+            ``(t0, t1)`` or a length in seconds (default: the whole run when it is short).
+        ax : matplotlib.axes.Axes, optional
+            The axes to draw on (default: a new figure's).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure drawn on.
+
+        Examples
+        --------
+        >>> result = netsim.run("scenarios/dc_servo_can.yaml")                 # doctest: +SKIP
+        >>> result.plot_schedule(window=(0, 0.05)).savefig("schedule.png")      # doctest: +SKIP
+        """
         from netsim.plotting import schedule_figure
 
-        title = ("schedule: not kept (output.schedule: off, or a folder written before schedule.csv existed)"
-                 if self.traces.get("schedule") == "off" else "")
+        title = "schedule: not kept (output.schedule: off)" if self.traces.get("schedule") == "off" else ""
         return schedule_figure(self.schedule, self.jobs, window=window, end_s=float(self.meta.get("t_end_s") or 0),
-                               title=title)
+                               title=title, ax=ax)
 
-    def plot_network(self, window: Any = None) -> Any:
-        """Network timeline (transmissions, delays, drops) over ``window``: a matplotlib ``Figure``."""
+    def plot_network(self, window: Any = None, *, ax: Any = None) -> Figure:
+        """Network timeline: transmissions, delays and drops (:func:`netsim.plotting.network_figure`).
+
+        Parameters
+        ----------
+        window : float or tuple of float, optional
+            ``(t0, t1)`` or a length in seconds (default: the whole run when it is short).
+        ax : matplotlib.axes.Axes, optional
+            The axes to draw on (default: a new figure's).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure drawn on.
+
+        Examples
+        --------
+        >>> import matplotlib.pyplot as plt                                     # doctest: +SKIP
+        >>> fig, (top, bottom) = plt.subplots(2, 1, sharex=True)                # doctest: +SKIP
+        >>> result.plot_schedule(window=0.1, ax=top)                            # doctest: +SKIP
+        >>> result.plot_network(window=0.1, ax=bottom)                          # doctest: +SKIP
+        """
         from netsim.plotting import network_figure
 
-        return network_figure(self.messages, window=window, end_s=float(self.meta.get("t_end_s") or 0))
+        return network_figure(self.messages, window=window, end_s=float(self.meta.get("t_end_s") or 0), ax=ax)
 
     def to_timeresponse(self, *, outputs: list[str] | None = None, inputs: list[str] | None = None,
                         states: list[str] | None = None) -> Any:
