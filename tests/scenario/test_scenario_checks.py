@@ -29,9 +29,9 @@ def test_times_are_integer_nanoseconds_and_defaults_are_filled(base):
     assert sc.duration == 1_000_000_000
 
 
-def test_task_without_period_or_release_is_aperiodic(base):
-    raw = base()
-    raw["nodes"]["controller"]["tasks"].append({"name": "bg", "program": "zzt_idle"})
+def test_task_released_aperiodic_has_no_deadline(base):
+    raw = base()  # without 'release: aperiodic' such a task is refused (issue 31: nothing would release it)
+    raw["nodes"]["controller"]["tasks"].append({"name": "bg", "program": "zzt_idle", "release": "aperiodic"})
     task = load_scenario(raw).nodes["controller"].tasks[1]
     assert task.release == "aperiodic" and task.deadline is None
 

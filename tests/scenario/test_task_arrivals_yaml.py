@@ -57,7 +57,7 @@ def test_unused_fields_stay_out_of_the_resolved_scenario():
 @pytest.mark.parametrize("fields, path, words", [
     ({"release": "sporadic"}, "min_interarrival", "needs a minimum inter-arrival"),
     ({"period": "10 ms", "min_interarrival": "5 ms"}, "min_interarrival", "only sporadic tasks"),
-    ({"release_jitter": "1 ms"}, "release_jitter", "periodic and sporadic tasks only"),
+    ({"release": "aperiodic", "release_jitter": "1 ms"}, "release_jitter", "periodic and sporadic tasks only"),
     ({"period": "10 ms", "release_jitter": {"dist": "uniform", "low": "2 ms", "high": "1 ms"}}, "release_jitter",
      "low must not exceed high"),
     ({"period": "10 ms", "release_jitter": {"dist": "poisson", "mean": "1 ms"}}, "release_jitter", "dist"),
