@@ -220,28 +220,26 @@ class Plant(abc.ABC):
         """Add white noise held per sample to input ``input``: ``sigma * N(0, 1)`` drawn at every multiple of
         ``sample_ns`` and held until the next (:class:`~netsim.plant.noise.HeldNoise`, stream
         ``plant.<name>.disturbance.<input>``). A piecewise-constant input: exact propagation stays exact."""
-        from netsim.plant.noise import HeldNoise
+        from netsim.plant.noise import add_held_noise
 
-        noise = HeldNoise(sigma, sample_ns)
-        index = self.input_index(input)
-        try:
-            self.add_disturbance(index, noise)
-        except (BuildError, ConfigError) as exc:
-            if self._started:
-                raise
-            raise type(exc)(f"plant {self.name} does not take random input noise (its model refuses a sampled "
-                            f"disturbance: {exc}); put the noise on its states instead: {{states: [...], "
-                            "sigma: ..., sample: ...}") from None
+        add_held_noise(self, self.input_index(input), sigma, sample_ns)
 
-    def add_state_noise(self, states: Sequence[int | str], sigma: float | Sequence[float], sample_ns: int) -> None:
-        """Add random-walk increments to ``states``: at every multiple ``k * sample_ns`` (``k >= 1``) each listed
-        state jumps by ``sigma_i * sqrt(sample) * N(0, 1)`` (``sigma`` per square root of a second; stream
-        ``plant.<name>.state_noise``). See :mod:`netsim.plant.noise` for how it composes with integration."""
+    def add_state_noise(self, states: Sequence[int | str], sigma: float | Sequence[float], sample_ns: int,
+                        model: str = "increment") -> None:
+        """Add random noise to ``states`` (stream ``plant.<name>.state_noise``, see :mod:`netsim.plant.noise`).
+
+        ``model="increment"``: at every multiple ``k * sample_ns`` (``k >= 1``) each listed state jumps by
+        ``sigma_i * sqrt(sample) * N(0, 1)`` (``sigma`` per square root of a second); any plant. ``"rate"``:
+        ``sigma_i * N(0, 1)`` drawn at every multiple (``k >= 0``) is held and added to the state's derivative
+        (LTI and ``NonlinearPlant`` plants)."""
         if self._started:
             raise BuildError(f"plant {self.name}: add state noise before the simulation starts")
         from netsim.plant.noise import state_noise
 
-        self._add_source(state_noise(self.name, [self.state_index(s) for s in states], sigma, sample_ns))
+        src = state_noise(self.name, [self.state_index(s) for s in states], sigma, sample_ns, model == "rate")
+        if src.rate and type(self)._state_rates_changed is Plant._state_rates_changed:
+            self._state_rates_changed()  # refuses
+        self._add_source(src)
 
     def set_process_noise(self, process_noise: Any) -> None:
         """Add the random disturbances of a scenario's ``process_noise`` entries before the run: held white
@@ -255,6 +253,10 @@ class Plant(abc.ABC):
     def _check_source(self, src: _Source) -> None:
         """Subclasses reject disturbance kinds they cannot propagate."""
 
+    def _state_rates_changed(self) -> None:
+        """Subclasses that take held rates on states (``model: rate``) read the new ones here."""
+        raise ConfigError(f"plant {self.name} does not take a held rate on its states; use model: increment")
+
     def _on_sources_changed(self) -> None:
         """Subclasses rebuild augmented models here."""
 
@@ -266,6 +268,8 @@ class Plant(abc.ABC):
             if (src.kind == "state" or (src.kind == "lti_d" and src.lti.noisy)) and src.rng is None:  # type: ignore[union-attr]
                 raise BuildError(f"plant {self.name}: bind(env) before running a noisy disturbance model")
             src.start()
+        if any(s.kind == "state" and s.rate for s in self._sources):  # type: ignore[attr-defined]
+            self._state_rates_changed()
         self._refresh_sources(self._t)
 
     def _is_plain(self) -> bool:
@@ -290,7 +294,11 @@ class Plant(abc.ABC):
                 src.step_discrete()
                 stochastic = stochastic or src.L is not None
             elif src.next_ns == t and src.kind == "state":
-                self._set_state_now(src.jump(self._state_now()))  # type: ignore[attr-defined]
+                if src.rate:  # type: ignore[attr-defined]
+                    src.draw_rates()  # type: ignore[attr-defined]
+                    self._state_rates_changed()
+                else:
+                    self._set_state_now(src.jump(self._state_now()))  # type: ignore[attr-defined]
                 stochastic = True
         self._refresh_sources(t)
         return stochastic

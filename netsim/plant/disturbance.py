@@ -151,18 +151,34 @@ class _Source:
 
 
 class _StateNoise(_Source):
-    """Random-walk increments on plant states: at each multiple of ``dt_ns`` the plant adds ``sd * N(0, I)`` to
-    ``states`` (``sd = sigma sqrt(dt)``, :mod:`netsim.plant.noise`)."""
+    """Random noise on plant states (:mod:`netsim.plant.noise`), drawn at each multiple of ``dt_ns``.
 
-    __slots__ = ("states", "sd", "dt_ns")
+    ``rate=False`` (increments): the plant adds ``sd * N(0, I)`` to ``states`` at each instant (``sd = sigma
+    sqrt(dt)``). ``rate=True`` (held rate): ``rates = sd * N(0, I)`` (``sd = sigma``) is drawn at the start and
+    at each instant and added to the derivatives of ``states`` until the next; the plant integrates it.
+    """
 
-    def __init__(self, states: list[int], sd: np.ndarray, dt_ns: int) -> None:
+    __slots__ = ("states", "sd", "dt_ns", "rate", "rates", "offset")
+
+    def __init__(self, states: list[int], sd: np.ndarray, dt_ns: int, rate: bool = False) -> None:
         super().__init__(-1, "state")
         self.states = np.array(states, dtype=int)
         self.sd = np.asarray(sd, dtype=float)
         if int(dt_ns) <= 0:
             raise ConfigError(f"state noise sample must be positive, got {dt_ns}")
         self.dt_ns = int(dt_ns)
+        self.rate = bool(rate)
+        self.rates = np.zeros(self.sd.size)
+        self.offset = -1  # where an LTI plant keeps the held rates in its augmented state
+
+    def start(self) -> None:
+        if self.rate:
+            self.draw_rates()
+
+    def draw_rates(self) -> None:
+        """Draw the held rates of the sample starting now."""
+        assert self.rng is not None
+        self.rates = self.sd * self.rng.standard_normal(self.sd.size)
 
     def jump(self, x: np.ndarray) -> np.ndarray:
         """``x`` with this instant's increments added (a new array)."""

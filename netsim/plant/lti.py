@@ -254,6 +254,14 @@ class LTIPlant(_LTIBase):
                 z0.append(lti.x0.copy())
                 couple.append((src.index, lti.C[0]))
                 q_blocks.append(lti.B @ lti.W @ lti.B.T)
+            elif src.kind == "state" and src.rate:  # type: ignore[attr-defined]
+                k = src.sd.size  # type: ignore[attr-defined]
+                blocks_A.append(np.zeros((k, k)))  # held rates: constant between sample instants
+                z0.append(src.rates.copy())  # type: ignore[attr-defined]
+                E = np.zeros((n, k))
+                E[src.states, np.arange(k)] = 1.0  # type: ignore[attr-defined]
+                couple.append((None, E))
+                q_blocks.append(np.zeros((k, k)))
         nz = n + sum(b.shape[0] for b in blocks_A)
         Af = np.zeros((nz, nz))
         Af[:n, :n] = self.A
@@ -262,11 +270,16 @@ class LTIPlant(_LTIBase):
         Qf = np.zeros((nz, nz))
         Qf[:n, :n] = self.Qc
         k = n
+        rate_sources = iter([src for src in self._sources if src.kind == "state" and src.rate])  # type: ignore[attr-defined]
         for blk, (idx, row), q in zip(blocks_A, couple, q_blocks):
             s = blk.shape[0]
             Af[k : k + s, k : k + s] = blk
-            Af[:n, k : k + s] = np.outer(self.B[:, idx], row)
-            Cf[:, k : k + s] = np.outer(self.D[:, idx], row)
+            if idx is None:  # held rates on states: dx/dt += E r (no output feed-through)
+                Af[:n, k : k + s] = row
+                next(rate_sources).offset = k  # type: ignore[attr-defined]
+            else:
+                Af[:n, k : k + s] = np.outer(self.B[:, idx], row)
+                Cf[:, k : k + s] = np.outer(self.D[:, idx], row)
             Qf[k : k + s, k : k + s] = q
             k += s
         Bf = np.zeros((nz, m))
@@ -286,6 +299,13 @@ class LTIPlant(_LTIBase):
 
     def _bind_streams(self, env: Any) -> None:
         self._rng = env.rng(f"plant.{self.name}.process")
+
+    def _state_rates_changed(self) -> None:
+        """The held rates are states of the augmented model: write the new ones there."""
+        for src in self._sources:
+            if src.kind == "state" and src.rate:  # type: ignore[attr-defined]
+                self._zu[src.offset : src.offset + src.sd.size] = src.rates  # type: ignore[attr-defined]
+        self._y = None
 
     def _start(self) -> None:
         if any(s.kind == "sine" for s in self._sources):

@@ -4,6 +4,7 @@ Both are entries of the plant section's ``process_noise`` (one entry, or a list 
 
     process_noise: {inputs: [u], sigma: 0.2, sample: 1 ms}             # held white noise on input u
     process_noise: {states: [x, y], sigma: [0.01, 0.01], sample: 10 ms}  # random walk on states x and y
+    process_noise: {states: [v], sigma: 0.5, sample: 1 ms, model: rate}  # a held random rate on dv/dt
 
 (the older forms, a number, a vector or a matrix, remain the intensity ``Qc`` of an LTI plant's white process
 noise, :class:`~netsim.plant.lti.LTIPlant`).
@@ -24,6 +25,12 @@ Models, with ``T`` the ``sample`` period, ``k = 0, 1, 2, ...`` and ``e_k ~ N(0, 
     anything that happens at ``k T`` reads it (a mode switch is re-selected after it, as after
     :meth:`~netsim.plant.Plant.set_state`). Works on every plant, including plugin plants such as
     ``unicycle``.
+``states`` with ``model: rate``
+    A held additive rate: ``dx_i/dt += sigma_i e_k`` for ``t`` in ``[k T, (k+1) T)`` (``e_0`` drawn at the
+    start; ``sigma`` in state units per second). The plant integrates it with its dynamics: an LTI plant keeps
+    the rates as constant states of its augmented model (still exact), a
+    :class:`~netsim.plant.nonlinear.NonlinearPlant` adds them to the right-hand side of whichever mode is
+    active. Plants with their own integrator (``unicycle``, the cart) and discrete plants refuse it.
 
 Draws come from the scenario seed's own streams (one seed fixes every draw): ``plant.<name>.disturbance.<input>``
 for input noise (the stream of the input's noisy disturbance models) and ``plant.<name>.state_noise`` for state
@@ -39,11 +46,11 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from netsim.errors import ConfigError
+from netsim.errors import BuildError, ConfigError
 from netsim.plant.disturbance import LTIDisturbance, _StateNoise
 from netsim.units import Duration, StrictModel
 
-__all__ = ["HeldNoise", "NoiseEntry", "apply_entries", "noise_entries", "normalized_entries", "state_noise"]
+__all__ = ["HeldNoise", "NoiseEntry", "add_held_noise", "apply_entries", "noise_entries", "normalized_entries", "state_noise"]
 
 
 class HeldNoise(LTIDisturbance):
@@ -82,9 +89,10 @@ class NoiseEntry(StrictModel):
         description="one number for every listed signal, or one per signal: the held value's standard deviation "
                     "(inputs, input units) or the increment intensity (states, units per sqrt(s))")
     sample: Duration = Field(description="noise sample period: draws at its multiples")
-    model: Literal["held", "increment"] | None = Field(
-        None, description="'held' (inputs: the value held over a sample) or 'increment' (states: x += sigma "
-                          "sqrt(sample) N(0,1) at each sample instant); the default follows states/inputs")
+    model: Literal["held", "increment", "rate"] | None = Field(
+        None, description="inputs: 'held' (the value held over a sample); states: 'increment' (default, x += "
+                          "sigma sqrt(sample) N(0,1) at each sample instant) or 'rate' (sigma N(0,1) held over a "
+                          "sample and added to dx/dt)")
 
     @model_validator(mode="after")
     def _one_target(self) -> "NoiseEntry":
@@ -96,12 +104,10 @@ class NoiseEntry(StrictModel):
             raise ValueError(f"sigma has {len(sig)} values for {n} {self.kind}; give one number or one per entry")
         if any(not (s >= 0.0 and s < float("inf")) for s in sig):
             raise ValueError(f"sigma must be finite numbers >= 0, got {self.sigma}")
-        expected = "increment" if self.states is not None else "held"
-        if self.model is not None and self.model != expected:
-            raise ValueError(
-                f"model '{self.model}' does not apply to {self.kind}: {self.kind} take '{expected}' noise "
-                "(a held rate on a state is not offered; write the rate as an input disturbance instead)"
-            )
+        allowed = ("increment", "rate") if self.states is not None else ("held",)
+        if self.model is not None and self.model not in allowed:
+            raise ValueError(f"model '{self.model}' does not apply to {self.kind}: {self.kind} take "
+                             f"{' or '.join(repr(a) for a in allowed)} noise")
         return self
 
     @property
@@ -156,9 +162,10 @@ def normalized_entries(noise: Any) -> list[dict[str, Any]]:
     return out
 
 
-def state_noise(plant: str, states: list[int], sigma: Any, sample_ns: int) -> _StateNoise:
-    """The source of random-walk increments on the state indices ``states`` of plant ``plant`` (checked):
-    ``sd = sigma sqrt(sample)`` per state, ``sigma`` one number or one per state."""
+def state_noise(plant: str, states: list[int], sigma: Any, sample_ns: int, rate: bool = False) -> _StateNoise:
+    """The source of noise on the state indices ``states`` of plant ``plant`` (checked), ``sigma`` one number or
+    one per state: random-walk increments (``sd = sigma sqrt(sample)``) or, with ``rate``, held rates
+    (``sd = sigma``)."""
     if len(set(states)) != len(states):
         raise ConfigError(f"plant {plant}: state noise lists a state twice: {list(states)}")
     sig = np.full(len(states), float(sigma)) if np.ndim(sigma) == 0 else np.asarray(sigma, dtype=float)
@@ -167,7 +174,7 @@ def state_noise(plant: str, states: list[int], sigma: Any, sample_ns: int) -> _S
     dt = int(sample_ns)
     if dt <= 0:
         raise ConfigError(f"plant {plant}: state noise sample must be positive, got {sample_ns}")
-    return _StateNoise(states, sig * math.sqrt(dt / 1e9), dt)
+    return _StateNoise(states, sig if rate else sig * math.sqrt(dt / 1e9), dt, rate)
 
 
 def apply_entries(plant: Any, noise: Any) -> None:
@@ -183,4 +190,18 @@ def apply_entries(plant: Any, noise: Any) -> None:
             for target, sigma in zip(entry.targets, entry.sigmas()):
                 plant.add_input_noise(target, sigma, entry.sample)
         else:
-            plant.add_state_noise(entry.targets, entry.sigmas(), entry.sample)
+            plant.add_state_noise(entry.targets, entry.sigmas(), entry.sample, entry.model or "increment")
+
+
+def add_held_noise(plant: Any, index: int, sigma: float, sample_ns: int) -> None:
+    """Add :class:`HeldNoise` to input ``index`` of ``plant``; a model that refuses sampled disturbances is
+    refused with what to write instead."""
+    noise = HeldNoise(sigma, sample_ns)
+    try:
+        plant.add_disturbance(index, noise)
+    except (BuildError, ConfigError) as exc:
+        if plant._started:
+            raise
+        raise type(exc)(f"plant {plant.name} does not take random input noise (its model refuses a sampled "
+                        f"disturbance: {exc}); put the noise on its states instead: {{states: [...], "
+                        "sigma: ..., sample: ...}") from None

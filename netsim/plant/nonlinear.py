@@ -209,6 +209,7 @@ class NonlinearPlant(Plant):
         self.rhs_evaluations = 0
         self.mode_switches = 0
         self._ueff = np.zeros(self.n_inputs)
+        self._rate: np.ndarray | None = None  # held state-noise rates (netsim.plant.noise), if any
         self._check_output(self._x)
 
     def _check_output(self, x: np.ndarray) -> None:
@@ -222,6 +223,14 @@ class NonlinearPlant(Plant):
                 f"plant {self.name}: continuous disturbance models need an LTI plant; give the LTIDisturbance "
                 "a dt_ns (discrete model) instead"
             )
+
+    def _state_rates_changed(self) -> None:
+        """Held rates on states (``model: rate``): added to the right-hand side of every mode until the next."""
+        rate = np.zeros(self.n_states)
+        for src in self._sources:
+            if src.kind == "state" and src.rate:  # type: ignore[attr-defined]
+                rate[src.states] += src.rates  # type: ignore[attr-defined]
+        self._rate = rate
 
     def _update_effective_input(self, t: int) -> None:
         self._ueff = self._piecewise_input()
@@ -274,13 +283,16 @@ class NonlinearPlant(Plant):
         t = t0
         switches_here, last_switch_t = 0, None
         params = self.params
+        rate = self._rate
         while t < t1:
             m = self.modes[mode]
             f = m.f or self.f
 
             def rhs(tt: float, xx: np.ndarray, f: Fn = f) -> np.ndarray:
                 self.rhs_evaluations += 1
-                return f(tt, xx, u_of(tt), params)
+                if rate is None:
+                    return f(tt, xx, u_of(tt), params)
+                return np.asarray(f(tt, xx, u_of(tt), params), dtype=float) + rate  # held state noise rates
 
             guards = list(m.guards) + list(extra)
             evs = []

@@ -187,3 +187,47 @@ def test_entries_given_to_the_constructor_act_as_set_later():
         plant.bind(SimEnv(seed=8))
     np.testing.assert_array_equal(given.state(20 * MS), later.state(20 * MS))
     assert np.all(given.state(20 * MS) != 0.0)
+
+
+def test_held_state_rate_on_an_lti_plant_is_propagated_exactly():
+    # model: rate on state 0 (the position of the oscillator A): dx0/dt gets 0.5 e_k held over [5k, 5(k+1)) ms,
+    # e_0 drawn at the start. Reference: the exact ZOH of x' = A x + E r with E = [1, 0]', read at 3, 12, 17 ms.
+    env = SimEnv(seed=21)
+    plant = LTIPlant(A, B, C, None, x0=[0.2, 0.0], input_names=["u"], name="p")
+    plant.set_process_noise({"states": [0], "sigma": 0.5, "sample": "5 ms", "model": "rate"})
+    plant.bind(env)
+    got = [plant.state(t * MS) for t in (3, 12, 17)]
+
+    r = 0.5 * _stream(21, "plant.p.state_noise").standard_normal(4)
+    x, t, want = np.array([0.2, 0.0]), 0, []
+    for stop in (3, 12, 17):
+        while t < stop:
+            end = min(stop, (t // 5 + 1) * 5)
+            M = np.zeros((3, 3))
+            M[:2, :2], M[0, 2] = A * (end - t) * 1e-3, (end - t) * 1e-3
+            E = expm(M)
+            x = E[:2, :2] @ x + E[:2, 2] * r[t // 5]
+            t = end
+        want.append(x.copy())
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)
+
+
+def test_held_state_rate_on_a_nonlinear_plant_adds_to_its_right_hand_side():
+    # x' = -x + r_k, r_k = 2 e_k held over 10 ms from x = 1: per interval x <- r + (x - r) e^{-h}; read at 25 ms
+    env = SimEnv(seed=5)
+    plant = NonlinearPlant(lambda t, x, u, p: -x, lambda t, x, u, p: x, n_states=1, n_inputs=1, n_outputs=1,
+                           x0=[1.0], name="nl", rtol=1e-11, atol=1e-13)
+    plant.add_state_noise([0], 2.0, 10 * MS, model="rate")
+    plant.bind(env)
+    r = 2.0 * _stream(5, "plant.nl.state_noise").standard_normal(3)
+    x = 1.0
+    for k, h in enumerate((0.01, 0.01, 0.005)):
+        x = r[k] + (x - r[k]) * math.exp(-h)
+    assert plant.state(25 * MS)[0] == pytest.approx(x, rel=1e-9)
+
+
+def test_a_plant_with_its_own_integrator_refuses_a_held_state_rate():
+    sc = {"name": "u", "duration": "20 ms", "plant": {"model": "unicycle", "process_noise": {
+        "states": ["x"], "sigma": 0.1, "sample": "10 ms", "model": "rate"}}}
+    errors = [p for p in check_scenario(sc) if p.severity == "error"]
+    assert any("does not take a held rate" in p.message and p.path == "plant.process_noise" for p in errors), errors
