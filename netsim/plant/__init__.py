@@ -28,7 +28,8 @@ callable ``t_ns -> value`` is sampled at each propagation instant and held (an a
 Random disturbances given in a scenario (``plant.process_noise`` entries, :mod:`netsim.plant.noise`): white noise
 held per sample on inputs (:meth:`Plant.add_input_noise`, a :class:`~netsim.plant.noise.HeldNoise` discrete
 disturbance model, so exact propagation stays exact) and random-walk increments on any state of any plant
-(:meth:`Plant.add_state_noise`, jumps at the sample instants between the plant's own integration steps).
+(:meth:`Plant.add_state_noise`, jumps at the sample instants between the plant's own integration steps), or
+held random rates on the states' derivatives (LTI and nonlinear plants).
 
 Listeners
 ---------

@@ -420,8 +420,8 @@ class PlantSpec(PluginSpec):
     process_noise: ProcessNoise = Field(None, description=(
         "LTI/discrete plants: intensity of white noise on the state (number, vector or matrix). Any plant: "
         "entries {inputs: [...], sigma, sample} (white noise held per sample on inputs) or {states: [...], sigma, "
-        "sample} (random-walk increments sigma*sqrt(sample)*N(0,1) at each sample), one or a list "
-        "(netsim.plant.noise)"))
+        "sample} (random-walk increments sigma*sqrt(sample)*N(0,1) at each sample; model: rate holds sigma*N(0,1) "
+        "on dx/dt instead), one or a list (netsim.plant.noise)"))
 
     @model_validator(mode="before")
     @classmethod
