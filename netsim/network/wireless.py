@@ -22,7 +22,8 @@ The radio (both MACs)
     :meth:`WirelessMedium.set_position` moves one from Python during a run.
     A transmission of power ``P_tx`` (dBm) reaches a node at distance ``d`` with
     ``P_tx - 10 a log10(max(d, d0) / d0)`` dBm (log-distance path loss, exponent ``a``, TrueTime's
-    ``1/d^a`` with ``d0`` = 1 m). A node senses the medium busy while the powers it receives add up to at
+    ``1/d^a`` with ``d0`` = 1 m), or with what the model ``path_loss: {type: NAME, ...}`` gives
+    (:mod:`netsim.network.path_loss`: ``log_distance``, ``free_space``, or a user's plugin). A node senses the medium busy while the powers it receives add up to at
     least ``carrier_sense_dbm`` (default: ``receiver_threshold_dbm``), or while it transmits: with a
     carrier-sense threshold below the decode threshold a node defers to transmissions it could not decode.
     A copy is received when its power is at least
@@ -74,13 +75,14 @@ import abc
 import math
 from typing import Any, ClassVar
 
-from pydantic import Field, model_serializer, model_validator
+from pydantic import BaseModel, Field, ValidationError, field_validator, model_serializer, model_validator
 
 from netsim.env import AIR
 from netsim.errors import ConfigError
 from netsim.network.message import Message
 from netsim.network.mobility import Motion, Track
 from netsim.network.params import NetworkParams
+from netsim.network.path_loss import exponent_dbm, make_path_loss, path_loss_class
 from netsim.network.pipeline import Copy, Frame, Network
 from netsim.network.records import (
     DROP_CHANNEL_ACCESS,
@@ -104,13 +106,8 @@ __all__ = ["WirelessMedium", "WirelessParams", "RadioClock", "received_dbm", "RA
 RADIO_STATES = ("tx", "rx", "idle", "sleep")
 
 
-def received_dbm(tx_dbm: float, distance_m: float, exponent: float, d0: float = 1.0) -> float:
-    """Power (dBm) received at ``distance_m`` from a transmitter of ``tx_dbm``: log-distance path loss.
-
-    >>> received_dbm(0.0, 10.0, 2.0)
-    -20.0
-    """
-    return tx_dbm - 10.0 * exponent * math.log10(max(distance_m, d0) / d0)
+#: Power (dBm) received at a distance with the exponent path loss (:func:`netsim.network.path_loss.exponent_dbm`).
+received_dbm = exponent_dbm
 
 
 def _mw(dbm: float) -> float:
@@ -126,8 +123,13 @@ class WirelessParams(NetworkParams):
     carrier_sense_dbm: float | None = Field(
         None, description="carrier-sense (CCA) threshold in dBm: the medium is busy while the received powers add "
                           "up to this; null: receiver_threshold_dbm (a lower value defers to frames it cannot decode)")
-    path_loss_exponent: float = Field(3.5, gt=0)
+    path_loss_exponent: float = Field(3.5, gt=0, description="exponent a of the default path loss, "
+                                                               "P_tx - 10 a log10(d / d0)")
     reference_distance: float = Field(1.0, gt=0, description="d0 (m): no loss closer than this")
+    path_loss: dict[str, Any] | None = Field(
+        None, description="the path-loss model instead: {type: exponent | log_distance | free_space | a plugin's "
+                          "name, ...its parameters} (netsim list path_loss); null: exponent with path_loss_exponent "
+                          "and reference_distance")
     noise_dbm: float = -100.0
     sinr_threshold_db: float = 10.0
     phy_overhead: Duration = 0
@@ -143,7 +145,7 @@ class WirelessParams(NetworkParams):
 
     #: Fields added in issue 20, left out of the resolved scenario while at their defaults (its text, and the
     #: golden digests of the shipped radio scenarios, stay as they were).
-    _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"carrier_sense_dbm": None, "mobility": {}}
+    _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"carrier_sense_dbm": None, "mobility": {}, "path_loss": None}
 
     @model_serializer(mode="wrap")
     def _without_quiet_defaults(self, handler: Any) -> Any:
@@ -154,8 +156,36 @@ class WirelessParams(NetworkParams):
                     del data[key]
         return data
 
+    @field_validator("path_loss")
+    @classmethod
+    def _check_path_loss(cls, value: dict[str, Any] | None) -> dict[str, Any] | None:
+        if value is None:
+            return None
+        name = value.get("type")
+        if not isinstance(name, str) or not name:
+            raise ValueError("give the model's type: {type: exponent | log_distance | free_space | a plugin's name, "
+                             "...}")
+        try:
+            model_cls = path_loss_class(name)
+        except ConfigError as exc:
+            raise ValueError(f"type: {exc.message}") from None
+        params = getattr(model_cls, "Params", None)
+        if isinstance(params, type) and issubclass(params, BaseModel):
+            try:
+                params.model_validate({k: v for k, v in value.items() if k != "type"})
+            except ValidationError as exc:
+                from netsim.network.factory import format_validation_error
+
+                raise ValueError(f"{name}: {format_validation_error(exc)}") from None
+        return value
+
     @model_validator(mode="after")
     def _check_radio(self) -> "WirelessParams":
+        if self.path_loss is not None:
+            both = sorted({"path_loss_exponent", "reference_distance"} & self.model_fields_set)
+            if both:
+                raise ValueError(f"give either path_loss or {' and '.join(both)}, not both (path_loss: {{type: "
+                                 "exponent, exponent: .., reference_distance: ..}} is the default model)")
         missing = [n for n in self.nodes if n not in self.positions]
         if missing:
             raise ValueError(f"positions: no position for {missing}; give each node [x, y] in metres")
@@ -221,6 +251,8 @@ class WirelessMedium(Network):
         self._pos = {n: (float(x), float(y)) for n, (x, y) in p.positions.items()}
         self._gain: dict[tuple[str, str], float] = {}  # received power (mW) by (sender, receiver)
         self._thr = _mw(p.receiver_threshold_dbm)
+        self._path_loss = make_path_loss(p.path_loss if p.path_loss is not None else {
+            "type": "exponent", "exponent": p.path_loss_exponent, "reference_distance": p.reference_distance})
         cs = p.receiver_threshold_dbm if p.carrier_sense_dbm is None else p.carrier_sense_dbm
         self._cs = _mw(cs)
         self._tracks = {n: Track(self._pos[n], m) for n, m in p.mobility.items()}
@@ -348,10 +380,9 @@ class WirelessMedium(Network):
             self._move()
         g = self._gain.get((sender, receiver))
         if g is None:
-            p: Any = self.params
-            (xa, ya), (xb, yb) = self._pos[sender], self._pos[receiver]
-            dbm = received_dbm(p.transmit_power_dbm, math.hypot(xa - xb, ya - yb), p.path_loss_exponent,
-                               p.reference_distance)
+            a, b = self._pos[sender], self._pos[receiver]
+            dbm = self._path_loss.received_dbm(self.params.transmit_power_dbm,  # type: ignore[attr-defined]
+                                               math.hypot(a[0] - b[0], a[1] - b[1]), sender, receiver, (a, b))
             g = self._gain[(sender, receiver)] = _mw(dbm)
         return g
 
