@@ -16,10 +16,11 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import re
-from typing import Annotated, Any
+from typing import Annotated, Any, get_args
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, PlainSerializer
+from pydantic import BaseModel, BeforeValidator, ConfigDict, PlainSerializer, model_validator
 
 from netsim.quantities import BITRATE, NUMBER_LIMIT, parse_bitrate, quantity_pattern
 from netsim.timebase import UNITS, TimeParseError, format_time, parse_duration, parse_time
@@ -74,8 +75,50 @@ SignedTime = Annotated[int, BeforeValidator(_signed), PlainSerializer(_as_text, 
 Bitrate = Annotated[float, BeforeValidator(parse_bitrate)]
 
 
+def _wants_number(annotation: Any) -> bool:
+    """True when a field's type holds ``float`` or ``int`` (alone, optional, in a list or union) and not ``bool``."""
+    number, stack = False, [annotation]
+    while stack:
+        part = stack.pop()
+        if part is bool:
+            return False
+        number = number or part in (float, int)
+        stack.extend(get_args(part))
+    return number
+
+
+@functools.cache
+def _number_fields(model: type[BaseModel]) -> frozenset[str]:
+    return frozenset(name for name, field in model.model_fields.items() if _wants_number(field.annotation))
+
+
+def _has_bool(value: Any) -> bool:
+    return isinstance(value, bool) or (isinstance(value, (list, tuple)) and any(_has_bool(v) for v in value))
+
+
+def _as_yaml_text(value: Any) -> Any:
+    """``value`` with every bool (also in nested lists) replaced by its YAML text, ``"true"`` or ``"false"``."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return [_as_yaml_text(v) for v in value]
+    return value
+
+
 class StrictModel(BaseModel):
     """Base of every parameter model: unknown keys are errors, values are validated on assignment, and a float
-    field refuses NaN and inf (also written as text, ``"nan"``)."""
+    field refuses NaN and inf (also written as text, ``"nan"``); a number field (float or int) refuses ``true`` and
+    ``false`` (pydantic's lax mode read them as 1 and 0); an integer stays accepted for a float."""
 
     model_config = ConfigDict(extra="forbid", validate_assignment=True, frozen=False, allow_inf_nan=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_bool_for_a_number(cls, data: Any) -> Any:
+        """A ``true``/``false`` given to a number field is handed on as its YAML text, so the field refuses it
+        (at its own path, a list item at its index) as it refuses any other text where a number is wanted."""
+        if isinstance(data, dict):
+            for name in _number_fields(cls).intersection(data):
+                if _has_bool(data[name]):
+                    data = {**data, name: _as_yaml_text(data[name])}
+        return data

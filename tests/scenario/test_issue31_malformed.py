@@ -4,6 +4,7 @@ refused at its YAML path, with its line and a fix, by ``netsim validate`` and ``
 from __future__ import annotations
 
 import copy
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -15,7 +16,8 @@ from netsim.scenario import check_scenario
 from netsim.scenario.loader import read_yaml
 from netsim.scenario.safe_yaml import dump_text
 
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+ROOT = Path(__file__).resolve().parents[2]
+SCENARIOS = ROOT / "scenarios"
 
 
 def _raw(name: str = "dc_servo_ideal.yaml") -> dict[str, Any]:
@@ -28,8 +30,10 @@ def _errors(raw: dict[str, Any]) -> dict[str, str]:
 
 
 def _cli(*args: str, cwd: Path, timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    """``netsim ARGS`` in a fresh process, importing netsim from this checkout (not whichever one is installed)."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     return subprocess.run([sys.executable, "-m", "netsim", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout)
+                          timeout=timeout, env=env)
 
 
 # ------------------------------------------------------------------------------- a task without period or release
@@ -92,3 +96,34 @@ def test_a_long_digit_run_below_the_lexer_limit_loads_in_linear_time() -> None:
     start = time.perf_counter()
     assert load_text("a: " + "1" * 9000 + " s\n") == {"a": "1" * 9000 + " s"}
     assert time.perf_counter() - start < 0.5
+
+
+# ------------------------------------------------------------------------------------ true/false for a number
+@pytest.mark.parametrize(("where", "value", "path"), [
+    (("plant", "params", "gain"), True, "plant.params.gain"),               # a float parameter (was 1.0)
+    (("nodes", "sensor", "tasks", 0, "params", "bits"), False, "nodes.sensor.tasks[0].params.bits"),  # an int
+    (("networks", "can", "bitrate"), True, "networks.can.bitrate"),
+])
+def test_true_or_false_is_refused_where_a_number_is_wanted(where: tuple[Any, ...], value: bool, path: str) -> None:
+    raw = _raw("dc_servo_can.yaml")
+    node = raw
+    for part in where[:-1]:
+        node = node[part]
+    node[where[-1]] = value
+    errors = _errors(raw)
+    assert path in errors, errors
+    assert "true" in errors[path] or "false" in errors[path]
+
+
+def test_an_integer_stays_a_valid_float() -> None:
+    from netsim.units import StrictModel
+
+    class P(StrictModel):
+        gain: float = 0.0
+        x0: list[float] = []
+        on: bool = False
+
+    p = P(gain=3, x0=[1, 2], on=True)
+    assert (p.gain, p.x0, p.on) == (3.0, [1.0, 2.0], True)
+    with pytest.raises(ValueError, match="true"):
+        P(x0=[1, True])
