@@ -57,6 +57,7 @@ from netsim.results.files import (
 from netsim.results.summary import key_metrics
 
 if TYPE_CHECKING:
+    from control import TimeResponseData
     from matplotlib.figure import Figure
 from netsim.results.tables import (
     JOB_COLUMNS,
@@ -123,7 +124,42 @@ class Lazy:
 class RunResult:
     """Tables, metrics and metadata of one run (see the module docstring for the columns).
 
-    A table field may hold a :class:`Lazy`: it is built when first read.
+    :func:`netsim.run` returns one; :meth:`read` loads one from a run folder. A table field may hold a
+    :class:`Lazy`: it is built when first read.
+
+    Parameters
+    ----------
+    signals : pandas.DataFrame
+        ``time_s``, then one column per recorded signal.
+    jobs : pandas.DataFrame
+        One row per job (columns :data:`JOB_COLUMNS`).
+    messages : pandas.DataFrame
+        One row per message copy (columns :data:`MESSAGE_COLUMNS`).
+    metrics : pandas.Series
+        Metric name -> value.
+    meta : dict
+        Seed, scenario name and hash, package versions, wall time, ``status``, error text.
+    scenario : dict, optional
+        The resolved scenario the run was made from.
+    schedule : pandas.DataFrame
+        The kernels' schedule traces (columns :data:`SCHEDULE_COLUMNS`).
+    out_dir : pathlib.Path, optional
+        The run folder, when one was written or read.
+    traces : dict of str to str
+        The scenario's ``output`` settings: ``jobs``/``messages`` ``full``, ``summary`` or ``off``; ``schedule``
+        ``on`` or ``off``.
+    job_summary : pandas.DataFrame, optional
+        Per-task statistics (``output.jobs: summary``).
+    message_summary : pandas.DataFrame, optional
+        Per-network statistics (``output.messages: summary``).
+
+    Examples
+    --------
+    >>> empty = RunResult()
+    >>> empty.status, list(empty.signals.columns)
+    ('ok', ['time_s'])
+    >>> result = netsim.run("scenarios/dc_servo_can.yaml")                     # doctest: +SKIP
+    >>> result.jobs.groupby("task")["response_s"].max()                         # doctest: +SKIP
     """
 
     def __getattribute__(self, name: str) -> Any:
@@ -191,31 +227,94 @@ class RunResult:
 
     @property
     def status(self) -> str:
-        """``"ok"``, ``"error"`` or ``"diverged at t = ... s"``."""
+        """``"ok"``, ``"error"``, ``"diverged at t = ... s"`` ... (``meta["status"]``, :mod:`netsim.status`).
+
+        Examples
+        --------
+        >>> RunResult(meta={"status": "diverged at t = 1.5 s"}).status
+        'diverged at t = 1.5 s'
+        """
         return str(self.meta.get("status", "ok"))
 
     @property
     def ok(self) -> bool:
-        """True when the run finished normally."""
+        """True when the run finished normally (``status == "ok"``).
+
+        Examples
+        --------
+        >>> RunResult().ok, RunResult(meta={"status": "error"}).ok
+        (True, False)
+        """
         return self.status == "ok"
 
     def signal(self, name: str) -> pd.Series:
-        """One signal column indexed by ``time_s``."""
+        """One recorded signal, indexed by time.
+
+        Parameters
+        ----------
+        name : str
+            The signal's column in ``signals``.
+
+        Returns
+        -------
+        pandas.Series
+            Its values (held between its samples, NaN before the first), indexed by ``time_s``.
+
+        Raises
+        ------
+        KeyError
+            Naming the recorded signals, when ``name`` is not one.
+
+        Examples
+        --------
+        >>> run = RunResult(signals=pd.DataFrame({"time_s": [0.0, 0.5], "y": [0.0, 1.0]}))
+        >>> run.signal("y").to_dict()
+        {0.0: 0.0, 0.5: 1.0}
+        """
         if name not in self.signals.columns:
             raise KeyError(f"no recorded signal '{name}'; recorded: {', '.join(self.signals.columns[1:])}")
         return pd.Series(self.signals[name].to_numpy(), index=self.signals["time_s"].to_numpy(), name=name)
 
     def metrics_frame(self) -> pd.DataFrame:
-        """Metrics as a two-column table ``metric, value``."""
+        """The metrics as a table, as ``metrics.csv`` holds them.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Two columns: ``metric`` and ``value``.
+
+        Examples
+        --------
+        >>> RunResult(metrics=pd.Series({"y.ISE": 0.25})).metrics_frame().to_dict("records")
+        [{'metric': 'y.ISE', 'value': 0.25}]
+        """
         return pd.DataFrame({"metric": list(self.metrics.index), "value": list(self.metrics.to_numpy(dtype=float))})
 
     def to_csv(self, out_dir: str | Path, tables: bool = True) -> Path:
-        """Write the run folder into ``out_dir`` (created if needed); returns the folder. With ``tables`` False,
-        only ``metrics.csv`` and ``meta.json`` (a sweep's ``runs: metrics``).
+        """Write the run folder (see the module docstring for its files).
 
         Every file is written atomically (:func:`netsim.safe_write.write_atomic`) and ``meta.json`` last: a
         folder without ``meta.json`` is incomplete (a run killed while writing), and ``netsim report`` and
         ``netsim sweep`` treat it so.
+
+        Parameters
+        ----------
+        out_dir : str or pathlib.Path
+            The folder (created if needed).
+        tables : bool, default True
+            False: only ``metrics.csv`` and ``meta.json`` (a sweep's ``runs: metrics``).
+
+        Returns
+        -------
+        pathlib.Path
+            The folder; also stored in ``out_dir``.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> folder = RunResult(meta={"scenario": "demo"}).to_csv(tempfile.mkdtemp())
+        >>> sorted(p.name for p in folder.iterdir())
+        ['jobs.csv', 'messages.csv', 'meta.json', 'metrics.csv', 'schedule.csv', 'signals.csv']
         """
         from netsim.safe_write import write_atomic
 
@@ -367,7 +466,7 @@ class RunResult:
         return network_figure(self.messages, window=window, end_s=float(self.meta.get("t_end_s") or 0), ax=ax)
 
     def to_timeresponse(self, *, outputs: list[str] | None = None, inputs: list[str] | None = None,
-                        states: list[str] | None = None) -> Any:
+                        states: list[str] | None = None) -> TimeResponseData:
         """The recorded signals as a python-control ``TimeResponseData`` (:func:`netsim.results.interop.to_timeresponse`).
 
         Parameters
@@ -399,13 +498,35 @@ class RunResult:
                                inputs=inputs, states=states)
 
     def to_pandas(self) -> pd.DataFrame:
-        """The recorded signals indexed by time in seconds (a copy; python-control's ``to_pandas``)."""
+        """The recorded signals indexed by time in seconds (a copy; python-control's ``to_pandas``).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One column per recorded signal, index ``time_s``.
+
+        Examples
+        --------
+        >>> RunResult(signals=pd.DataFrame({"time_s": [0.0, 0.5], "y": [0.0, 1.0]})).to_pandas().index.name
+        'time_s'
+        """
         return self.signals.set_index("time_s")
 
     def summary(self) -> dict[str, Any]:
-        """What a reader wants first: status, simulated duration, wall time, run folder, and the key metrics
-        (:func:`key_metrics`: control measures, then worst responses, deadline misses, network loss and
-        delay)."""
+        """What a reader wants first (what ``netsim run`` prints, and a notebook shows).
+
+        Returns
+        -------
+        dict
+            ``scenario``, ``status``, ``duration_s`` (simulated), ``wall_time_s``, ``folder`` (or None), and
+            ``control`` and ``timing``: ``(name, text)`` rows of the key metrics (:func:`key_metrics`: control
+            measures, then worst responses, deadline misses, network loss and delay).
+
+        Examples
+        --------
+        >>> RunResult(meta={"scenario": "demo", "t_end_s": 2.0}).summary()["duration_s"]
+        2.0
+        """
         control, timing = key_metrics(self.metrics)
         return {"scenario": self.meta.get("scenario", ""), "status": self.status,
                 "duration_s": self.meta.get("t_end_s", self.meta.get("duration_s")),
@@ -438,10 +559,27 @@ class RunResult:
 
     @classmethod
     def read(cls, run_dir: str | Path) -> "RunResult":
-        """Load a run folder written by :meth:`to_csv`: the same values and column types as the run had.
+        """Load a run folder written by :meth:`to_csv` (or ``netsim run``): the same values and column types.
 
         Signals are floats (a signal holding whole numbers stays float), jobs' ``deadline_met`` is a nullable
         boolean, text columns stay text (an empty ``drop_reason`` is ``""``, not NaN).
+
+        Parameters
+        ----------
+        run_dir : str or pathlib.Path
+            The run folder.
+
+        Returns
+        -------
+        RunResult
+            Its tables, metrics, meta and scenario; ``out_dir`` is the folder.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> folder = RunResult(meta={"scenario": "demo"}).to_csv(tempfile.mkdtemp())
+        >>> RunResult.read(folder).meta["scenario"]
+        'demo'
         """
         folder = Path(run_dir)
         signals = pd.read_csv(folder / "signals.csv", dtype=np.float64)

@@ -12,10 +12,13 @@ from __future__ import annotations
 import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
+
+if TYPE_CHECKING:
+    from control import TimeResponseData
 
 __all__ = ["PlantColumns", "plant_columns", "to_timeresponse"]
 
@@ -110,7 +113,7 @@ def _block(signals: pd.DataFrame, pairs: list[tuple[str, str]]) -> np.ndarray:
 
 def to_timeresponse(signals: pd.DataFrame, scenario: Mapping[str, Any] | None, *, name: str = "",
                     outputs: Sequence[str] | None = None, inputs: Sequence[str] | None = None,
-                    states: Sequence[str] | None = None) -> Any:
+                    states: Sequence[str] | None = None) -> TimeResponseData:
     """The recorded signals as a python-control :class:`control.TimeResponseData`.
 
     Parameters
