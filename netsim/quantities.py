@@ -178,7 +178,8 @@ def parse_quantity(value: Any, quantity: Quantity) -> float:
         if unit and unit not in spellings:
             hint = _suggest(unit, quantity)
             tip = f"did you mean '{hint}'? " if hint else ""
-            raise ValueError(f"unknown {what} unit '{unit}' in {value!r}; {tip}a {what} takes {quantity.accepted()}")
+            raise ValueError(f"cannot read {value!r} as a {what}: unknown {what} unit '{unit}'; {tip}"
+                             f"a {what} takes {quantity.accepted()}")
         try:
             number = Decimal(match.group(1))
         except InvalidOperation:  # pragma: no cover - the pattern admits only decimal numbers

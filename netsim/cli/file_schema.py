@@ -228,13 +228,13 @@ def _nested_rules(defs: dict[str, Any], refs: dict[Any, Any], names: dict[str, l
                 props[field] = _name_choice(names.get(kind, []), node)
 
 
-def _inline_sections(defs: dict[str, Any], models: list[type]) -> None:
-    """Sections that take their plugin's parameters beside ``type`` (a model validator gathers them before
-    validation) accept other keys (the plugin's rule limits them), and their ``params`` may be left out."""
-    for model in models:
-        target = defs.get(model.__name__)
-        before = [d for d in model.__pydantic_decorators__.model_validators.values() if d.info.mode == "before"]
-        if target is None or not before or "params" not in target.get("properties", {}):
+def _inline_sections(defs: dict[str, Any]) -> None:
+    """Sections that take their plugin's parameters beside the name (networks, signals, ``plant: {type: ...}``: a
+    model validator gathers them into ``params`` before validation) accept other keys (the plugin's rule limits
+    them), and their ``params`` may be left out."""
+    for spec_name in dict.fromkeys(spec for _, spec, _, inline in _PLUGIN_SLOTS if inline):
+        target = defs.get(spec_name)
+        if target is None or "params" not in target.get("properties", {}):
             continue
         target["additionalProperties"] = True
         target["required"] = [r for r in target.get("required", []) if r == "type" and "model" not in
@@ -274,7 +274,7 @@ def json_schema() -> dict[str, Any]:
     models = _reachable_models([Scenario, SweepSpec, *plugin_models])
     defs = schema.get("$defs", {})
     _tighten_fields(defs, refs, models)
-    _inline_sections(defs, models)
+    _inline_sections(defs)
     _plugin_rules(defs, refs, names, params_of)
     _nested_rules(defs, refs, names, params_of)
     node = defs.get("NodeSpec", {}).get("properties", {})
