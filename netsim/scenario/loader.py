@@ -369,20 +369,32 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
 
     Parameters
     ----------
-    source
+    source : str, os.PathLike, Mapping or Scenario
         Path of a YAML file, a raw mapping (copied, never modified), or a :class:`Scenario` (returned as is
         unless ``overrides`` are given).
-    overrides
+    overrides : Mapping[str, Any], optional
         ``{"dotted.path": value}`` applied to the raw data before the one validation
         (``{"networks.can.bitrate": "1 Mbit/s", "seed": 3}``).
-    allow_plugins
+    allow_plugins : bool, optional
         Whether the plugin files the scenario's ``plugins:`` names may run (None: the user's settings,
         :func:`netsim.trust.plugins_allowed`; a scenario naming a file that is not allowed does not load).
+
+    Returns
+    -------
+    Scenario
+        The validated scenario (frozen), ready for :func:`netsim.run`.
 
     Raises
     ------
     ScenarioError
         Listing every problem (with path, line and file) when there is at least one error.
+
+    Examples
+    --------
+    >>> import netsim
+    >>> scenario = netsim.load_scenario("scenarios/dc_servo_can.yaml", {"seed": 3})   # doctest: +SKIP
+    >>> scenario.seed, scenario.name                                                  # doctest: +SKIP
+    (3, 'dc_servo_can')
     """
     problems, scenario, base_warnings = _gather(source, overrides, allow_plugins)
     if scenario is None:

@@ -415,32 +415,38 @@ def run_sweep(
 
     Parameters
     ----------
-    path
+    path : str or pathlib.Path
         The sweep YAML file.
-    out
+    out : str or pathlib.Path, optional
         Output folder (default ``reports/<sweep name>/``).
-    workers
+    workers : int, optional
         Worker processes (default: all cores; ``1`` runs in this process).
-    scheduler
+    scheduler : str, optional
         Address ``tcp://host:port`` of a Dask scheduler to run on.
-    local_dask
+    local_dask : bool, default False
         Run on a local Dask cluster started for this sweep (scratch in ``<out>/dask-scratch``).
-    overwrite
+    overwrite : bool, default False
         Replace an output folder that holds another sweep, and re-run every point.
-    progress
+    progress : bool, default True
         Show a progress bar on stderr.
-    point_fn
+    point_fn : callable, optional
         The function run for each point, ``fn(raw, out, seed) -> metrics`` (default
         :func:`netsim.runner.run_point`); must be a picklable module-level function for process backends.
-    chunk_size
+    chunk_size : int, optional
         Runs per executor task (default: adaptive, see :class:`ChunkPlanner`).
-    connect_timeout
+    connect_timeout : float, default 5.0
         Seconds to wait for the Dask scheduler.
-    cluster_kwargs
+    cluster_kwargs : Mapping[str, Any], optional
         Extra ``LocalCluster`` arguments for ``local_dask`` (e.g. ``{"processes": False}``).
-    dashboard
+    dashboard : str, optional
         Address for the local Dask cluster's dashboard (e.g. ``"127.0.0.1:8787"``); default: none, and
         the cluster listens on no HTTP port.
+
+    Returns
+    -------
+    SweepResult
+        Counts of runs (ok, failed, pending, resumed), the output folder, ``summary`` as a DataFrame and the
+        surface's ``optimum``.
 
     Raises
     ------
@@ -453,6 +459,13 @@ def run_sweep(
         When the Dask scheduler goes away mid-sweep: the finished runs are kept and ``summary.csv`` is
         written (the rest ``pending``) before it is raised; ``.result`` holds the :class:`SweepResult`.
         Running the sweep again resumes.
+
+    Examples
+    --------
+    >>> import netsim
+    >>> result = netsim.run_sweep("scenarios/hdd_gpi_sweep.yaml", workers=2)   # doctest: +SKIP
+    >>> print(result.describe())                                               # doctest: +SKIP
+    >>> result.summary.sort_values("GPI").head()                               # doctest: +SKIP
     """
     t0 = time.perf_counter()
     if scheduler and local_dask:
