@@ -395,14 +395,16 @@ def _figures(tables: dict[str, pd.DataFrame], out: Path, folder: Path, kind: str
 def report(path_or_name: str | Path, *, out: str | Path | None = None, plots: bool = True) -> dict[str, pd.DataFrame]:
     """Tables (and figures) of a run, batch or sweep folder, or a registered case-study report.
 
+    Exported as ``netsim.make_report`` (the name ``netsim.report`` is this module).
+
     Parameters
     ----------
-    path_or_name
+    path_or_name : str or pathlib.Path
         A folder written by ``netsim run``/``batch``/``sweep``, or the name of a registered ``report``.
-    out
+    out : str or pathlib.Path, optional
         Where to write the CSV tables and figures (default ``<folder>/report/``; for a registered report,
         passed to it as is).
-    plots
+    plots : bool, default True
         Also write the figures.
 
     Returns
@@ -414,6 +416,13 @@ def report(path_or_name: str | Path, *, out: str | Path | None = None, plots: bo
     ------
     ConfigError
         When the argument is neither such a folder nor a registered report name.
+
+    Examples
+    --------
+    >>> import netsim
+    >>> netsim.run("scenarios/dc_servo_can.yaml", out="out/run")                 # doctest: +SKIP
+    >>> tables = netsim.make_report("out/run", plots=False)                      # doctest: +SKIP
+    >>> tables["tasks"][["task", "response_max_s", "deadline_misses_count"]]     # doctest: +SKIP
     """
     folder = Path(path_or_name)
     if not folder.is_dir():
