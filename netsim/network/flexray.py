@@ -85,7 +85,7 @@ class FlexRayBus(Network):
             for node, fid in value.items():
                 if node not in nodes:
                     raise ValueError(f"'{node}' is not one of the network's nodes {nodes}")
-                if not n_static < fid <= n_static + m:
+                if "static_schedule" in info.data and "minislots" in info.data and not n_static < fid <= n_static + m:
                     raise ValueError(f"'{node}' has frame ID {fid}; dynamic frame IDs run from {n_static + 1} (after "
                                      f"the {n_static} static slots) to {n_static + m} (one per minislot)")
                 if fid in owner:

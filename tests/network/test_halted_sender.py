@@ -25,6 +25,7 @@ TX = 8 * MS  # 8 bits at 1 kbit/s
 WIRED = {
     "can": {},
     "tdma": {"slot": "8 ms", "schedule": ["a", "b"]},
+    "flexray": {"cycle": "20 ms", "static_slot": "8 ms", "static_schedule": ["a", "b"]},
     "csma_cd": {"min_frame_bits": 8},
     "ethernet": {"min_frame_bits": 8},
     "round_robin": {},
