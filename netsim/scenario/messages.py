@@ -224,6 +224,10 @@ def _message(err: dict[str, Any], root: type[BaseModel] | None) -> tuple[list[Pa
         return path, f"expected an integer, got {show_value(value)}"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         return path, f"{msg[0].lower() + msg[1:]}, got {show_value(value)}"
+    if kind == "too_short" and ctx.get("actual_length") == 0:
+        key = f"'{loc[-1]}'" if loc and isinstance(loc[-1], str) else "the list"
+        least = ctx.get("min_length", 1)
+        return path, f"{key} is empty; give at least {least} entr{'y' if least == 1 else 'ies'}"
     if kind in ("too_short", "too_long", "string_too_short"):
         return path, msg[0].lower() + msg[1:]
     return path, msg[0].lower() + msg[1:] if msg else kind

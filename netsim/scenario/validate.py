@@ -226,6 +226,7 @@ class _Checker:
             if isinstance(name, str) and len(name) <= NAME_MAX and isinstance(node, dict):  # limits: long names
                 self.node(name, node)
         self.metrics(outputs)
+        self.verdict_signals(outputs)
         self.record(outputs)
         self.problems += plugin_load_problems()  # the modules the lookups above imported (lazy registry)
 
@@ -619,6 +620,9 @@ class _Checker:
                 self.metric_reads(plugin, str(metric.get("type")), ["metrics", i, "type"])
                 for key, value in values.items():
                     if isinstance(key, str) and (key == "chain" or key.endswith("_chain")):
+                        if isinstance(value, list) and not value:  # was accepted, and reported "worst -"
+                            self.error(["metrics", i, "params", key], f"'{key}' is empty; list the tasks of the "
+                                       "chain as 'node.task', e.g. [sensor.sample, controller.control]")
                         for j, ref in enumerate(_l(value)):
                             self.task_ref(ref, ["metrics", i, "params", key, j])
 
@@ -637,7 +641,7 @@ class _Checker:
                               f"(record: [{listed}]); add '{name}' to 'record:'")
 
     def grid_outputs(self, metric: str, values: dict[str, Any], refs: list[tuple[list[PathPart], str]],
-                     outputs: list[Any] | None) -> None:
+                     outputs: list[Any] | None, reader: str | None = None) -> None:
         """A plant output is recorded under its name only on ``plant.record_grid``: without the grid, a metric
         reading one (``refs``: its signal parameters and its ``reads_signals``) fails after the run ("signal 'y'
         was not recorded"), unless something else records that
@@ -654,7 +658,8 @@ class _Checker:
                 period = values.get("period")
                 grid = (format_time(period) if isinstance(period, int) and not isinstance(period, bool) and period > 0
                         else period if isinstance(period, str) else "1 ms")
-                self.error(where, f"metric '{metric}' reads the plant output '{name}', which is recorded only on "
+                who = reader or f"metric '{metric}'"
+                self.error(where, f"{who} reads the plant output '{name}', which is recorded only on "
                                   f"the plant's record grid, and 'plant:' sets no 'record_grid'; add e.g. "
                                   f"'record_grid: {grid}' under 'plant:'")
 
@@ -671,6 +676,26 @@ class _Checker:
             listed = ", ".join(sorted(kept)) or "nothing"
             self.error(at, f"metric '{metric}' reads the signals {', '.join(missing)}, which 'record:' leaves out "
                            f"(record: [{listed}]); add them to 'record:'")
+
+    def verdict_signals(self, outputs: list[Any] | None) -> None:
+        """``verdict.signals`` and ``verdict.bound`` name signals the run judges after it ends: each must be
+        recorded (in a ``record:`` list if there is one; a plant output needs ``plant.record_grid``), as for a
+        metric's signals; otherwise the run could not judge it."""
+        block = self.raw.get("verdict")
+        if not isinstance(block, dict):
+            return
+        refs: list[tuple[list[PathPart], str]] = [
+            (["verdict", "signals", j], n) for j, n in enumerate(_l(block.get("signals"))) if isinstance(n, str) and n]
+        refs += [(["verdict", "bound", n], n) for n in _d(block.get("bound")) if isinstance(n, str) and n]
+        record = self.raw.get("record")
+        if isinstance(record, list):
+            kept = {r for r in record if isinstance(r, str)}
+            listed = ", ".join(r for r in record if isinstance(r, str)) or "nothing"
+            for where, name in refs:
+                if name not in kept and name.split("[", 1)[0] not in kept:
+                    self.error(where, f"the verdict judges signal '{name}', which 'record:' leaves out "
+                                      f"(record: [{listed}]); add '{name}' to 'record:'")
+        self.grid_outputs("verdict", {}, refs, outputs, reader="the verdict")
 
     def task_ref(self, ref: Any, at: list[PathPart]) -> None:
         """``ref`` is ``node.task`` naming an existing task or handler of that node."""

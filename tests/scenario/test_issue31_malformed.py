@@ -127,3 +127,28 @@ def test_an_integer_stays_a_valid_float() -> None:
     assert (p.gain, p.x0, p.on) == (3.0, [1.0, 2.0], True)
     with pytest.raises(ValueError, match="true"):
         P(x0=[1, True])
+
+
+# ----------------------------------------------------------------------------------- empty lists that need a value
+def test_an_empty_latency_chain_is_refused_at_its_path() -> None:
+    """It was accepted and the latency metric reported 'worst -'."""
+    raw = _raw("dc_servo_can.yaml")
+    (i,) = [i for i, m in enumerate(raw["metrics"]) if m["type"] == "latency"]
+    raw["metrics"][i]["params"]["chain"] = []
+    errors = _errors(raw)
+    assert "is empty" in errors[f"metrics[{i}].params.chain"] and "node.task" in errors[f"metrics[{i}].params.chain"]
+
+
+@pytest.mark.parametrize(("name", "where", "path"), [
+    ("dc_servo_can.yaml", ("networks", "can", "nodes"), "networks.can.nodes"),
+    ("pendulum_network.yaml", ("nodes", "controller", "tasks", 0, "params", "measurements"),
+     "nodes.controller.tasks[0].params.measurements"),
+])
+def test_an_empty_list_that_needs_an_entry_says_so_in_words(name: str, where: tuple[Any, ...], path: str) -> None:
+    """Refused before too, as pydantic's 'list should have at least 1 item after validation, not 0'."""
+    raw = _raw(name)
+    node = raw
+    for part in where[:-1]:
+        node = node[part]
+    node[where[-1]] = []
+    assert _errors(raw)[path] == f"'{where[-1]}' is empty; give at least 1 entry"
