@@ -168,3 +168,37 @@ def test_a_dynamic_frame_id_inside_the_static_segment_is_refused():
 def test_times_without_a_unit_are_refused():
     errs = _errors(_scenario(static_slot=50))
     assert [p for p, _ in errs] == ["networks.bus.static_slot"] and "unit" in errs[0][1]
+
+
+def test_random_traffic_keeps_every_frame_inside_its_segment_and_never_overlaps(bench):
+    import random
+
+    rnd = random.Random(7)
+    b = bench("flexray", PARAMS)
+    sizes = {"a": (80, 500), "b": (80, 500), "c": (40, 3000), "d": (40, 3000), "e": (40, 3000)}
+    for k in range(300):
+        node = rnd.choice("abcde")
+        lo, hi = sizes[node]
+        b.send_at(rnd.randrange(0, 40 * MS), node, "sink", rnd.randrange(lo, hi), tag=f"m{k}")
+    b.run(2000 * MS)  # at most one frame per node and cycle: a backlog of about 60 frames per node takes 0.3 s
+    recs = sorted((r for r in b.net.records if r.tx_start_ns is not None), key=lambda r: r.tx_start_ns)
+    assert len(recs) == 300 and all(r.delivered_ns is not None for r in recs)
+    for r, nxt in zip(recs, recs[1:]):
+        assert r.tx_end_ns <= nxt.tx_start_ns  # one frame at a time on the bus
+    for r in recs:
+        t0, t1 = r.tx_start_ns % CYCLE, r.tx_start_ns % CYCLE + (r.tx_end_ns - r.tx_start_ns)
+        if r.sender in ("a", "b"):  # at the start of its own slot (a: 0 us, b: 100 us), within 50 us
+            assert t0 == {"a": 0, "b": 100 * US}[r.sender] and t1 <= t0 + 50 * US
+        else:  # inside the dynamic segment (500-1000 us), on a minislot boundary
+            assert 500 * US <= t0 and t1 <= 1000 * US and (t0 - 500 * US) % (5 * US) == 0
+
+
+def test_a_node_with_a_static_slot_and_a_dynamic_id_sends_at_its_first_turn(bench):
+    b = bench("flexray", {**PARAMS, "dynamic_ids": {**PARAMS["dynamic_ids"], "a": 12}})
+    b.send_at(0, "a", "sink", 200, tag="first")
+    b.send_at(0, "a", "sink", 200, tag="second")
+    b.run(20 * MS)
+    # first: a's static slot 1 at 0 us, 20 us; second: ID 12 in an otherwise idle dynamic segment, after ID 11's
+    # one empty minislot: 500 + 1 x 5 = 505 us, 20 us on the bus
+    assert b.record("first").delivered_ns == 20 * US
+    assert b.record("second").delivered_ns == 525 * US
