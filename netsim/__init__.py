@@ -8,7 +8,8 @@ The public entry points are imported lazily so that ``import netsim`` (and ``net
 No top-level name is also a submodule's name: ``netsim.sweep`` and ``netsim.report`` are always the modules
 (:mod:`netsim.sweep`, :mod:`netsim.report`). Before issue 27 they were the functions until the module was first
 imported (by a run, say), and modules after it. Calling either module still runs the function, with a
-``DeprecationWarning`` naming ``netsim.run_sweep`` / ``netsim.make_report`` (:func:`netsim.lazy_import.callable_module`).
+``DeprecationWarning`` naming ``netsim.run_sweep`` / ``netsim.make_report``
+(:func:`netsim.lazy_import.callable_module`).
 
 ``netsim.run(..., allow_plugins=True)`` and ``netsim.load_scenario(..., allow_plugins=True)`` let a scenario run
 the plugin files its ``plugins:`` list names (default: the user's settings, :mod:`netsim.trust`; see the

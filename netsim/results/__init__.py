@@ -467,7 +467,8 @@ class RunResult:
 
     def to_timeresponse(self, *, outputs: list[str] | None = None, inputs: list[str] | None = None,
                         states: list[str] | None = None) -> TimeResponseData:
-        """The recorded signals as a python-control ``TimeResponseData`` (:func:`netsim.results.interop.to_timeresponse`).
+        """The recorded signals as python-control's ``TimeResponseData``
+        (:func:`netsim.results.interop.to_timeresponse`).
 
         Parameters
         ----------
