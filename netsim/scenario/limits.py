@@ -31,6 +31,7 @@ quantity: it is exempt from the number limit but must stay below :data:`SEED_LIM
 from __future__ import annotations
 
 import math
+import re
 from typing import Any, Callable, Final, Iterator
 
 from netsim.scenario.paths import PathPart, format_path
@@ -60,17 +61,28 @@ SKIPPED: Final[tuple[str, ...]] = ("description", "baseline", "output")
 LineOf = Callable[[str], "int | None"]
 
 
-def _numbers(node: Any, parts: tuple[PathPart, ...]) -> Iterator[tuple[tuple[PathPart, ...], float | int]]:
+_PATH_KEY = re.compile(r"[^.\[\]\s]+")  # a key a dotted path can name (netsim.scenario.paths)
+
+
+def _numbers(node: Any, parts: tuple[PathPart, ...],
+             inside: str = "") -> Iterator[tuple[tuple[PathPart, ...], float | int, str]]:
+    """``(path, number, inside)`` for every number under ``node``. Below a key no path can name (a mobility
+    waypoint's time ``8 s`` has a space), the path stops at that key's mapping and ``inside`` says where
+    the number is from there (``'8 s'[0]``), so the problem keeps a path with a line."""
     if isinstance(node, dict):
         for key, value in node.items():
             if isinstance(key, str) and len(key) > NAME_MAX:
                 continue  # reported as a name; its path would be unreadable
-            yield from _numbers(value, (*parts, key if isinstance(key, (str, int)) else str(key)))
+            key = key if isinstance(key, (str, int)) else str(key)
+            if inside or (isinstance(key, str) and not _PATH_KEY.fullmatch(key)):
+                yield from _numbers(value, parts, f"{inside}['{key}']" if inside else f"'{key}'")
+            else:
+                yield from _numbers(value, (*parts, key))
     elif isinstance(node, list):
         for i, value in enumerate(node):
-            yield from _numbers(value, (*parts, i))
+            yield from (_numbers(value, parts, f"{inside}[{i}]") if inside else _numbers(value, (*parts, i)))
     elif isinstance(node, (int, float)) and not isinstance(node, bool):
-        yield parts, node
+        yield parts, node, inside
 
 
 def _digits(value: int) -> str:
@@ -226,7 +238,7 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[P
     for key, value in raw.items():
         if key in SKIPPED:
             continue
-        for parts, number in _numbers(value, (key,)):
+        for parts, number, inside in _numbers(value, (key,)):
             if parts == ("seed",) and isinstance(number, int):
                 if number >= SEED_LIMIT:
                     problems.append(Problem("seed", f"the seed is an integer of {_digits(number)}; write an integer "
@@ -234,6 +246,8 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[P
                                             supersedes=True))
                 continue  # a negative seed is the schema's (seed >= 0)
             msg = _number_problem(number)
+            if msg and inside:
+                msg = f"at {inside}: {msg}"
             if msg:  # the value is unusable: other messages about it would only repeat that
                 problems.append(Problem(format_path(list(parts)), msg, supersedes=True))
     problems += _name_problems(raw)

@@ -152,3 +152,16 @@ def test_an_empty_list_that_needs_an_entry_says_so_in_words(name: str, where: tu
         node = node[part]
     node[where[-1]] = []
     assert _errors(raw)[path] == f"'{where[-1]}' is empty; give at least 1 entry"
+
+
+# ------------------------------------------------------------------------------------------ NaN in a waypoint
+def test_a_nan_in_a_mobility_waypoint_has_a_path_with_a_line(tmp_path: Path) -> None:
+    """The path was 'networks.bus.mobility.sensor.path.8 s[0]' (a space: no line could be found for it)."""
+    raw = _raw("wireless_battery.yaml")
+    raw["networks"]["bus"]["mobility"]["sensor"]["path"] = {"1 s": [0, 0], "8 s": [float("nan"), 0]}
+    f = tmp_path / "nan.yaml"
+    f.write_text(dump_text(raw))
+    line = next(i for i, t in enumerate(f.read_text().splitlines(), 1) if t.strip() == "path:")
+    done = _cli("validate", str(f), cwd=tmp_path)
+    assert done.returncode != 0
+    assert f"nan.yaml:{line}: networks.bus.mobility.sensor.path: at '8 s'[0]: NaN" in done.stdout, done.stdout
