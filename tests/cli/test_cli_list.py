@@ -44,9 +44,9 @@ def test_a_network_lists_its_parameters_with_types_defaults_and_units(capsys):
     assert out.splitlines()[0] == "can (network): CAN bus (CSMA/AMP): priority arbitration, non-preemptive frames"
     assert "defined in: netsim.network.can:CanBus" in out
     rows = _rows(out)
-    assert rows["bitrate"] == ["bit rate", "required", "bit/s"]
-    assert rows["pre_delay"] == ["time", "0 ns", TIME_UNIT]
-    assert rows["utilization_bin"] == ["duration", "10 ms", TIME_UNIT]
+    assert rows["bitrate"][:3] == ["bit rate", "required", "bit/s"]
+    assert rows["pre_delay"][:3] == ["time", "0 ns", TIME_UNIT]
+    assert rows["utilization_bin"][:3] == ["duration", "10 ms", TIME_UNIT]
     assert rows["queue_discipline"] == ["'fifo' | 'priority'", "'priority'"]  # CAN's own default (fifo elsewhere)
     assert "times are written with their unit: 20 us, 1.5 ms, 2 s" in out
 
