@@ -20,7 +20,8 @@ A run's status (``meta.json``, the ``status`` column of every summary) is one of
 Only ``ok`` is a success. A diverged or unstable run is a result worth keeping (it is a point of a surface, a row
 of a batch), but it is not a success: ``netsim run``, ``netsim batch`` and ``netsim sweep`` all exit with
 :data:`EXIT_FAILED` when any run is not ``ok`` (``pending`` runs of an interrupted sweep exit with
-:data:`EXIT_INTERRUPTED`).
+:data:`EXIT_INTERRUPTED`). ``netsim validate`` exits with :data:`EXIT_PROBLEMS` when a file has problems and prints
+their count.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ __all__ = [
     "EXIT_OK",
     "EXIT_FAILED",
     "EXIT_INVALID",
+    "EXIT_PROBLEMS",
     "EXIT_INTERRUPTED",
     "kind_of",
     "is_ok",
@@ -55,6 +57,8 @@ INTERRUPTED = "interrupted"
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_INVALID = 2
+#: ``netsim validate`` found problems (it prints how many; the count is never the exit code).
+EXIT_PROBLEMS = 1
 EXIT_INTERRUPTED = 130
 
 

@@ -6,7 +6,8 @@ Every command catches the errors a user can cause (:class:`~netsim.errors.Netsim
 - ``0`` success;
 - ``1`` a run, or any run of a batch or sweep, is not ``ok`` (diverged, unstable or error; one rule, :mod:`netsim.status`);
 - ``2`` the scenario or the command line is invalid (nothing ran);
-- ``validate``: the number of problems found (0 when every file is valid), capped at 255;
+- ``validate``: ``1`` when any file has problems (their count is printed: as an exit code it would read as a
+  usage error or Ctrl-C), ``0`` when every file is valid;
 - ``130`` interrupted (Ctrl-C);
 - ``0`` when the reader of the output stops early (``netsim list | head``): the rest of the output is dropped
   quietly (no traceback), like output nobody reads; 0 rather than 141 so that ``set -o pipefail`` scripts do not

@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 from typing import Any, Callable, Sequence, TextIO
 
-from netsim.status import EXIT_INVALID, EXIT_OK
+from netsim.status import EXIT_INVALID, EXIT_OK, EXIT_PROBLEMS
 
 __all__ = ["LIST_KINDS"]
 
@@ -77,9 +77,11 @@ def _cmd_validate(args: argparse.Namespace) -> int:
             warn = len(problems)
             note = f" ({warn} warning{'s' if warn != 1 else ''})" if warn else ""
             print(f"{file}: valid{note}")
-    if len(args.files) > 1 and n_errors:
-        print(f"{n_errors} problem{'s' if n_errors != 1 else ''} in total", file=sys.stderr)
-    return min(n_errors, 255)
+    if n_errors:  # the count is printed, not returned: 2 is a usage error and 130 is Ctrl-C (issue 27)
+        total = " in total" if len(args.files) > 1 else ""
+        print(f"{n_errors} problem{'s' if n_errors != 1 else ''}{total}", file=sys.stderr)
+        return EXIT_PROBLEMS
+    return EXIT_OK
 
 
 def _cmd_run(args: argparse.Namespace) -> int:

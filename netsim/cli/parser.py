@@ -23,7 +23,7 @@ _MAIN_EPILOG = """\
 examples:
   netsim run scenarios/dc_servo_can.yaml                 run one scenario, write reports/<name>/<run-id>/
   netsim run scenarios/dc_servo_can.yaml --plot --seed 3 --set networks.can.bitrate="1 Mbit/s"
-  netsim validate scenarios/*.yaml                       check files; exit code = number of problems
+  netsim validate scenarios/*.yaml                       check files; exit 1 and the count on problems
   netsim design scenarios/dc_servo_lqr_kalman.yaml       gains, eigenvalues, delay margin; nothing runs
   netsim batch scenarios/ --workers 4                    run every scenario in a folder, write summary.csv
   netsim sweep scenarios/hdd_gpi_sweep.yaml              threshold sweep (parallel), summary.csv + surface
@@ -32,7 +32,7 @@ examples:
   netsim docs > scenario-reference.md                    every scenario key and plugin parameter
   netsim schema > netsim.schema.json                     JSON Schema for editor completion
 
-exit codes: 0 ok, 1 a run failed, 2 invalid scenario or usage; validate: number of problems.
+exit codes: 0 ok, 1 a run failed, 2 invalid scenario or usage; validate: 1 on problems (count printed).
 """
 
 _RUN_EPILOG = """\
@@ -65,8 +65,8 @@ examples:
   netsim validate scenarios/dc_servo_can.yaml
   netsim validate scenarios/*.yaml --set duration="10 s"
 
-Prints every problem as file:line: path: message (warnings marked "warning:") and exits with the
-number of errors found (0 when every file is valid, at most 255).
+Prints every problem as file:line: path: message (warnings marked "warning:"), then the number of
+errors on standard error; exits 1 when there are any, 0 when every file is valid.
 """
 
 _DESIGN_EPILOG = """\
@@ -229,7 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="file format of the figures (default: png)")
     p.set_defaults(func=_cmd_report)
 
-    p = sub.add_parser("validate", parents=[common, trust], help="check scenario files; exit code = number of problems",
+    p = sub.add_parser("validate", parents=[common, trust], help="check scenario files; exit 1 on problems",
                        epilog=_VALIDATE_EPILOG, formatter_class=_Formatter,
                        description="Check scenario files completely without running them.")
     p.add_argument("files", nargs="+", metavar="FILE", help="scenario YAML files")
