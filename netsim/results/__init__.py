@@ -227,7 +227,8 @@ class RunResult:
 
     @property
     def status(self) -> str:
-        """``"ok"``, ``"error"``, ``"diverged at t = ... s"`` ... (``meta["status"]``, :mod:`netsim.status`).
+        """``"ok"``, ``"diverged at t = ... s"``, ``"unstable at t = ... s"`` (the loop left its operating region,
+        :mod:`netsim.results.verdict`), ``"error"`` or ``"interrupted at t = ... s"`` (``meta["status"]``, :mod:`netsim.status`).
 
         Examples
         --------
