@@ -34,16 +34,29 @@ def _describe(values: dict[str, Any]) -> str:
     return ", ".join(f"{k}={v!r}" for k, v in values.items())
 
 
-def _line(path: str | Path, where: str | None) -> int | None:
-    """The line of the YAML path ``where`` in the sweep file (None when unknown or unreadable)."""
-    if not where:
-        return None
-    from netsim.scenario.loader import read_yaml
+class _Lines:
+    """The lines of a sweep file's YAML paths, read once when first asked for (None when unknown)."""
 
-    try:
-        return read_yaml(path)[1].line_of(where)
-    except ConfigError:
-        return None
+    def __init__(self, path: str | Path) -> None:
+        self.path = path
+        self._index: Any = None
+
+    def __call__(self, where: str | None) -> int | None:
+        if not where:
+            return None
+        if self._index is None:
+            from netsim.scenario.loader import LineIndex
+            from netsim.scenario.safe_yaml import YamlRefused, read_text
+            from netsim.sweep.spec import quote_flow_paths
+
+            try:  # read as load_sweep reads it (flow lists of paths quoted, lines kept)
+                self._index = LineIndex(quote_flow_paths(read_text(str(self.path))))
+            except (OSError, YamlRefused):
+                self._index = LineIndex()
+        try:
+            return self._index.line_of(where)
+        except ConfigError:
+            return None
 
 
 def check_sweep(path: str | Path) -> list[Problem]:
@@ -56,11 +69,17 @@ def check_sweep(path: str | Path) -> list[Problem]:
     from netsim.sweep.spec import load_sweep
 
     file = str(path)
+    line_of = _Lines(path)
     try:
         sweep = load_sweep(path)
     except ConfigError as exc:
-        message = exc.message.removeprefix(f"{file}: ")  # the problem line names the file already
-        return [Problem(exc.path or "", message, line=_line(path, exc.path), file=file)]
+        listed = getattr(exc, "problems", None)
+        if listed is None:
+            message = exc.message.removeprefix(f"{file}: ")  # the problem line names the file already
+            return [Problem(exc.path or "", message, line=line_of(exc.path), file=file)]
+        where = getattr(exc, "file", file)
+        return [Problem(at, message, line=line if line is not None or where != file else line_of(at), file=where)
+                for at, message, line in listed]
     base_problems = check_scenario(sweep.base_path or sweep.base)
     problems = list(base_problems)
     if any(p.is_error for p in base_problems):
@@ -72,8 +91,9 @@ def check_sweep(path: str | Path) -> list[Problem]:
             continue
         seen.update(fresh)
         label = f"point ({_describe(point.values)})"
+        line = line_of(f"factors.{fresh[0][0]}")  # the factor whose new level this point checks
         for problem in check_scenario(sweep.point_raw(point)):
             if problem.is_error:
                 path_text = f"{label}: {problem.path}" if problem.path else label
-                problems.append(Problem(path_text, problem.message, file=file))
+                problems.append(Problem(path_text, problem.message, line=line, file=file))
     return problems

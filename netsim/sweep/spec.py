@@ -335,31 +335,50 @@ def _read_yaml(path: Path, *, sweep_file: bool = False) -> Any:
     except OSError as exc:
         raise ConfigError(f"cannot read '{path}': {exc.strerror or exc}") from None
     except YamlRefused as exc:
-        where = f" (line {exc.line})" if exc.line else ""
-        raise ConfigError(f"'{path}'{where}: {exc.message}") from None
+        raise _refusal(str(path), [("", exc.message, exc.line)]) from None
     if sweep_file:
         text = quote_flow_paths(text)
     try:
         return load_text(text)
     except YamlRefused as exc:
-        where = f" (line {exc.line})" if exc.line else ""
         if exc.syntax:
-            raise ConfigError(
-                f"'{path}' is not valid YAML{where}: {exc.message.removeprefix('YAML syntax error: ')}; quote values "
-                "that contain [ ] inside flow lists, e.g. paths: ['nodes.ctrl.tasks[0].params.k']"
-            ) from None
-        raise ConfigError(f"'{path}'{where}: {exc.message}") from None
+            raise _refusal(str(path), [("", f"not valid YAML: {exc.message.removeprefix('YAML syntax error: ')}; "
+                                            "quote values that contain [ ] inside flow lists, e.g. "
+                                            "paths: ['nodes.ctrl.tasks[0].params.k']", exc.line)]) from None
+        raise _refusal(str(path), [("", exc.message, exc.line)]) from None
 
 
-def _format_validation(exc: ValidationError, where: str) -> str:
+#: One problem of a sweep file: ``(path, message, line)``; the path is a dotted YAML path of the sweep file
+#: ("" for the whole file), the line None when not known yet (:func:`netsim.sweep.check.check_sweep` looks it up).
+SweepProblem = tuple[str, str, "int | None"]
+
+
+def _refusal(where: str, problems: list[SweepProblem]) -> ConfigError:
+    """One :class:`ConfigError` for the file ``where`` (a sweep file or its base scenario): every problem on its
+    own line (``file:line: path: message``), the list itself as ``.problems`` and the file as ``.file``
+    (:func:`netsim.sweep.check.check_sweep` makes one Problem of each, with its line)."""
     lines = []
+    for path, message, line in problems:
+        at = f"{where}:{line}" if line is not None else where
+        lines.append(f"{at}: {path}: {message}" if path else f"{at}: {message}")
+    exc = ConfigError("\n".join(lines))
+    exc.problems = problems  # type: ignore[attr-defined]
+    exc.file = where  # type: ignore[attr-defined]  # the sweep file, or its base scenario
+    return exc
+
+
+def _validation_problems(exc: ValidationError) -> list[SweepProblem]:
+    out: list[SweepProblem] = []
     for err in exc.errors():
         loc = ""
         for part in err["loc"]:
             loc += f"[{part}]" if isinstance(part, int) else (f".{part}" if loc else str(part))
         msg = err["msg"].removeprefix("Value error, ")
-        lines.append(f"{where}: {loc or '(top level)'}: {msg}")
-    return "\n".join(lines)
+        m = re.match(r"^((?:points|surface)(?:\[\d+\]|\.\w+)?): (.*)$", msg) if not loc else None
+        if m:  # a check of the whole file that names its key in the message ("points[2]: unknown factor(s) ..")
+            loc, msg = m.group(1), m.group(2)
+        out.append((loc, msg, None))
+    return out
 
 
 def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | None = None) -> Sweep:
@@ -384,20 +403,21 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
     data = plain_copy(dict(source)) if isinstance(source, dict) else _read_yaml(path, sweep_file=True)  # type: ignore[arg-type]  # numpy values as lists (issue 26)
     where = str(path) if path else "sweep"
     if not isinstance(data, dict):
-        raise ConfigError(f"{where}: a sweep file is a mapping with keys sweep, base, factors, ...")
+        raise _refusal(where, [("", "a sweep file is a mapping with keys sweep, base, factors, ...", None)])
     if "sweep" not in data and ("name" in data or "duration" in data):
         run_it = f"`netsim run {path}`" if path else "`netsim run FILE`"
         raise ConfigError(f"{where}: this is a scenario file (it has 'name:'/'duration:' and no 'sweep:'); "
                           f"run it with {run_it}, or give a sweep file (sweep:, base:, factors:)")
     if "factors" in data and not data["factors"]:
-        raise ConfigError(f"{where}: 'factors' is empty; name at least one factor with its paths and values", "factors")
+        raise _refusal(where, [("factors", "'factors' is empty; name at least one factor with its paths and values",
+                                None)])
     try:
         spec = SweepSpec.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(_format_validation(exc, where)) from None
+        raise _refusal(where, _validation_problems(exc)) from None
     surface = spec.surface_problem()
     if surface is not None:
-        raise ConfigError(f"{where}: {surface[1]}", surface[0])
+        raise _refusal(where, [(surface[0], surface[1], None)])
     base_path: Path | None = None
     if base is None:
         base_path = (path.parent if path else Path.cwd()) / spec.base
@@ -419,7 +439,7 @@ def _check_paths(spec: SweepSpec, raw: dict[str, Any], where: str) -> None:
     factor levels (the plugins' parameter models refuse unknown keys, with a "did you mean")."""
     from netsim.scenario.paths import did_you_mean, get_path, parse_path
 
-    problems = []
+    problems: list[SweepProblem] = []
     for name, factor in spec.factors.items():
         for i, p in enumerate(factor.paths):
             try:
@@ -436,7 +456,7 @@ def _check_paths(spec: SweepSpec, raw: dict[str, Any], where: str) -> None:
                     parent = None
                 if isinstance(parent, dict) and not did_you_mean(last, [k for k in parent if isinstance(k, str)]):
                     continue  # a parameter left at its default: set_path creates it at each point
-            problems.append(f"{where}: factors.{name}.paths[{i}]: '{p}' is not in the base scenario: {message}")
+            problems.append((f"factors.{name}.paths[{i}]", f"'{p}' is not in the base scenario: {message}", None))
     if problems:
-        raise ConfigError("\n".join(problems))
+        raise _refusal(where, problems)
 

@@ -20,7 +20,7 @@ def test_sweep_with_an_invalid_probability_level_is_refused_listing_it(tmp_path,
     err = capsys.readouterr().err
     lines = err.splitlines()
     assert len(lines) == 2 and "Traceback" not in err
-    assert lines[0].startswith(f"{sweep}: point (share=7): nodes.interference.tasks[0].params") and "7" in lines[0]
+    assert lines[0].startswith(f"{sweep}:4: point (share=7): nodes.interference.tasks[0].params") and "7" in lines[0]  # line 4: factor 'share'
     assert lines[1] == f"netsim: error: sweep {sweep}: 1 problem; nothing was run"
     assert not (tmp_path / "out").exists()
 

@@ -165,3 +165,33 @@ def test_a_nan_in_a_mobility_waypoint_has_a_path_with_a_line(tmp_path: Path) -> 
     done = _cli("validate", str(f), cwd=tmp_path)
     assert done.returncode != 0
     assert f"nan.yaml:{line}: networks.bus.mobility.sensor.path: at '8 s'[0]: NaN" in done.stdout, done.stdout
+
+
+# --------------------------------------------------------------------------------- sweep files: file:line: path
+def test_sweep_file_errors_are_one_per_line_with_file_line_and_path(tmp_path: Path) -> None:
+    """Before: 'FILE: factors.period: ... FILE: replicates: ...' on one line, without any line number."""
+    from netsim.sweep.check import check_sweep
+
+    sweep = tmp_path / "bad.yaml"
+    sweep.write_text(f"sweep: bad\nbase: {SCENARIOS / 'dc_servo_ideal.yaml'}\nfactors:\n"
+                     "  period:\n"                                          # line 4
+                     "    paths: [nodes.computer.tasks[0].period]\n"
+                     "    values: [5 ms, 7 ms]\n"
+                     "    linspace: {start: 1, stop: 2, num: 3}\n"
+                     "replicates: 0\n")                                     # line 8
+    shown = [str(p) for p in check_sweep(sweep)]
+    assert shown == [f"{sweep}:4: factors.period: give only one of values/linspace/logspace, got values, linspace",
+                     f"{sweep}:8: replicates: Input should be greater than or equal to 1"]
+
+
+def test_a_bad_factor_path_and_a_bad_level_name_their_lines(tmp_path: Path) -> None:
+    from netsim.sweep.check import check_sweep
+
+    sweep = tmp_path / "bad.yaml"
+    head = f"sweep: bad\nbase: {SCENARIOS / 'dc_servo_ideal.yaml'}\nfactors:\n  gain:\n"
+    sweep.write_text(head + "    paths: [plant.params.gainx]\n    values: [1, 2]\n")
+    (p,) = check_sweep(sweep)
+    assert (p.line, p.path) == (5, "factors.gain.paths[0]") and "did you mean 'gain'" in p.message
+    sweep.write_text(head + "    paths: [plant.params.gain]\n    values: [1, .nan]\n")
+    (p,) = check_sweep(sweep)
+    assert p.line == 4 and p.path.startswith("point (gain=nan): plant.params.gain")  # line 4: the factor
