@@ -7,10 +7,14 @@ written. A reader therefore sees either the previous file or the whole new one, 
 
 :func:`make_unique_dir` creates a new folder exclusively, adding ``-2``, ``-3`` ... to the name when it exists:
 two runs started in the same second never share a folder.
+
+A write that fails for lack of room (the file-size limit ``ulimit -f``, a full disk, a used-up quota) raises the
+same :class:`OSError` with the final file's name and a fix in its message ("cannot write X: File too large; ...").
 """
 
 from __future__ import annotations
 
+import errno
 import os
 from pathlib import Path
 from typing import Iterable
@@ -49,13 +53,27 @@ def write_atomic(path: str | Path, data: str | bytes | Iterable[str], encoding: 
             for chunk in chunks:
                 fh.write(chunk.encode(encoding) if isinstance(chunk, str) else chunk)
         os.replace(tmp, final)  # no fsync: a killed process leaves the old file or the new one (not power loss)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except OSError:
             pass
+        if isinstance(exc, OSError) and exc.errno in _FIXES:  # the same error, naming the file and the fix
+            raise OSError(exc.errno, f"{exc.strerror or os.strerror(exc.errno or 0)}; {_FIXES[exc.errno]}",
+                          str(final)) from exc
         raise
     return final
+
+
+_LESS = ("or write less: a shorter 'duration', a coarser 'plant.record_grid', fewer 'record:' signals, or "
+         "'output: {jobs: summary, messages: summary}'")
+#: What to do when a write fails for lack of room, by errno (the message the CLI prints after "cannot write X").
+_FIXES = {
+    errno.EFBIG: f"the file-size limit of this shell stops it (see 'ulimit -f'): raise it ('ulimit -f unlimited'), "
+                 f"{_LESS}",
+    errno.ENOSPC: f"free space on that disk, or write elsewhere with '--out DIR', {_LESS}",
+    errno.EDQUOT: f"your disk quota is used up: free space, or write elsewhere with '--out DIR', {_LESS}",
+}
 
 
 def make_unique_dir(base: str | Path) -> Path:

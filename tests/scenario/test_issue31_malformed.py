@@ -195,3 +195,20 @@ def test_a_bad_factor_path_and_a_bad_level_name_their_lines(tmp_path: Path) -> N
     sweep.write_text(head + "    paths: [plant.params.gain]\n    values: [1, .nan]\n")
     (p,) = check_sweep(sweep)
     assert p.line == 4 and p.path.startswith("point (gain=nan): plant.params.gain")  # line 4: the factor
+
+
+# --------------------------------------------------------------------------------------- File too large: a fix
+def test_a_run_stopped_by_the_file_size_limit_says_how_to_write_less(tmp_path: Path) -> None:
+    """'cannot write X: File too large' said nothing about what to do."""
+    import resource
+
+    def small_files() -> None:  # 20 kB: scenario.yaml fits, signals.csv (2000 rows x 4 columns) does not
+        resource.setrlimit(resource.RLIMIT_FSIZE, (20_000, 20_000))
+
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    done = subprocess.run([sys.executable, "-m", "netsim", "run", str(SCENARIOS / "dc_servo_ideal.yaml"), "--out",
+                           str(tmp_path / "out")], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env=env, preexec_fn=small_files)
+    assert done.returncode != 0 and "Traceback" not in done.stderr
+    (line,) = [t for t in done.stderr.splitlines() if "File too large" in t]
+    assert "cannot write" in line and "ulimit -f" in line and "output: {jobs: summary" in line
