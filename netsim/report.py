@@ -103,9 +103,11 @@ def _is_run(folder: Path) -> bool:
 
 
 def _is_incomplete_run(folder: Path) -> bool:
-    """Run-folder files without the ``meta.json`` that marks the folder complete (a run killed while writing)."""
+    """Run-folder files without the ``meta.json`` that marks the folder complete (a run killed or still running:
+    ``scenario.yaml`` is written first)."""
     return not (folder / "meta.json").exists() and any(
-        (folder / name).exists() for name in ("metrics.csv", "jobs.csv", "signals.csv", "messages.csv"))
+        (folder / name).exists() for name in ("scenario.yaml", "metrics.csv", "jobs.csv", "signals.csv",
+                                              "messages.csv"))
 
 
 def find_runs(folder: Path) -> tuple[str, list[tuple[str, Path, dict[str, Any]]]]:
@@ -129,8 +131,9 @@ def find_runs(folder: Path) -> tuple[str, list[tuple[str, Path, dict[str, Any]]]
     if _is_run(folder):
         return "run", [(_case_name(folder), folder, {})]
     if _is_incomplete_run(folder):
-        raise ConfigError(f"'{folder}' is an incomplete run folder (no meta.json: the run was stopped while its "
-                          "files were written); run the scenario again")
+        raise ConfigError(f"'{folder}' is an incomplete run folder (no meta.json: the run was killed or stopped "
+                          "while writing, or is still running); wait for a running one to finish, or run it again: "
+                          f"netsim run {folder / 'scenario.yaml'} --out NEW_FOLDER")
     for sub in sorted(p for p in folder.iterdir() if p.is_dir() and _is_incomplete_run(p)):
         log.warning("skipping incomplete run folder %s (no meta.json: stopped while writing)", sub)
     subs = sorted(p for p in folder.iterdir() if p.is_dir() and _is_run(p))
