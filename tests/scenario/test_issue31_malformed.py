@@ -212,3 +212,15 @@ def test_a_run_stopped_by_the_file_size_limit_says_how_to_write_less(tmp_path: P
     assert done.returncode != 0 and "Traceback" not in done.stderr
     (line,) = [t for t in done.stderr.splitlines() if "File too large" in t]
     assert "cannot write" in line and "ulimit -f" in line and "output: {jobs: summary" in line
+
+
+# --------------------------------------------------------------------------- report on a folder still being written
+def test_report_on_a_folder_with_only_scenario_yaml_says_the_run_is_incomplete(tmp_path: Path) -> None:
+    """A run killed right after writing scenario.yaml (or still running): was 'not a run folder'."""
+    folder = tmp_path / "run"
+    folder.mkdir()
+    (folder / "scenario.yaml").write_text((SCENARIOS / "dc_servo_ideal.yaml").read_text())
+    done = _cli("report", str(folder), cwd=tmp_path)
+    assert done.returncode != 0 and "Traceback" not in done.stderr
+    assert "incomplete run folder" in done.stderr and "still running" in done.stderr
+    assert f"netsim run {folder / 'scenario.yaml'}" in done.stderr
