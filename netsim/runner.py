@@ -339,6 +339,7 @@ def run(
         folder = check_out_dir(out if out is not None else (
             scenario_out_dir(scenario.output.dir) if scenario.output.dir else default_out_dir(scenario.name, digest)))
         folder.mkdir(parents=True, exist_ok=True)  # before the run: incomplete (no meta.json) until written
+        (folder / "meta.json").unlink(missing_ok=True)  # a folder run again reads incomplete until it is rewritten
 
     base_sc = scenario.baseline_scenario()
     baseline = _baseline(base_sc) if base_sc is not None else None

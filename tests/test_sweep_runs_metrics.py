@@ -33,7 +33,7 @@ def test_runs_metrics_writes_metrics_and_meta_only_with_the_same_summary(tmp_pat
     assert full.n_ok == small.n_ok == 2
     for index in range(2):
         point = next((tmp_path / "small" / "points").glob(f"{index:05d}-*"))
-        assert sorted(p.name for p in point.iterdir()) == ["meta.json", "metrics.csv", "point.json"]
+        assert sorted(p.name for p in point.iterdir()) == ["manifest.json", "meta.json", "metrics.csv", "point.json"]
         same = next((tmp_path / "full" / "points").glob(f"{index:05d}-*"))
         assert (point / "metrics.csv").read_bytes() == (same / "metrics.csv").read_bytes()
         assert {p.name for p in same.iterdir()} >= {"scenario.yaml", "signals.csv", "jobs.csv", "messages.csv"}

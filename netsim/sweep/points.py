@@ -3,27 +3,37 @@
 A worker runs each point with the *point function* (``netsim.runner.run_point`` unless a caller injects
 another picklable module-level function with the same signature ``fn(raw, out, seed) -> metrics``) and
 writes the point's record ``point.json`` into the point's folder as soon as the point is done, so an
-interrupted sweep keeps every finished point. Where the chunks run (this process, a pool, Dask) is
+interrupted sweep keeps every finished point. Last of all it writes ``manifest.json`` (atomically): the sha256 of
+every file of the folder. A point is trusted on resume only when its folder is a real folder (no symlink, in
+it or as it) holding exactly those files with those digests (:func:`verified_record`): a point killed half-way,
+an edited ``point.json``, ``metrics.csv`` or ``meta.json`` or a planted symlink is run again, never read
+(issue 31). A point is run in a fresh folder: whatever was there (a symlink is removed, not followed) goes first. Where the chunks run (this process, a pool, Dask) is
 :mod:`netsim.sweep.executor`.
 """
 
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import json
 import logging
 import os
+import shutil
 import time
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
 
-__all__ = ["PointFn", "RECORD_NAME", "default_point_fn", "metrics_point_fn", "run_chunk", "read_record", "point_hash"]
+__all__ = ["PointFn", "RECORD_NAME", "MANIFEST_NAME", "default_point_fn", "metrics_point_fn", "run_chunk", "read_record",
+           "point_hash", "write_manifest", "verified_record", "fresh_folder"]
 
 #: ``fn(raw_scenario, run_folder, seed) -> {metric: value}``
 PointFn = Callable[[Mapping[str, Any], Path, int], Mapping[str, float]]
 
 #: The per-point record written by the worker when a point finishes (ok or error).
 RECORD_NAME = "point.json"
+
+#: Written last in a point folder: ``{"files": {relative path: sha256}}`` of every other file in it.
+MANIFEST_NAME = "manifest.json"
 
 _SINGLE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
@@ -67,6 +77,69 @@ def read_record(folder: Path) -> dict[str, Any] | None:
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) else None
+
+
+def _digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _listing(folder: Path) -> dict[str, Path] | None:
+    """Every file below ``folder`` by relative path (the manifest aside); ``None`` when ``folder`` is a symlink
+    or holds one, or anything that is neither a file nor a folder."""
+    if folder.is_symlink() or not folder.is_dir():
+        return None
+    files: dict[str, Path] = {}
+    for root, dirs, names in os.walk(folder, followlinks=False):
+        for name in [*dirs, *names]:
+            path = Path(root) / name
+            if path.is_symlink() or not (path.is_dir() or path.is_file()):
+                return None
+        for name in names:
+            path = Path(root) / name
+            rel = path.relative_to(folder).as_posix()
+            if rel != MANIFEST_NAME:
+                files[rel] = path
+    return files
+
+
+def write_manifest(folder: Path) -> None:
+    """Write ``manifest.json``: the sha256 of every file of the point folder (written last, atomically)."""
+    listing = _listing(folder) or {}
+    _write_json(folder / MANIFEST_NAME, {"files": {rel: _digest(path) for rel, path in sorted(listing.items())}})
+
+
+def verified_record(folder: Path) -> dict[str, Any] | None:
+    """The point's ``point.json`` if the folder is exactly what its manifest says (same files, same sha256, no
+    symlink); ``None`` otherwise (a point stopped before it finished, or a folder changed since)."""
+    listing = _listing(folder)
+    if listing is None or RECORD_NAME not in listing:
+        return None
+    try:
+        manifest = json.loads((folder / MANIFEST_NAME).read_text(encoding="utf-8"))
+        files = manifest["files"]
+    except (OSError, ValueError, TypeError, KeyError):
+        return None
+    if not isinstance(files, dict) or set(files) != set(listing):
+        return None
+    try:
+        if any(_digest(path) != files[rel] for rel, path in listing.items()):
+            return None
+    except OSError:
+        return None
+    return read_record(folder)
+
+
+def fresh_folder(folder: Path) -> None:
+    """Empty ``folder`` for a (re)run: a symlink there is removed (never followed), a folder deleted."""
+    if folder.is_symlink() or (folder.exists() and not folder.is_dir()):
+        folder.unlink()
+    elif folder.exists():
+        shutil.rmtree(folder)
+    folder.mkdir(parents=True)
 
 
 def point_hash(raw: Mapping[str, Any], seed: int) -> str:
@@ -137,8 +210,7 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
         for task in tasks:
             caught.messages.clear()
             folder = Path(task["folder"])
-            folder.mkdir(parents=True, exist_ok=True)
-            (folder / RECORD_NAME).unlink(missing_ok=True)
+            fresh_folder(folder)  # nothing of an earlier (killed, tampered) attempt is kept or followed
             record: dict[str, Any] = {
                 "index": task["index"],
                 "values": task["values"],
@@ -149,7 +221,6 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
                 "error": "",
                 "metrics": {},
             }
-            (folder / "meta.json").unlink(missing_ok=True)
             t0 = time.perf_counter()
             try:
                 metrics = point_fn(task["raw"], folder, task["seed"])
@@ -163,5 +234,6 @@ def run_chunk(point_fn: PointFn, tasks: list[dict[str, Any]]) -> list[dict[str, 
             record["elapsed_s"] = time.perf_counter() - t0  # in point.json only, never in summary.csv
             record["warnings"] = list(caught.messages)
             _write_json(folder / RECORD_NAME, record)
+            write_manifest(folder)  # last: the point is finished only now
             out.append(record)
     return out

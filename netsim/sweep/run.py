@@ -25,18 +25,21 @@ the worker side is :mod:`netsim.sweep.points`, the backends :mod:`netsim.sweep.e
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
+import os
 import shutil
 import time
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Executor, Future, wait
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping
 
 from netsim.errors import ConfigError
 from netsim.sweep.executor import SchedulerLost, open_executor, scheduler_lost
-from netsim.sweep.points import PointFn, default_point_fn, metrics_point_fn, point_hash, read_record, run_chunk
+from netsim.sweep.points import (PointFn, default_point_fn, metrics_point_fn, point_hash, run_chunk,
+                                 verified_record, write_manifest)
 from netsim.sweep.spec import Point, Sweep, load_sweep
 from netsim.sweep.summary import write_summary
 
@@ -46,6 +49,8 @@ log = logging.getLogger(__name__)
 
 #: The file that marks a folder as holding a sweep.
 SWEEP_MARKER = "sweep.json"
+#: The lock a running sweep holds on its output folder (its pid inside): one sweep per folder at a time.
+LOCK_NAME = ".sweep.lock"
 _OWNED = ("points", "summary.csv", "optimum.json", "surface.png", "surface.csv", SWEEP_MARKER, "dask-scratch")
 
 
@@ -150,7 +155,7 @@ def _prepare_out(out: Path, sweep: Sweep, overwrite: bool) -> None:
     marker = out / SWEEP_MARKER
     if out.exists() and not out.is_dir():
         raise ConfigError(f"output '{out}' is a file; give a folder with --out")
-    if out.is_dir() and any(out.iterdir()):
+    if out.is_dir() and any(p.name != LOCK_NAME for p in out.iterdir()):
         held = None
         if marker.exists():
             try:
@@ -180,14 +185,46 @@ def _prepare_out(out: Path, sweep: Sweep, overwrite: bool) -> None:
         "runs": len(sweep.points),
         "spec": sweep.spec.model_dump(mode="json"),
     }
-    marker.write_text(json.dumps(info, indent=1, sort_keys=True), encoding="utf-8")
+    from netsim.safe_write import write_atomic
+
+    write_atomic(marker, json.dumps(info, indent=1, sort_keys=True))
+
+
+@contextlib.contextmanager
+def _folder_lock(out: Path) -> Iterator[None]:
+    """Hold ``<out>/.sweep.lock`` (an ``flock``, released by the kernel however the process ends) while the
+    sweep writes ``out``; another sweep into the same folder is refused, naming the process that holds it.
+    The pool's worker processes inherit the lock, so a sweep killed outright keeps its folder until its last
+    worker is gone."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"output '{out}' is a file; give a folder with --out")
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / LOCK_NAME
+    fd = os.open(path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "?"
+            raise ConfigError(f"output folder '{out}' is being written by another sweep (process {holder}); wait "
+                              "for it to end, or choose another --out") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
+        yield
+    finally:
+        os.close(fd)
 
 
 def _finished(point: Point, folder: Path, raw: Mapping[str, Any]) -> dict[str, Any] | None:
     """The point's record if it finished ok with the same seed and scenario hash as now."""
     from netsim.status import DIVERGED, OK, UNSTABLE, kind_of
 
-    rec = read_record(folder)  # a diverged or unstable run is a finished result (run again, it is the same)
+    rec = verified_record(folder)  # a diverged or unstable run is a finished result (run again, it is the same)
     if not rec or kind_of(rec.get("status")) not in (OK, DIVERGED, UNSTABLE) or rec.get("seed") != point.seed \
             or rec.get("index") != point.index:
         return None
@@ -372,9 +409,12 @@ def _lost(task: dict[str, Any], exc: BaseException) -> dict[str, Any]:
         "metrics": {},
     }
     folder = Path(task["folder"])
-    if read_record(folder) is None:
-        folder.mkdir(parents=True, exist_ok=True)
+    if verified_record(folder) is None:
+        from netsim.sweep.points import fresh_folder
+
+        fresh_folder(folder)
         _write_json(folder / RECORD_NAME, rec)
+        write_manifest(folder)
     return rec
 
 
@@ -474,6 +514,17 @@ def run_sweep(
     sweep = load_sweep(path)
     folder = Path(out) if out is not None else Path("reports") / sweep.name
     raws = [sweep.point_raw(p) for p in sweep.points]
+    with _folder_lock(folder):
+        return _run_locked(sweep, folder, raws, overwrite, t0, point_fn=point_fn, workers=workers,
+                           scheduler=scheduler, local_dask=local_dask, progress=progress, chunk_size=chunk_size,
+                           connect_timeout=connect_timeout, cluster_kwargs=cluster_kwargs, dashboard=dashboard)
+
+
+def _run_locked(sweep: Sweep, folder: Path, raws: list[dict[str, Any]], overwrite: bool, t0: float, *,
+                point_fn: PointFn | None, workers: int | None, scheduler: str | None, local_dask: bool,
+                progress: bool, chunk_size: int | None, connect_timeout: float,
+                cluster_kwargs: Mapping[str, Any] | None, dashboard: str | None) -> SweepResult:
+    """:func:`run_sweep` once its output folder is locked."""
     _prepare_out(folder, sweep, overwrite)
 
     todo: list[tuple[Point, dict[str, Any]]] = []
@@ -526,7 +577,7 @@ def _collect(
 
     rows = []
     for point in sweep.points:
-        rec = read_record(folder / point.folder)
+        rec = verified_record(folder / point.folder)  # a changed folder is not trusted: pending, run it again
         if not rec or rec.get("index") != point.index or rec.get("seed") != point.seed:
             rec = {"index": point.index, "values": point.values, "replicate": point.replicate,
                    "seed": point.seed, "status": "pending", "error": "", "metrics": {}}
