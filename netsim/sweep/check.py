@@ -92,7 +92,7 @@ def check_sweep(path: str | Path) -> list[Problem]:
         seen.update(fresh)
         label = f"point ({_describe(point.values)})"
         line = line_of(f"factors.{fresh[0][0]}")  # the factor whose new level this point checks
-        for problem in check_scenario(sweep.point_raw(point)):
+        for problem in [*sweep.point_problems(point), *check_scenario(sweep.point_raw(point))]:
             if problem.is_error:
                 path_text = f"{label}: {problem.path}" if problem.path else label
                 problems.append(Problem(path_text, problem.message, line=line, file=file))

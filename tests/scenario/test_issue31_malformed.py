@@ -224,3 +224,44 @@ def test_report_on_a_folder_with_only_scenario_yaml_says_the_run_is_incomplete(t
     assert done.returncode != 0 and "Traceback" not in done.stderr
     assert "incomplete run folder" in done.stderr and "still running" in done.stderr
     assert f"netsim run {folder / 'scenario.yaml'}" in done.stderr
+
+
+# ------------------------------------------------------------------- a sweep level of a preset-like field (cart friction)
+def _friction_sweep(tmp_path: Path, base: Path) -> Path:
+    sweep = tmp_path / "friction.yaml"
+    sweep.write_text(f"sweep: friction\nbase: {base}\nfactors:\n"
+                     "  friction:\n"                                        # line 4
+                     "    paths: [plant.params.friction.model]\n"
+                     "    values: [inband, modes6]\n"
+                     "  duration:\n    paths: [duration]\n    values: [20 ms, 30 ms]\n")
+    return sweep
+
+
+def test_a_sweep_level_of_a_preset_takes_effect_over_siblings_that_spell_out_the_old_preset(tmp_path: Path) -> None:
+    """cart.yaml spells out the inband preset; the modes6 level used to keep inband's wavelength 3.3 etc.
+    (Sweep.point_raw wrote the value directly, so the override shadow check never ran)."""
+    from netsim.scenario import load_scenario
+    from netsim.sweep.spec import load_sweep
+
+    sweep = load_sweep(_friction_sweep(tmp_path, SCENARIOS / "cart.yaml"))
+    modes6 = [p for p in sweep.points if p.values["friction"] == "modes6"]
+    for point in modes6:
+        friction = load_scenario(sweep.point_raw(point)).plant.validated_params().friction
+        # modes6 as models/cart/friction.py's docstring states it (tests/scenario/test_shadowed_overrides.py)
+        assert (friction.wavelength, friction.speedup, friction.modes, friction.spread) == (0.1, 3.0, 6, 0.5)
+        assert friction.coulomb == 2.0  # not a preset field: as the base gives it
+    for point in sweep.points:
+        sweep.point_raw(point)
+    assert len(sweep._shadow) == 2  # one check per friction level, not one per point (4)
+
+
+def test_a_sweep_level_shadowed_by_the_base_s_own_values_is_refused(tmp_path: Path) -> None:
+    from netsim.sweep.check import check_sweep
+
+    base = tmp_path / "cart_own.yaml"
+    base.write_text((SCENARIOS / "cart.yaml").read_text().replace("wavelength: 3.3", "wavelength: 2.0"))
+    sweep = _friction_sweep(tmp_path, base)
+    errors = [p for p in check_sweep(sweep) if p.is_error]
+    assert errors and all(p.line == 4 for p in errors)
+    assert "point (friction='modes6'" in errors[0].path and "wavelength" in errors[0].message
+    assert "shadowed" in errors[0].message
