@@ -311,7 +311,7 @@ def _sweep_heatmaps(folder: Path, out: Path) -> Path | None:
     try:
         spec = SweepSpec.model_validate(json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["spec"])
         summary = pd.read_csv(folder / "summary.csv", keep_default_na=False, na_values=[""])
-    except (OSError, ValueError, KeyError, TypeError):
+    except (OSError, ValueError, KeyError, TypeError):  # no readable sweep record: the bar figure is drawn instead
         return None
     if spec.surface is not None:
         axes = [spec.surface.x, spec.surface.y]
@@ -354,7 +354,7 @@ def _by_values(frame: pd.DataFrame, folder: Path) -> pd.DataFrame:
 
     try:
         factors = list(json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["factors"])
-    except (OSError, ValueError, KeyError, TypeError):
+    except (OSError, ValueError, KeyError, TypeError):  # no readable sweep record: rows keep their folder names
         return frame
     names = [f for f in factors if f in frame.columns]
     if "case" not in frame.columns or not names or frame.empty:

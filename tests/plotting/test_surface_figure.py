@@ -30,10 +30,10 @@ def _surface() -> Surface:
     return Surface(x="sigma_s", y="sigma_c", z="et.GPI", cells=cells, xs=xs, ys=ys, Z=Z, logx=True, logy=True)
 
 
-def test_heat_map_uses_the_log_edges_on_log_axes_and_the_legend_is_outside_the_axes():
+def test_heat_map_uses_the_log_edges_on_log_axes_and_the_optimum_is_named_outside_the_cells():
     surf = _surface()
     fig = surface_figure(surf, find_optimum(surf))
-    heat = fig.axes[1]
+    heat = fig.axes[0]
     assert heat.get_xscale() == "log" and heat.get_yscale() == "log"
     mesh = heat.collections[0]
     coords = mesh.get_coordinates()  # (ny + 1, nx + 1, 2): the cell corners
@@ -41,8 +41,6 @@ def test_heat_map_uses_the_log_edges_on_log_axes_and_the_legend_is_outside_the_a
     np.testing.assert_allclose(coords[:, 0, 1], cell_edges(surf.ys, True))
     assert heat.get_xlim()[0] <= cell_edges(surf.xs, True)[0] * 1.0000001  # the first column is whole
     assert heat.get_ylim()[0] <= cell_edges(surf.ys, True)[0] * 1.0000001  # the bottom row is not cut
-    legend = heat.get_legend()
-    fig.canvas.draw()
-    box, axes_box = legend.get_window_extent(), heat.get_window_extent()
-    assert box.y1 <= axes_box.y0  # below the axes: it covers no cell
-    assert heat.get_xlabel().startswith("sigma_s") and heat.get_ylabel().startswith("sigma_c")
+    assert heat.get_legend() is None  # the optimum is written in the title (issue 27), above the cells
+    assert heat.get_title().startswith("min GPI = ")
+    assert heat.get_xlabel() == r"$\sigma_{s}$" and heat.get_ylabel() == r"$\sigma_{c}$"
