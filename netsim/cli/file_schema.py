@@ -23,7 +23,7 @@ the file does not declare, a matrix whose shape must match another) is left to `
 from __future__ import annotations
 
 import copy
-from typing import Any, Union, get_args, get_origin
+from typing import Any
 
 __all__ = ["json_schema"]
 
@@ -48,26 +48,10 @@ _NAMED_PLUGINS: dict[str, str] = {"design": "controller"}
 _PATH_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.]*:[A-Za-z_][A-Za-z0-9_.]*$"
 
 
-def _models_in(tp: Any) -> list[type]:
-    """The pydantic models a field annotation holds (through dict, list, union and Annotated)."""
-    from pydantic import BaseModel
-
-    origin = get_origin(tp)
-    if origin is dict:
-        return _models_in(get_args(tp)[1])
-    if origin is list:
-        return _models_in(get_args(tp)[0])
-    if origin is Union or type(tp).__name__ == "UnionType":
-        return [m for arg in get_args(tp) if arg is not type(None) for m in _models_in(arg)]
-    if origin is not None and hasattr(tp, "__metadata__"):  # Annotated[...]
-        return _models_in(get_args(tp)[0])
-    if isinstance(tp, type) and issubclass(tp, BaseModel):
-        return [tp]
-    return []
-
-
 def _reachable_models(roots: list[type]) -> list[type]:
     """The pydantic models reachable from ``roots`` through field annotations (dict, list, union, nested)."""
+    from netsim.cli.docs import _models_in
+
     out: list[type] = []
     todo = list(roots)
     while todo:
@@ -76,7 +60,7 @@ def _reachable_models(roots: list[type]) -> list[type]:
             continue
         out.append(model)
         for field in model.model_fields.values():
-            todo += [m for m in _models_in(field.annotation) if m not in out]
+            todo += [m for _, m in _models_in(field.annotation) if m not in out]
     return out
 
 
