@@ -635,9 +635,14 @@ def gpi_figure(gpi: pd.DataFrame) -> Any:
             label="our minimum")
     ax.plot([PAPER_OPT["sigma_s"]], [PAPER_OPT["sigma_c"]], "x", color="red", ms=7, mew=1.5, clip_on=False,
             label="paper's optimum")
+    if "status" in gpi:  # a run the verdict called unstable or diverged: its GPI is shown, and marked
+        bad = gpi[gpi["status"].astype(str) != "ok"]
+        if len(bad):
+            ax.plot(bad["sigma_s"], bad["sigma_c"], "o", mfc="none", mec="white", ms=5, mew=0.8, clip_on=False,
+                    label="run not ok (unstable)")
     ax.set_xlabel("$\\delta_s = \\sigma_s$")
     ax.set_ylabel("$\\delta_c = \\sigma_c$")
-    fig.legend(loc="outside lower center", ncols=2)
+    fig.legend(loc="outside lower center", ncols=3, handletextpad=0.3, columnspacing=0.8)
     return fig
 
 

@@ -300,6 +300,12 @@ def _bar_figure(frame: pd.DataFrame, label_cols: list[str], value_cols: dict[str
 _UTIL_FIGURE = {"Uc_ratio": "$U_c$", "Ua_ratio": "$U_a$", "NE_ratio": "NE", "GPI": "GPI"}
 
 
+def _spans_decades(values: pd.Series) -> bool:
+    """True for positive values spanning at least two decades (listed values drawn on a log axis)."""
+    v = pd.to_numeric(values, errors="coerce").dropna().to_numpy(float)
+    return bool(v.size and (v > 0).all() and v.max() / v.min() >= 100.0)
+
+
 def _sweep_heatmaps(folder: Path, out: Path) -> Path | None:
     """``utilization.png`` of a sweep: a heat map per index (Uc, Ua, NE, GPI) over two numeric factors (the
     surface's, else the first two with several values), mean over replicates; None when the sweep has fewer
@@ -321,7 +327,8 @@ def _sweep_heatmaps(folder: Path, out: Path) -> Path | None:
     if len(axes) < 2:
         return None
     given = [spec.surface.logx, spec.surface.logy] if spec.surface is not None else [None, None]
-    logs = [spec.factors[n].is_log if g is None else bool(g) for g, n in zip(given, axes)]
+    logs = [(spec.factors[n].is_log or _spans_decades(summary[n])) if g is None else bool(g)
+            for g, n in zip(given, axes)]
     fig = metric_heatmaps(summary, x=axes[0], y=axes[1], metrics=["et.Uc", "et.Ua", "et.NE", "et.GPI"],
                           logx=logs[0], logy=logs[1])
     return None if fig is None else save_figure(fig, out / "utilization.png")

@@ -109,7 +109,8 @@ def test_sweep_utilization_is_a_heat_map_per_index_over_the_factors(tmp_path: Pa
     panels = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
     assert len(panels) == 4  # Uc, Ua, NE, GPI
     assert {ax.get_xlabel() for ax in panels} == {r"$\sigma_{s}$"}
-    assert {ax.get_yscale() for ax in panels} == {"linear"} and {ax.get_xscale() for ax in panels} == {"log"}
+    # sigma_s is a logspace; sigma_c is listed, and its values span four decades: both on log axes
+    assert {ax.get_yscale() for ax in panels} == {"log"} and {ax.get_xscale() for ax in panels} == {"log"}
     # about 7 x 5 in at 300 dpi in the paper style: far from the old 2079 px tall bar list, whatever the points
     assert fig.get_size_inches()[1] <= 5.0
     assert not raw_identifiers(fig)
@@ -184,3 +185,13 @@ def test_cart_report_figures_have_no_raw_identifiers() -> None:
     for name, fig in figs.items():
         assert not raw_identifiers(fig), (name, figure_texts(fig))
         assert not any("numpy" in t for t in figure_texts(fig)), name
+
+
+def test_hdd_gpi_figure_marks_a_run_that_was_not_ok() -> None:
+    from models.hdd_report import gpi_figure
+
+    gpi = _summary()[["sigma_s", "sigma_c", "et.GPI", "status"]].copy()
+    gpi.loc[gpi.index[2], "status"] = "unstable at t = 0.008 s"
+    fig = gpi_figure(gpi)
+    marked = [line for line in fig.axes[0].lines if line.get_label() == "run not ok (unstable)"]
+    assert len(marked) == 1 and list(marked[0].get_xdata()) == [gpi["sigma_s"].iloc[2]]
