@@ -93,3 +93,9 @@ def test_a_network_bit_rate_field_takes_the_same_prefixes():
     assert TypeAdapter(Bitrate).validate_python("1 Mbit/s") == 1e6
     with pytest.raises(ValueError, match="kbit/s"):
         TypeAdapter(Bitrate).validate_python("1 Mbyte/s")
+
+
+def test_a_power_in_dbm_is_not_a_power_field_s_unit():
+    # dBm is a log scale: the wireless networks' *_dbm fields stay plain numbers; a power field refuses it
+    with pytest.raises(ValueError, match="unknown power unit 'dBm'"):
+        parse_quantity("0 dBm", POWER)
