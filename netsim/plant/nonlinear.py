@@ -1,4 +1,5 @@
-"""Nonlinear plants integrated by :func:`scipy.integrate.solve_ivp` between events, with mode switching.
+"""Nonlinear plants integrated between events (by :func:`scipy.integrate.solve_ivp`, or by fixed-step RK4: see
+:mod:`netsim.plant.integrator`), with mode switching.
 
 ``f(t, x, u, params) -> dx/dt`` and ``h(t, x, u, params) -> y`` use python-control's vocabulary (``t`` in
 seconds). Between two events the plant is integrated from its current state; inputs are held.
@@ -29,6 +30,7 @@ from scipy.integrate import solve_ivp
 from netsim.errors import ConfigError, SimulationError
 from netsim.plant.base import Plant
 from netsim.plant.disturbance import _Source
+from netsim.plant.integrator import Rk4Buffers, hermite, rk4_steps, steps_for
 from netsim.plant.shared import NEVER, _vector
 from netsim.timebase import S
 
@@ -38,6 +40,16 @@ Fn = Callable[[float, np.ndarray, np.ndarray, Any], Any]
 
 #: Mode switches allowed at one instant before the plant reports Zeno behaviour.
 MAX_SWITCHES_PER_INSTANT = 20
+
+
+class _SwitchCount:
+    """Mode switches at one instant so far (Zeno detection of :meth:`NonlinearPlant._guard_fired`)."""
+
+    __slots__ = ("here", "last_t")
+
+    def __init__(self) -> None:
+        self.here = 0
+        self.last_t: float | None = None
 
 
 @dataclass(frozen=True)
@@ -158,7 +170,9 @@ class NonlinearPlant(Plant):
         every restart (input change, disturbance jump, guard crossing) and may return ``name`` or
         ``(name, x)``.
     method, rtol, atol, max_step
-        solve_ivp settings (defaults RK45, 1e-8, 1e-10, unbounded).
+        solve_ivp settings (defaults RK45, 1e-8, 1e-10, unbounded, ``max_step`` in seconds); ``method="rk4"``
+        integrates with fixed RK4 steps of at most ``max_step`` instead (required then; see
+        :meth:`set_integrator`).
     """
 
     def __init__(
@@ -204,13 +218,58 @@ class NonlinearPlant(Plant):
         self.mode = initial_mode if initial_mode is not None else next(iter(self.modes))
         if self.mode not in self.modes:
             raise ConfigError(f"plant {name}: initial_mode {self.mode!r} is not one of {list(self.modes)}")
-        self.method, self.rtol, self.atol = method, float(rtol), float(atol)
-        self.max_step = math.inf if max_step is None else float(max_step)
+        self.method, self.rtol, self.atol = "RK45", 1e-8, 1e-10
+        self.max_step = math.inf
+        self._rk4_ns: int | None = None  # the largest RK4 step (ns) when integrating with RK4
+        self._rk4_buf = Rk4Buffers(self.n_states)
+        if method.lower() == "rk4":
+            self.set_integrator("rk4", max_step=max_step)
+        else:
+            self.set_integrator("solve_ivp", solver=method, rtol=rtol, atol=atol, max_step=max_step)
         self.rhs_evaluations = 0
         self.mode_switches = 0
         self._ueff = np.zeros(self.n_inputs)
         self._rate: np.ndarray | None = None  # held state-noise rates (netsim.plant.noise), if any
         self._check_output(self._x)
+
+    def set_integrator(self, method: str = "solve_ivp", *, max_step: float | None = None, solver: str | None = None,
+                       rtol: float | None = None, atol: float | None = None) -> None:
+        """Choose how the plant is integrated between events (``plant.integrator`` in a scenario).
+
+        Parameters
+        ----------
+        method
+            ``"solve_ivp"`` (:func:`scipy.integrate.solve_ivp`, one call per segment) or ``"rk4"`` (classical
+            Runge-Kutta in fixed steps, :mod:`netsim.plant.integrator`).
+        max_step
+            Seconds. RK4: the largest step (required; at least 1 ns). solve_ivp: a bound on its step (default
+            unbounded).
+        solver, rtol, atol
+            solve_ivp's method name and tolerances (defaults RK45, 1e-8, 1e-10); not taken with RK4.
+        """
+        if self._started:
+            raise ConfigError(f"plant {self.name}: choose the integrator before the simulation starts")
+        if method == "rk4":
+            if max_step is None or not (max_step > 0 and math.isfinite(max_step)):
+                raise ConfigError(f"plant {self.name}: integrator rk4 needs a finite positive max_step, got {max_step}")
+            if solver is not None or rtol is not None or atol is not None:
+                raise ConfigError(f"plant {self.name}: solver, rtol and atol apply to solve_ivp only, not to rk4")
+            step_ns = int(round(max_step * S))
+            if step_ns < 1:
+                raise ConfigError(f"plant {self.name}: integrator rk4 max_step {max_step} s is below 1 ns")
+            self._rk4_ns, self.max_step = step_ns, step_ns / S
+            self.method = "rk4"
+            return
+        if method != "solve_ivp":
+            raise ConfigError(f"plant {self.name}: integrator method must be 'solve_ivp' or 'rk4', got {method!r}")
+        rtol = self.rtol if rtol is None else float(rtol)
+        atol = self.atol if atol is None else float(atol)
+        if not (rtol > 0 and atol > 0):
+            raise ConfigError(f"plant {self.name}: solve_ivp tolerances must be positive, got rtol {rtol}, atol {atol}")
+        self._rk4_ns = None
+        self.method = "RK45" if solver is None else str(solver)
+        self.rtol, self.atol = rtol, atol
+        self.max_step = math.inf if max_step is None else float(max_step)
 
     def _check_output(self, x: np.ndarray) -> None:
         y = np.atleast_1d(np.asarray(self.h(0.0, x, np.zeros(self.n_inputs), self.params), dtype=float))
@@ -280,8 +339,10 @@ class NonlinearPlant(Plant):
 
         Returns ``(t_reached, x, mode, stopped_by_extra)``.
         """
+        if self._rk4_ns is not None:
+            return self._integrate_rk4(t0, t1, x, mode, u_of, extra)
         t = t0
-        switches_here, last_switch_t = 0, None
+        zeno = _SwitchCount()
         params = self.params
         rate = self._rate
         while t < t1:
@@ -324,27 +385,133 @@ class NonlinearPlant(Plant):
             x = np.asarray(sol.y_events[i][0], dtype=float)
             if i >= len(m.guards):
                 return t_new, x, mode, True
-            if last_switch_t is not None and t_new - last_switch_t <= 1e-12 * max(1.0, abs(t_new)):
-                switches_here += 1
-                if switches_here > MAX_SWITCHES_PER_INSTANT:
-                    raise SimulationError(
-                        f"plant {self.name}: modes switch endlessly at t = {t_new:.9g} s (Zeno behaviour); "
-                        "check the guards and select_mode"
-                    )
-            else:
-                switches_here = 0
-            last_switch_t = t_new
-            if self.select_mode is not None:
-                choice = self.select_mode(t_new, x, u_of(t_new), params)
-                new, x = (choice, x) if isinstance(choice, str) else choice
-                x = np.asarray(x, dtype=float)
-                if new not in self.modes:
-                    raise SimulationError(f"plant {self.name}: select_mode returned unknown mode {new!r}")
-                if new != mode:
-                    self.mode_switches += 1
-                mode = new
+            mode, x = self._guard_fired(t_new, x, mode, u_of, zeno)
             t = t_new
         return t1, x, mode, False
+
+    def _guard_fired(
+        self, t_new: float, x: np.ndarray, mode: str, u_of: Callable[[float], np.ndarray], zeno: "_SwitchCount"
+    ) -> tuple[str, np.ndarray]:
+        """The mode (and state) after a mode guard fired at ``t_new``; refuses endless switching at one instant."""
+        if zeno.last_t is not None and t_new - zeno.last_t <= 1e-12 * max(1.0, abs(t_new)):
+            zeno.here += 1
+            if zeno.here > MAX_SWITCHES_PER_INSTANT:
+                raise SimulationError(
+                    f"plant {self.name}: modes switch endlessly at t = {t_new:.9g} s (Zeno behaviour); "
+                    "check the guards and select_mode"
+                )
+        else:
+            zeno.here = 0
+        zeno.last_t = t_new
+        if self.select_mode is not None:
+            choice = self.select_mode(t_new, x, u_of(t_new), self.params)
+            new, x = (choice, x) if isinstance(choice, str) else choice
+            x = np.asarray(x, dtype=float)
+            if new not in self.modes:
+                raise SimulationError(f"plant {self.name}: select_mode returned unknown mode {new!r}")
+            if new != mode:
+                self.mode_switches += 1
+            mode = new
+        return mode, x
+
+    def _integrate_rk4(
+        self,
+        t0: float,
+        t1: float,
+        x: np.ndarray,
+        mode: str,
+        u_of: Callable[[float], np.ndarray],
+        extra: Sequence[Guard] = (),
+    ) -> tuple[float, np.ndarray, str, bool]:
+        """:meth:`_integrate` by fixed RK4 steps of at most ``self._rk4_ns``: each stretch between mode switches
+        is cut into equal steps; a guard that changes sign over a step is located on the step's cubic Hermite
+        interpolant (:func:`netsim.plant.integrator.hermite`) by bisection to 1 ns."""
+        params, rate, buf, max_ns = self.params, self._rate, self._rk4_buf, self._rk4_ns
+        assert max_ns is not None
+        x = np.asarray(x, dtype=float)
+        t = t0
+        zeno = _SwitchCount()
+        while t < t1:
+            m = self.modes[mode]
+            f = m.f or self.f
+            if rate is None:
+                def rhs(tt: float, xx: np.ndarray, f: Fn = f) -> Any:
+                    return f(tt, xx, u_of(tt), params)
+            else:
+                def rhs(tt: float, xx: np.ndarray, f: Fn = f) -> Any:
+                    return np.asarray(f(tt, xx, u_of(tt), params), dtype=float) + rate  # held state noise rates
+
+            guards = m.guards + tuple(extra)
+            n = steps_for(int(round((t1 - t) * S)), max_ns)
+            h = (t1 - t) / n
+            if not guards:
+                x = self._rk4(rhs, t, x, h, n, t1)
+                return t1, x, mode, False
+            g_prev = [float(g.fn(t, x, u_of(t), params)) for g in guards]
+            hit = None
+            for i in range(n):
+                ta = t + i * h
+                tb = t1 if i == n - 1 else t + (i + 1) * h
+                xb = self._rk4(rhs, ta, x, tb - ta, 1, tb)
+                g_new = [float(g.fn(tb, xb, u_of(tb), params)) for g in guards]
+                hit = self._first_crossing(rhs, guards, g_prev, g_new, ta, x, tb, xb, u_of)
+                if hit is not None:
+                    break
+                x, g_prev = xb, g_new
+            if hit is None:
+                return t1, x, mode, False
+            t_new, x, j = hit
+            if j >= len(m.guards):
+                return t_new, x, mode, True
+            mode, x = self._guard_fired(t_new, x, mode, u_of, zeno)
+            t = t_new
+        return t1, x, mode, False
+
+    def _rk4(self, rhs: Callable[[float, np.ndarray], Any], t: float, x: np.ndarray, h: float, n: int,
+             t_end: float) -> np.ndarray:
+        """``n`` RK4 steps of ``h`` from ``(t, x)``, with the divergence check at ``t_end``."""
+        try:
+            x = rk4_steps(rhs, t, x, h, n, self._rk4_buf)
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+            raise SimulationError(f"plant {self.name}: integrator failed at t = {t:.12g} s: {exc}") from exc
+        self.rhs_evaluations += 4 * n
+        if not (x @ x <= self._bound2):
+            self._diverged(int(round(t_end * S)), x)
+        return x
+
+    def _first_crossing(
+        self, rhs: Callable[[float, np.ndarray], Any], guards: Sequence[Guard], g_prev: list[float],
+        g_new: list[float], ta: float, xa: np.ndarray, tb: float, xb: np.ndarray, u_of: Callable[[float], np.ndarray],
+    ) -> tuple[float, np.ndarray, int] | None:
+        """The earliest guard crossing over the step ``[ta, tb]`` as ``(t, x, guard index)``, or None.
+
+        A guard crosses when it leaves a strictly positive (negative) value for a non-positive (non-negative)
+        one in its ``direction``; the instant is bisected on the Hermite interpolant to 1 ns and the state there
+        (just past the crossing) returned."""
+        fired = [j for j, (g0, g1) in enumerate(zip(g_prev, g_new))
+                 if (guards[j].direction >= 0 and g0 < 0 <= g1) or (guards[j].direction <= 0 and g0 > 0 >= g1)]
+        if not fired:
+            return None
+        h = tb - ta
+        f0 = np.array(rhs(ta, xa), dtype=float)
+        f1 = np.array(rhs(tb, xb), dtype=float)
+        self.rhs_evaluations += 2
+        params = self.params
+        best: tuple[float, np.ndarray, int] | None = None
+        for j in fired:
+            g, lo, hi = guards[j].fn, 0.0, 1.0
+            side = g_prev[j] > 0
+            while (hi - lo) * h > 1e-9:
+                mid = 0.5 * (lo + hi)
+                tm = ta + mid * h
+                if (float(g(tm, hermite(xa, f0, xb, f1, h, mid), u_of(tm), params)) > 0) == side:
+                    lo = mid
+                else:
+                    hi = mid
+            te = tb if hi >= 1.0 else ta + hi * h
+            if best is None or te < best[0]:
+                best = (te, xb.copy() if hi >= 1.0 else hermite(xa, f0, xb, f1, h, hi), j)
+        return best
 
     def _step(self, t: int) -> bool:
         _, x, mode, _ = self._integrate(self._t / S, t / S, self._x, self.mode, self._input_fn(self._ueff))

@@ -186,6 +186,8 @@ def _build_plant(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> Any:
     plant = make_plant(spec.model, spec.plugin(), spec.validated_params())
     if spec.process_noise is not None:
         checked_call(_set_process_noise, "plant.process_noise", plant, spec.process_noise)
+    if spec.integrator is not None:
+        checked_call(_set_integrator, "plant.integrator", plant, spec.integrator)
     for port, sig_name in spec.disturbances.items():
         checked_call(plant.add_disturbance, f"plant.disturbances.{port}", port, signals[sig_name])
     record_events = scenario.record is None or any(
@@ -195,6 +197,15 @@ def _build_plant(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> Any:
     if spec.x0 is not None:
         checked_call(plant.set_state, "plant.x0", np.asarray(spec.x0, dtype=float), 0)
     return plant
+
+
+def _set_integrator(plant: Any, spec: Any) -> None:
+    fn = getattr(plant, "set_integrator", None)
+    if callable(fn):
+        fn(**spec.plant_kwargs())
+        return
+    raise BuildError(f"this plant ({type(plant).__name__}) has no integrator to choose (LTI and discrete plants are "
+                     "propagated exactly); remove 'integrator'", path="plant.integrator")
 
 
 def _set_process_noise(plant: Any, noise: Any) -> None:

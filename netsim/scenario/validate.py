@@ -236,7 +236,7 @@ class _Checker:
             return None, None
         if "type" in plant:  # a described plant (type: ss, tf, ...): its parameters are inline, at plant.<field>
             factory = self.lookup("plant", plant.get("type"), ["plant", "type"])
-            fixed = ("type", "model", "params", "x0", "disturbances", "record_grid", "process_noise")
+            fixed = ("type", "model", "params", "x0", "disturbances", "record_grid", "process_noise", "integrator")
             raw = {k: v for k, v in plant.items() if k not in fixed}
             if isinstance(plant.get("params"), dict):
                 raw = {**plant["params"], **raw}
