@@ -8,8 +8,8 @@ One cycle of length ``cycle`` repeats from time 0::
 Static segment
     ``static_schedule`` lists the owner of each static slot (slot ``i + 1`` is frame ID ``i + 1``; ``null``: a
     free slot). At the start of each slot it owns, a node sends the head of its sender queue, if any, frames
-    queued at that very instant included; one frame per slot, which must fit in the slot (a longer frame is
-    refused when it is sent). A frame queued just after its owner's slot started waits a whole cycle.
+    queued at that very instant included; one frame per slot, which must fit in the slot: ``min_frame_bits`` and
+    ``max_frame_bits`` longer than a slot are refused with the parameters, a longer message when it is sent. A frame queued just after its owner's slot started waits a whole cycle.
 Dynamic segment
     The frame IDs continue after the static slots: ``dynamic_ids`` gives each node that sends there its ID
     (``N + 1`` to ``N + M``). The IDs take their turns in increasing order (lower ID first: the priority), each
@@ -36,7 +36,7 @@ from netsim.errors import ConfigError
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Frame, Network
 from netsim.network.stats import BusyMeter
-from netsim.network.timing import call_later
+from netsim.network.timing import call_later, tx_time_ns
 from netsim.registry import register
 from netsim.timebase import format_time
 from netsim.units import Duration
@@ -62,6 +62,21 @@ class FlexRayBus(Network):
                                               "+ 1 to + minislots; a lower ID goes first)")
         cycle: Duration = Field(description="communication cycle: static segment + dynamic segment + network idle "
                                             "time ('5 ms')")
+
+        @field_validator("static_slot")
+        @classmethod
+        def _check_slot(cls, value: int | None, info: ValidationInfo) -> int | None:
+            d = info.data
+            if value is None or "bitrate" not in d:
+                return value
+            for field in ("min_frame_bits", "max_frame_bits"):  # every frame is at least min, at most max bits
+                bits = d.get(field)
+                if bits and tx_time_ns(bits, d["bitrate"]) > value:
+                    raise ValueError(
+                        f"a frame of {field} = {bits} bits takes {format_time(tx_time_ns(bits, d['bitrate']))} at "
+                        f"{d['bitrate']:g} bit/s, longer than a static slot ({format_time(value)}); lengthen "
+                        f"static_slot or lower {field}")
+            return value
 
         @field_validator("static_schedule")
         @classmethod

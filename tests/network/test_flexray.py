@@ -202,3 +202,12 @@ def test_a_node_with_a_static_slot_and_a_dynamic_id_sends_at_its_first_turn(benc
     # one empty minislot: 500 + 1 x 5 = 505 us, 20 us on the bus
     assert b.record("first").delivered_ns == 20 * US
     assert b.record("second").delivered_ns == 525 * US
+
+
+def test_a_minimum_or_maximum_frame_longer_than_a_static_slot_is_refused_at_static_slot():
+    # 10 Mbit/s: 600 bits take 60 us, longer than the 50 us slot
+    for field in ("min_frame_bits", "max_frame_bits"):
+        errs = _errors(_scenario(**{field: 600}))
+        assert [p for p, _ in errs] == ["networks.bus.static_slot"], errs
+        assert f"{field} = 600 bits takes 60 us" in errs[0][1]
+    assert _errors(_scenario(max_frame_bits=500)) == []  # 50 us: fits exactly
