@@ -383,6 +383,11 @@ class WirelessMedium(Network):
             a, b = self._pos[sender], self._pos[receiver]
             dbm = self._path_loss.received_dbm(self.params.transmit_power_dbm,  # type: ignore[attr-defined]
                                                math.hypot(a[0] - b[0], a[1] - b[1]), sender, receiver, (a, b))
+            if not isinstance(dbm, (int, float)) or not math.isfinite(dbm) or dbm > 1000:
+                name = (self.params.path_loss or {}).get("type", "exponent")  # type: ignore[attr-defined]
+                raise ConfigError(f"network '{self.name}': the path-loss model '{name}' gave {dbm!r} dBm from "
+                                  f"'{sender}' to '{receiver}'; it must return a finite power in dBm: fix the model",
+                                  path=f"networks.{self.name}.path_loss")
             g = self._gain[(sender, receiver)] = _mw(dbm)
         return g
 

@@ -140,3 +140,16 @@ def test_a_scenario_naming_a_path_loss_plugin_is_refused_without_permission(tmp_
 def test_the_same_scenario_is_valid_with_permission(tmp_path):
     path = _scenario_file(tmp_path)
     assert [p.message for p in check_scenario(path, allow_plugins=True) if p.severity == "error"] == []
+
+
+@register("path_loss", "test_nan_loss", "test double: a broken model")
+class NanLoss(PathLoss):
+    def loss_db(self, distance_m: float) -> float:
+        return float("nan")
+
+
+def test_a_model_that_returns_no_finite_power_is_reported_with_its_name(bench):
+    b = bench("802.15.4", {**RADIO, "path_loss": {"type": "test_nan_loss"}})
+    b.send_at(0, "a", None, 64)
+    with pytest.raises(ConfigError, match="path-loss model 'test_nan_loss' gave nan dBm from 'a' to"):
+        b.run(10 * MS)
