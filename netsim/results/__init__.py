@@ -31,6 +31,10 @@ Run folder layout (see :meth:`RunResult.to_csv`): ``scenario.yaml``, ``signals.c
 stable column order, so the same scenario and seed give byte-identical files. A scenario's ``output: {jobs:
 summary}`` (``messages: summary``) writes ``jobs_summary.csv`` (``messages_summary.csv``) instead of the rows;
 ``off`` writes neither (:mod:`netsim.results.traces`).
+
+Why this module is long: :class:`RunResult` is the public result class, and about half of the module is its
+methods' numpydoc docstrings (typed parameters, returns and a runnable example each, issue 27); the code the
+tables are built with lives in :mod:`netsim.results.tables`, ``files``, ``rows`` and ``signals``.
 """
 
 from __future__ import annotations
