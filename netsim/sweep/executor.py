@@ -252,10 +252,28 @@ class SerialExecutor(Executor):
         return fut
 
 
-def _init_worker() -> None:
+def _die_with(parent: int) -> None:
+    """Linux: this process gets SIGKILL when its parent dies (``PR_SET_PDEATHSIG``). A sweep killed outright
+    (SIGKILL, the OOM killer) would otherwise leave its pool workers waiting forever for work, holding the output
+    folder's lock (:mod:`netsim.sweep.run`); a point they had in hand is left unfinished (no manifest) and rerun."""
+    if not sys.platform.startswith("linux"):
+        return
+    with contextlib.suppress(Exception):
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
+        if os.getppid() != parent:  # the parent died before the line above
+            os._exit(1)
+
+
+def _init_worker(parent: int | None = None) -> None:
     """Pool worker start: single-threaded BLAS, ignore Ctrl-C (the parent stops the sweep cleanly), and die at
     SIGTERM (the handler the forked worker inherits from the CLI would turn it into an interrupted run that
-    writes its folder and goes on with its chunk: the parent's stop would wait for that)."""
+    writes its folder and goes on with its chunk: the parent's stop would wait for that), and with ``parent``
+    (:func:`_die_with`)."""
+    if parent is not None:
+        _die_with(parent)
     os.environ.update(_SINGLE_THREAD_ENV)
     os.environ.setdefault("MPLBACKEND", "Agg")
     with contextlib.suppress(ImportError):
@@ -379,7 +397,7 @@ def open_executor(
     import multiprocessing
 
     ctx = multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
-    pool = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init_worker)
+    pool = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(),))
     try:
         yield pool, n, f"process pool ({n} workers)"
     except BaseException:  # Ctrl-C / SIGTERM: the runs in flight are lost anyway, do not wait for them to end

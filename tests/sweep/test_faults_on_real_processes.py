@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import re
 import shutil
 import signal
 import subprocess
@@ -226,6 +227,8 @@ def test_ten_sweeps_into_one_folder_at_once_do_not_corrupt_it(files, tmp_path) -
     for text in refused:  # a refusal names the folder and the process writing it, no traceback
         assert "is being written by another sweep (process " in text and "Traceback" not in text, text
     assert (out / "summary.csv").read_bytes() == (reference / "summary.csv").read_bytes()
+    executed = [int(m) for _, text, err in results for m in re.findall(r"(\d+) executed", text + err)]
+    assert sum(executed) == 16  # each point ran once: no two sweeps wrote the same point folder at once
     again = netsim(tmp_path, *_sweep_args(sweep, out))
     assert again.returncode == 0 and "(16 resumed, 0 executed" in again.stdout + again.stderr
     FAULTS.append(("10 sweeps of one file into one folder at once", 10, f"nothing ({len(refused)} refused)"))
