@@ -11,9 +11,10 @@ files, for editors with a YAML language server (completion and errors while typi
 
 from __future__ import annotations
 
-from typing import Any, Union, get_args, get_origin
+from typing import Any, get_args
 
 from netsim.cli.file_schema import json_schema
+from netsim.cli.model_fields import models_in as _models_in
 
 __all__ = ["scenario_reference", "json_schema", "KIND_TITLES"]
 
@@ -30,25 +31,6 @@ KIND_TITLES: dict[str, tuple[str, str]] = {
     "path_loss": ("Path-loss models", "networks.<net>.path_loss: {type: NAME, ...} (radio networks)"),
     "report": ("Reports", "netsim report NAME"),
 }
-
-
-def _models_in(tp: Any) -> list[tuple[str, type]]:
-    """``(suffix, model)`` for the pydantic models a container field holds: ``.<name>`` for dict values,
-    ``[]`` for list items; a union gives each member."""
-    from pydantic import BaseModel
-
-    origin = get_origin(tp)
-    if origin is dict:
-        return [(".<name>" + s, m) for s, m in _models_in(get_args(tp)[1])]
-    if origin is list:
-        return [("[]" + s, m) for s, m in _models_in(get_args(tp)[0])]
-    if origin is Union or type(tp).__name__ == "UnionType":
-        return [pair for arg in get_args(tp) if arg is not type(None) for pair in _models_in(arg)]
-    if get_origin(tp) is not None and hasattr(tp, "__metadata__"):  # Annotated[...]
-        return _models_in(get_args(tp)[0])
-    if isinstance(tp, type) and issubclass(tp, BaseModel):
-        return [("", tp)]
-    return []
 
 
 def _type_tag(model: type) -> str:

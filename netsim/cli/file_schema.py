@@ -50,7 +50,7 @@ _PATH_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.]*:[A-Za-z_][A-Za-z0-9_.]*$"
 
 def _reachable_models(roots: list[type]) -> list[type]:
     """The pydantic models reachable from ``roots`` through field annotations (dict, list, union, nested)."""
-    from netsim.cli.docs import _models_in
+    from netsim.cli.model_fields import models_in as _models_in
 
     out: list[type] = []
     todo = list(roots)
