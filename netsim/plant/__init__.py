@@ -10,8 +10,9 @@ Three plant types share the :class:`Plant` interface:
     continuous LTI, propagated exactly (one matrix exponential per distinct step length, cached), process
     noise with the exact (Van Loan) discrete covariance.
 :class:`~netsim.plant.nonlinear.NonlinearPlant`
-    ``f(t, x, u, params)``, ``h(t, x, u, params)`` integrated by :func:`scipy.integrate.solve_ivp`, with
-    event-detected mode switches for state-dependent discontinuities (stick-slip friction).
+    ``f(t, x, u, params)``, ``h(t, x, u, params)`` integrated by :func:`scipy.integrate.solve_ivp` (or, chosen by
+    ``plant.integrator``, by fixed-step RK4: :mod:`netsim.plant.integrator`), with event-detected mode switches
+    for state-dependent discontinuities (stick-slip friction).
 :class:`~netsim.plant.discrete.DiscretePlant`
     ``x[k+1] = Ad x[k] + Bd u[k]`` updated at multiples of ``dt_ns``, outputs held in between.
 
@@ -40,7 +41,7 @@ noise enters as a jump at the step instant), a stochastic disturbance update. Ex
 Modules
 -------
 ``base`` (:class:`Plant`, the lazy-advance machinery), ``lti`` (:class:`LTIPlant`), ``discrete`` (:class:`DiscretePlant`),
-``nonlinear`` (:class:`NonlinearPlant`, :class:`Mode`, :class:`Guard`), ``disturbance`` (:class:`LTIDisturbance`
+``nonlinear`` (:class:`NonlinearPlant`, :class:`Mode`, :class:`Guard`), ``integrator`` (the RK4 steps and their interpolant), ``disturbance`` (:class:`LTIDisturbance`
 and the classification of disturbances), ``noise`` (:class:`~netsim.plant.noise.HeldNoise`, the ``process_noise``
 entries), ``shared`` (matrix validation helpers, ``NEVER``). The concrete plants
 are imported on first use (``scipy.integrate`` is not needed to build an LTI plant).

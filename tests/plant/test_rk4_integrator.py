@@ -11,7 +11,9 @@ import pytest
 from scipy.linalg import expm
 
 import netsim
+from netsim.env import SimEnv
 from netsim.errors import ConfigError
+from netsim.io import Encoder
 from netsim.plant import NonlinearPlant
 from netsim.plant.nonlinear import stick_slip_modes
 from netsim.scenario import check_scenario
@@ -114,6 +116,31 @@ def test_rk4_cart_sticks_where_the_guard_crosses_on_the_interpolant():
     assert plant.mode == "slip+"
     assert x[1] == pytest.approx(0.3, rel=1e-12)
     assert x[0] == pytest.approx(0.09 / 2.2 + 0.15, rel=1e-8)
+
+
+def _encoder_edges(mode: str, integrator: dict) -> list:
+    """Edges of an encoder (512 counts per turn, 20 us ticks) on a swinging undamped pendulum over 0.5 s."""
+    env = SimEnv(seed=0)
+
+    def f(t, x, u, p):
+        return np.array([x[1], -9.81 * math.sin(x[0])])
+
+    plant = NonlinearPlant(f, lambda t, x, u, p: x[:1], 2, 1, 1, x0=[1.0001, 0.0], **integrator)
+    plant.bind(env)
+    edges: list = []
+    Encoder(plant, 0, step=2 * math.pi / 512, tick_ns=20 * US, mode=mode).start(env, lambda *e: edges.append(e))
+    env.run(S // 2)
+    return edges
+
+
+def test_exact_encoder_on_an_rk4_plant_reports_the_polled_edges():
+    # the exact encoder predicts band crossings on the RK4 steps' Hermite interpolant; polling reads the plant
+    # at every tick; both must give the edges solve_ivp (rtol 1e-8) gives
+    rk4 = {"method": "rk4", "max_step": 1e-3}
+    exact = _encoder_edges("exact", rk4)
+    assert len(exact) > 50
+    assert exact == _encoder_edges("polling", rk4)
+    assert exact == _encoder_edges("exact", {})
 
 
 # ------------------------------------------------------------------------------------------------- the pendulum
