@@ -164,6 +164,13 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
         t_end = sim.env.now
         status, error = f"interrupted at t = {t_end / S:.9g} s", "interrupted by the user (Ctrl-C or SIGTERM)"
         failure = exc
+    except MemoryError:  # the records are dropped so the folder can be written; one line with the fix (issue 31)
+        from netsim.scenario.memory import out_of_memory, release
+
+        release(sim)
+        t_end = sim.env.now
+        failure = out_of_memory(t_end)
+        status, error = "error", str(failure)
     except Exception as exc:  # noqa: BLE001 - recorded, then re-raised by run()
         t_end = sim.env.now
         status, error = "error", f"{type(exc).__name__}: {exc}"

@@ -106,6 +106,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         _err(f"cannot write {where}: {exc.strerror or exc}")
         _partial_folder(exc)
         return EXIT_FAILED
+    except MemoryError as exc:  # outside the event loop (which ends as a SimulationError): one line, the fix
+        from netsim.scenario.memory import out_of_memory
+
+        _err(str(out_of_memory()))
+        _partial_folder(exc)
+        return EXIT_FAILED
     except Exception as exc:  # a bug: the traceback is wanted, and where the partial results are
         _partial_folder(exc)
         raise

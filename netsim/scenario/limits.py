@@ -15,6 +15,8 @@ What is checked
 - A task with neither ``period`` nor ``release`` (nor ``min_interarrival``) is refused: a deleted ``period``
   used to leave an aperiodic task that never runs while the run said ``ok``. A task released only by a
   plugin's program or a trigger says so with ``release: aperiodic``.
+- The memory the run would keep (recorded samples, jobs and messages rows) above the memory budget is an error
+  (:mod:`netsim.scenario.memory`).
 - The expected number of events (:func:`expected_events`: ``duration / period`` summed over periodic tasks,
   timer handlers, polling encoders and the plant's ``record_grid``) above :data:`EVENTS_WARN` is a warning
   with the estimate.
@@ -34,6 +36,7 @@ import math
 import re
 from typing import Any, Callable, Final, Iterator
 
+from netsim.scenario.memory import memory_problem
 from netsim.scenario.paths import PathPart, format_path
 from netsim.scenario.problems import WARNING, Problem
 from netsim.scenario.safe_yaml import long_integer_placeholder  # what the loader reads for a 5000-digit integer
@@ -258,5 +261,8 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[P
         problems.append(Problem("duration", f"this run simulates at least {total:.3g} events (duration / period "
                                             f"summed: {top}); it may take very long: shorten 'duration' or lengthen "
                                             "those periods if that was not meant", severity=WARNING))
+    memory = memory_problem(raw)  # what the run would keep in memory, against the budget (issue 31)
+    if memory is not None:
+        problems.append(memory)
     return problems
 

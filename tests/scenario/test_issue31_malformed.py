@@ -265,3 +265,58 @@ def test_a_sweep_level_shadowed_by_the_base_s_own_values_is_refused(tmp_path: Pa
     assert errors and all(p.line == 4 for p in errors)
     assert "point (friction='modes6'" in errors[0].path and "wavelength" in errors[0].message
     assert "shadowed" in errors[0].message
+
+
+# ------------------------------------------------------------------------------------- memory: budget, MemoryError
+_HOG = """name: hog
+duration: {duration}
+nodes:
+  cpu:
+    policy: rm
+    tasks:
+      - {{name: a, program: idle, period: 10 us, execution: 1 us}}
+      - {{name: b, program: idle, period: 10 us, execution: 1 us}}
+"""
+
+
+def _limited_run(tmp_path: Path, duration: str, address_space_mib: int, budget: str | None,
+                 timeout: float) -> subprocess.CompletedProcess[str]:
+    """``netsim run`` of two 10 us idle tasks (jobs rows kept in full) under ``ulimit -v``."""
+    import resource
+
+    def limit() -> None:
+        size = address_space_mib * 2**20
+        resource.setrlimit(resource.RLIMIT_AS, (size, size))
+
+    f = tmp_path / "hog.yaml"
+    f.write_text(_HOG.format(duration=duration))
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    env.pop("NETSIM_MEMORY_BUDGET", None)
+    if budget is not None:
+        env["NETSIM_MEMORY_BUDGET"] = budget
+    return subprocess.run([sys.executable, "-m", "netsim", "run", str(f), "--out", str(tmp_path / "out")],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=timeout, env=env, preexec_fn=limit)
+
+
+def test_a_run_whose_estimated_memory_exceeds_the_budget_is_refused_before_it_starts(tmp_path: Path) -> None:
+    """1000 s of two 10 us tasks: 2e8 jobs rows (at least 100 GB at 600 B each, the measured order), far beyond
+    half of a 600 MiB address space. Before: the run started and ended in a MemoryError traceback."""
+    done = _limited_run(tmp_path, "1000 s", 600, None, timeout=60)
+    assert done.returncode != 0 and "Traceback" not in done.stderr, done.stderr[-2000:]
+    (line,) = [t for t in done.stderr.splitlines() if "in memory" in t]
+    assert "hog.yaml:2: duration:" in line and "ulimit -v" in line and "output: {jobs: summary" in line
+    assert "NETSIM_MEMORY_BUDGET" in line
+    assert not (tmp_path / "out" / "meta.json").exists()  # refused before anything ran
+
+
+@pytest.mark.slow
+def test_a_run_out_of_memory_ends_in_one_line_and_marks_its_folder_failed(tmp_path: Path) -> None:
+    """The budget lifted (0: no limit), a 480 MiB address space runs out after about 3 s simulated (~20 s here)."""
+    import json
+
+    done = _limited_run(tmp_path, "100 s", 480, "0", timeout=300)
+    assert done.returncode != 0 and "Traceback" not in done.stderr, done.stderr[-2000:]
+    errors = [t for t in done.stderr.splitlines() if t.startswith("netsim: error:")]
+    assert len(errors) == 1 and "out of memory" in errors[0] and "output: {jobs: summary" in errors[0], done.stderr
+    meta = json.loads((tmp_path / "out" / "meta.json").read_text())
+    assert meta["status"] == "error" and meta["error"].startswith("out of memory at t = ")

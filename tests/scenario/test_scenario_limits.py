@@ -165,7 +165,8 @@ def test_check_raw_gives_the_line_of_the_first_definition_when_it_can(base):
         "handler names must be unique per node: rename one"]
 
 
-def test_expected_event_count_warns_with_the_estimate(base):
+def test_expected_event_count_warns_with_the_estimate(base, monkeypatch):
+    monkeypatch.setenv("NETSIM_MEMORY_BUDGET", "0")  # no memory budget: 1e8 job rows kept would be refused (issue 31)
     raw = base()
     raw["duration"] = "1000 s"
     raw["nodes"]["sensor"]["tasks"][0]["period"] = "10 us"
