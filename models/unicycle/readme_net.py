@@ -10,7 +10,11 @@ Every number goes through the :class:`~models.unicycle.quoting.Quotes`.
 
 from __future__ import annotations
 
+import ast
+import json
 import math
+import re
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -19,10 +23,15 @@ from models.unicycle.model import TS
 from models.unicycle.quoting import Quotes
 
 __all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference", "delay_aware_section",
-           "delay_aware_frame", "GROWTH", "LOST_E3", "DELAY_AWARE_MARK"]
+           "delay_aware_frame", "GROWTH", "LOST_E3", "DELAY_AWARE_MARK", "RADIO_MC_MARK", "radio_mc_section",
+           "splice_radio_mc", "loss_params"]
 
 #: The README lines of the delay-aware study sit between these (``netsim report unicycle_delay_aware`` splices them).
 DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report unicycle_delay_aware -->", "<!-- /delay-aware -->")
+#: The radio Monte-Carlo study's README lines sit between these (``netsim report unicycle_radio_mc`` splices them).
+RADIO_MC_MARK = ("<!-- radio-mc: netsim report unicycle_radio_mc -->", "<!-- /radio-mc -->")
+#: Where that study's lines stood in a README written before the markers: its first and last line begin so.
+RADIO_MC_LEGACY = ("802.15.4 radio (`unicycle_radio_mc.yaml`", "- Loss")
 
 #: A delay "degrades" the loop when the mean RMS longitudinal error e1 reaches this multiple of the no-delay one.
 GROWTH = 3.0
@@ -45,13 +54,15 @@ def _tol(d: Any, col: str) -> float:
     return 1.96 * float(d[col].std(ddof=1)) / math.sqrt(len(d)) if len(d) > 1 else float("nan")
 
 
-def mean_difference(q: Quotes, x: Any, y: Any) -> tuple[str, bool]:
-    """``mean(x) - mean(y) +- 2 SE`` as quoted text (rad), and whether it exceeds two standard errors."""
+def mean_difference(q: Quotes, x: Any, y: Any, key: str | None = None) -> tuple[str, bool]:
+    """``mean(x) - mean(y) +- 2 SE`` as quoted text (rad), and whether it exceeds two standard errors (quote keys
+    ``<key>_diff`` and ``<key>_2se`` when ``key`` is given, running numbers otherwise)."""
     if len(x) < 2 or len(y) < 2:
         return "n/a", False
     d = float(x.mean() - y.mean())
     se = math.sqrt(float(x.var(ddof=1)) / len(x) + float(y.var(ddof=1)) / len(y))
-    return f"{q.f(d, 2)} +- {q.f(2 * se, 2)} rad", abs(d) > 2 * se
+    k1, k2 = (f"{key}_diff", f"{key}_2se") if key else (None, None)
+    return f"{q.f(d, 2, k1)} +- {q.f(2 * se, 2, k2)} rad", abs(d) > 2 * se
 
 
 def stability_limits(d: Any) -> dict[str, float]:
@@ -68,70 +79,202 @@ def stability_limits(d: Any) -> dict[str, float]:
             "lost_ms": float(gone[0]) if gone else float("nan"), "e1_base": base}
 
 
+def loss_params(value: Any) -> dict[str, Any]:
+    """The loss model of one sweep cell (a dict, or its JSON or Python text) as a dict."""
+    if isinstance(value, dict):
+        return value
+    text = str(value)
+    try:
+        return dict(json.loads(text))
+    except ValueError:
+        return dict(ast.literal_eval(text))
+
+
+def _attempt_share(d: Any) -> Any:
+    """Per run: the share of the radio's transmission attempts the loss model erased. ``lost_attempts`` is in
+    the metrics only when a loss model is set (none for ``p: 0``): no model, nothing erased."""
+    lost = d["net.radio.lost_attempts"] if "net.radio.lost_attempts" in d else 0.0 * d["net.radio.attempts"]
+    return lost.fillna(0.0) / d["net.radio.attempts"]
+
+
+def radio_mc_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
+    """The README lines of the radio Monte-Carlo study (``F["radio_mc"]``, ``unicycle_radio_mc.yaml``) between
+    :data:`RADIO_MC_MARK`, and their ``table.csv`` rows (experiment ``5 radio``, settings ending in ``runs``).
+
+    The loss of the sweep is drawn per transmission attempt before the ACK (``docs/loss.md``): a lost attempt is
+    retried by the MAC, so the messages lost are far fewer than the attempts erased; both are quoted from the
+    runs. Every quote has a fixed key (``s5.radio_runs``, ``s5.rm_*``), so that the full report and
+    ``netsim report unicycle_radio_mc`` write the same keys.
+    """
+    rm = F.get("radio_mc")
+    if rm is None or not len(rm):
+        return []
+    _f, _pct = q.f, q.pct
+    short = {"none": "none", "Bernoulli": "bern", "Gilbert-Elliott bursts": "burst"}
+    order = {"none": 0, "Bernoulli": 1, "Gilbert-Elliott bursts": 2}
+    rm = rm.copy().assign(_fp=_ms(rm["sensor_period"]), _kind=loss_kind(rm["loss_model"]))
+    rm = rm.assign(_k=rm["_kind"].map(order), _erased=_attempt_share(rm),
+                   _apm=rm["net.radio.attempts"] / rm["net.radio.messages"])
+    g = rm.sort_values(["_fp", "_k"]).groupby(["_fp", "_k"], sort=True)
+    se = [_tol(d, f"unicycle.cover_{s}_all") for _, d in g for s in ("x", "y", "theta")]
+    bern = loss_params(rm[rm["_kind"] == "Bernoulli"]["loss_model"].iloc[0]) if (rm["_kind"] == "Bernoulli").any() \
+        else None
+    ge = loss_params(rm[rm["_kind"] == "Gilbert-Elliott bursts"]["loss_model"].iloc[0]) \
+        if (rm["_kind"] == "Gilbert-Elliott bursts").any() else None
+    model = []
+    if bern is not None:
+        model.append(f"Bernoulli with p = {q.g(bern['p'], 'rm_p')} per attempt")
+    if ge is not None:
+        gb, bg = float(ge["p_good_to_bad"]), float(ge["p_bad_to_good"])
+        model.append(f"Gilbert-Elliott bursts stepping once per attempt (good -> bad {q.g(gb, 'rm_p_gb')}, bad -> good "
+                     f"{q.g(bg, 'rm_p_bg')}, every attempt lost while bad: {_pct(gb / (gb + bg), 'rm_bad_share')} of "
+                     f"the attempts in bursts of {_f(1 / bg, 2, 'rm_burst_len')} on average)")
+    L = [RADIO_MC_MARK[0],
+         "802.15.4 radio (`unicycle_radio_mc.yaml`, base `unicycle_zigbee.yaml`): both IR sensors at the same rate; "
+         "the loss model erases single transmission attempts, drawn at the end of each reception before the ACK "
+         "(`docs/loss.md`), so an erased frame goes unacknowledged and the MAC sends it again, up to its retry "
+         "limit. Loss models: " + "; ".join(model) + ". IR samples and wheel commands are hit alike; "
+         f"{q.i(rm.groupby(['_fp', '_k']).size().min(), 'radio_runs')} Monte-Carlo runs per point. "
+         f"Monte-Carlo tolerance of a mean coverage: +- {_pct(min(se), 'rm_tol_lo')} to "
+         f"+- {_pct(max(se), 'rm_tol_hi')} (1.96 standard errors of the runs' coverages).", "",
+         "| sensor rate | loss | runs | attempts erased | messages lost | attempts per message | mean delay [ms] | "
+         "coverage x / y / theta | RMS y front part [mm] | RMS theta all [rad] | fused samples | fused late |",
+         "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for (fp, _), d in g:
+        kind = d["_kind"].iloc[0]
+        k = f"rm_{1e3 / fp:g}hz_{short[kind]}"
+        fused = d["control.ekf.filter.fused_front"] + d["control.ekf.filter.fused_side"]
+        L.append(f"| {q.g(1e3 / fp, k + '_hz')} Hz | {kind} | {q.i(len(d), k + '_runs')} | "
+                 f"{_pct(d['_erased'].mean(), k + '_erased')} | {_pct(d['net.radio.loss_rate'].mean(), k + '_lost')} | "
+                 f"{_f(d['_apm'].mean(), 3, k + '_apm')} | "
+                 f"{_f(d['net.radio.mean_delay_s'].mean() * 1e3, 3, k + '_delay')} | "
+                 f"{_pct(d['unicycle.cover_x_all'].mean(), k + '_cov_x')} / "
+                 f"{_pct(d['unicycle.cover_y_all'].mean(), k + '_cov_y')} / "
+                 f"{_pct(d['unicycle.cover_theta_all'].mean(), k + '_cov_theta')} | "
+                 f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3, 3, k + '_rms_y')} | "
+                 f"{_f(d['unicycle.rmse_theta_all'].mean(), 3, k + '_rms_theta')} | "
+                 f"{_f(fused.mean(), 3, k + '_fused')} | "
+                 f"{_pct((d['control.ekf.filter.late'] / fused).mean(), k + '_late')} |")
+        for col, name in (("unicycle.cover_theta_all", "coverage theta"), ("unicycle.cover_y_all", "coverage y"),
+                          ("unicycle.rmse_theta_all", "RMS theta all [rad]"),
+                          ("unicycle.rmse_y_front", "RMS y front part [m]"),
+                          ("net.radio.loss_rate", "messages lost"), ("_erased", "attempts erased")):
+            T.add("5 radio", f"{1e3 / fp:g} Hz, {kind}, {len(d)} runs", name, d[col].mean(), "", "")
+    L.append("")
+    fps = sorted(rm["_fp"].unique())
+    at = rm[rm["_fp"] == fps[0]]
+    nan = float("nan")
+
+    def _mean(kind: str, col: str, fp: float = fps[0]) -> float:
+        d = rm[(rm["_fp"] == fp) & (rm["_kind"] == kind)][col]
+        return float(d.mean()) if len(d) else nan
+
+    def _diff(kind: str) -> tuple[str, bool]:
+        """Mean RMS theta of ``kind`` minus that without loss at the fastest rate, +- two standard errors, and
+        whether the difference exceeds them."""
+        return mean_difference(q, at[at["_kind"] == kind]["unicycle.rmse_theta_all"],
+                               at[at["_kind"] == "none"]["unicycle.rmse_theta_all"], f"rm_{short[kind]}")
+
+    be_text, be_sig = _diff("Bernoulli")
+    ge_text, ge_sig = _diff("Gilbert-Elliott bursts")
+    hz = q.g(1e3 / fps[0], "rm_fast_hz")
+    if be_sig and ge_sig:
+        verdict = "With these runs both kinds of loss move the mean heading error beyond two standard errors."
+    elif ge_sig:
+        verdict = ("With these runs bursts move the mean heading error beyond two standard errors; independent "
+                   "loss does not.")
+    elif be_sig:
+        verdict = ("With these runs independent loss moves the mean heading error beyond two standard errors; "
+                   "bursts do not.")
+    else:
+        verdict = ("With these runs neither independent loss nor bursts moves the mean heading error beyond two "
+                   "standard errors.")
+    L += [f"- Rate: from {q.g(1e3 / fps[0], 'rm_rate_hi_hz')} to {q.g(1e3 / fps[-1], 'rm_rate_lo_hz')} Hz without "
+          "loss the RMS y error after the turn goes from "
+          f"{_f(_mean('none', 'unicycle.rmse_y_front') * 1e3, 3, 'rm_y_hi')} "
+          f"to {_f(_mean('none', 'unicycle.rmse_y_front', fps[-1]) * 1e3, 3, 'rm_y_lo')} mm: fewer readings of a weak "
+          "sensor; theta is hardly observed by either rate.",
+          f"- Loss at {hz} Hz: the Bernoulli model erases {_pct(_mean('Bernoulli', '_erased'), 'rm_bern_erased_fast')} "
+          "of the attempts; the MAC sends each erased frame again, and in the end "
+          f"{_pct(_mean('Bernoulli', 'net.radio.loss_rate'), 'rm_bern_lost_fast')} of the messages are lost (without a "
+          f"loss model {_pct(_mean('none', 'net.radio.loss_rate'), 'rm_none_lost_fast')}, the radio's own failed "
+          "attempts), "
+          f"at {_f(_mean('Bernoulli', '_apm'), 3, 'rm_bern_apm_fast')} attempts per message (without "
+          f"{_f(_mean('none', '_apm'), 3, 'rm_none_apm_fast')}) and a mean message delay of "
+          f"{_f(_mean('Bernoulli', 'net.radio.mean_delay_s') * 1e3, 3, 'rm_bern_delay_fast')} ms (without "
+          f"{_f(_mean('none', 'net.radio.mean_delay_s') * 1e3, 3, 'rm_none_delay_fast')} ms). The theta error moves "
+          f"from {_f(_mean('none', 'unicycle.rmse_theta_all'), 3, 'rm_none_theta_fast')} to "
+          f"{_f(_mean('Bernoulli', 'unicycle.rmse_theta_all'), 3, 'rm_bern_theta_fast')} rad (difference {be_text}: "
+          f"{'beyond' if be_sig else 'within'} two standard errors). Bursts erase "
+          f"{_pct(_mean('Gilbert-Elliott bursts', '_erased'), 'rm_burst_erased_fast')} of the attempts and lose "
+          f"{_pct(_mean('Gilbert-Elliott bursts', 'net.radio.loss_rate'), 'rm_burst_lost_fast')} of the messages, "
+          "because the retries of a message sent in a burst fall in the same burst; they give "
+          f"{_f(_mean('Gilbert-Elliott bursts', 'unicycle.rmse_theta_all'), 3, 'rm_burst_theta_fast')} rad "
+          f"(difference {ge_text}: {'beyond' if ge_sig else 'within'} two standard errors) and theta coverage "
+          f"{_pct(_mean('Gilbert-Elliott bursts', 'unicycle.cover_theta_all'), 'rm_burst_cov_theta_fast')} (without "
+          f"loss {_pct(_mean('none', 'unicycle.cover_theta_all'), 'rm_none_cov_theta_fast')}). A lost wheel command "
+          "matters where the command changes (the start and the end of the turn): the drive keeps the old one, a "
+          "burst keeps it for several periods, and the filter, which knows the command it sent but not whether it "
+          "arrived, predicts with the new one. " + verdict, "", RADIO_MC_MARK[1], ""]
+    return L
+
+
+def _region(lines: list[str], marks: tuple[str, str], legacy: tuple[str, str]) -> tuple[int, int]:
+    """``[i, j)`` of a spliced section in README or template lines: from the first marker to the closing one and
+    the blank line after it; a README written before the markers: from the line starting ``legacy[0]`` to the
+    first line starting ``legacy[1]`` after it and the blank line after that."""
+    if marks[0] in lines:
+        i, j = lines.index(marks[0]), lines.index(marks[1]) + 1
+    else:
+        i = next(n for n, ln in enumerate(lines) if ln.startswith(legacy[0]))
+        j = next(n for n in range(i, len(lines)) if lines[n].startswith(legacy[1])) + 1
+    return i, j + 1 if j < len(lines) and lines[j] == "" else j
+
+
+def splice_radio_mc(out: Path, marked: list[str], quotes: list[dict[str, Any]], table: Any) -> None:
+    """Write the radio Monte-Carlo section into an existing report folder ``out`` and leave the rest alone.
+
+    ``marked`` are the section's lines with quote markers (:func:`radio_mc_section`), ``quotes`` the
+    :class:`Quotes` rows, ``table`` its ``table.csv`` rows. In ``README.md`` and ``template.md`` the section
+    (between :data:`RADIO_MC_MARK`, or where it stood before the markers) is replaced; the keys the old template
+    lines held leave ``quoted.csv`` and the new quotes take the place of the first of them; in ``table.csv`` the
+    radio Monte-Carlo rows (experiment ``5 radio``, setting ending in ``runs``) are replaced in place.
+    """
+    import pandas as pd
+
+    marked_text = "\n".join(marked)
+    tpl = (out / "template.md").read_text().split("\n")
+    md = (out / "README.md").read_text().split("\n")
+    i, j = _region(tpl, RADIO_MC_MARK, RADIO_MC_LEGACY)
+    if _region(md, RADIO_MC_MARK, RADIO_MC_LEGACY) != (i, j):
+        raise ValueError(f"{out}: README.md and template.md do not line up at the radio Monte-Carlo section")
+    old_keys = set(re.findall(r"\{([A-Za-z0-9_.]+)\}", "\n".join(tpl[i:j])))
+    tpl[i:j] = Quotes.template(marked_text).split("\n")
+    md[i:j] = Quotes.render(marked_text).split("\n")
+    quoted = pd.read_csv(out / "quoted.csv", dtype=str, keep_default_na=False)
+    gone = quoted["key"].isin(old_keys)
+    new = pd.DataFrame(quotes, columns=["key", "value", "text"]).astype(str)
+    clash = set(new["key"]) & set(quoted.loc[~gone, "key"])
+    if clash:
+        raise ValueError(f"{out / 'quoted.csv'}: keys of the radio section already used elsewhere: {sorted(clash)}")
+    at = int(np.argmax(gone.to_numpy())) if gone.any() else len(quoted)
+    quoted = pd.concat([quoted[:at][~gone[:at]], new, quoted[at:][~gone[at:]]], ignore_index=True)
+    tab = pd.read_csv(out / "table.csv", dtype=str, keep_default_na=False)
+    mine = (tab["experiment"] == "5 radio") & tab["setting"].str.endswith(" runs")
+    at = int(np.argmax(mine.to_numpy())) if mine.any() else len(tab)
+    tab = pd.concat([tab[:at][~mine[:at]], table.astype(str), tab[at:][~mine[at:]]], ignore_index=True)
+    (out / "template.md").write_text("\n".join(tpl))
+    (out / "README.md").write_text("\n".join(md))
+    quoted.to_csv(out / "quoted.csv", index=False)
+    tab.to_csv(out / "table.csv", index=False)
+
+
 def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
     """The README lines of section 5 (and their ``table.csv`` rows)."""
     _f, _pct = q.f, q.pct
     q.section = "s5"
     L = ["## 5. What only a networked simulator shows", ""]
-    # ------------------------------------------------------------ radio Monte-Carlo
-    rm = F.get("radio_mc")
-    if rm is not None and len(rm):
-        rm = rm.copy().assign(_fp=_ms(rm["sensor_period"]), _kind=loss_kind(rm["loss_model"]))
-        order = {"none": 0, "Bernoulli": 1, "Gilbert-Elliott bursts": 2}
-        rm = rm.copy().assign(_k=rm["_kind"].map(order))
-        g = rm.sort_values(["_fp", "_k"]).groupby(["_fp", "_k"], sort=True)
-        se = [_tol(d, f"unicycle.cover_{s}_all") for _, d in g for s in ("x", "y", "theta")]
-        L += ["802.15.4 radio (`unicycle_radio_mc.yaml`, base `unicycle_zigbee.yaml`): both IR sensors at the "
-              "same rate, loss after the radio's MAC (CSMA/CA and retries deliver the frame, then the loss model "
-              "drops the copy: IR samples and wheel commands alike), "
-              f"{q.i(rm.groupby(['_fp', '_k']).size().min(), 'radio_runs')} Monte-Carlo runs per point. "
-              f"Monte-Carlo tolerance of a mean coverage: +- {_pct(min(se))} to +- {_pct(max(se))} (1.96 standard "
-              "errors of the runs' coverages).", "",
-              "| sensor rate | loss | runs | lost share | coverage x / y / theta | RMS y front part [mm] | "
-              "RMS theta all [rad] | fused samples | fused late |", "|---|---|---|---|---|---|---|---|---|"]
-        for (fp, _), d in g:
-            kind = d["_kind"].iloc[0]
-            fused = d["control.ekf.filter.fused_front"] + d["control.ekf.filter.fused_side"]
-            L.append(f"| {q.g(1e3 / fp)} Hz | {kind} | {q.i(len(d))} | {_pct(d['net.radio.loss_rate'].mean())} | "
-                     f"{_pct(d['unicycle.cover_x_all'].mean())} / {_pct(d['unicycle.cover_y_all'].mean())} / "
-                     f"{_pct(d['unicycle.cover_theta_all'].mean())} | {_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | "
-                     f"{_f(d['unicycle.rmse_theta_all'].mean())} | {_f(fused.mean())} | "
-                     f"{_pct((d['control.ekf.filter.late'] / fused).mean())} |")
-            for col, name in (("unicycle.cover_theta_all", "coverage theta"), ("unicycle.cover_y_all", "coverage y"),
-                              ("unicycle.rmse_theta_all", "RMS theta all [rad]"),
-                              ("unicycle.rmse_y_front", "RMS y front part [m]")):
-                T.add("5 radio", f"{1e3 / fp:g} Hz, {kind}, {len(d)} runs", name, d[col].mean(), "", "")
-        L.append("")
-        m = rm.groupby(["_fp", "_kind"])["unicycle.rmse_theta_all"].mean().to_dict()
-        c = rm.groupby(["_fp", "_kind"])["unicycle.cover_theta_all"].mean().to_dict()
-        ry = rm.groupby(["_fp", "_kind"])["unicycle.rmse_y_front"].mean().to_dict()
-        nan = float("nan")
-        fps = sorted(rm["_fp"].unique())
-
-        def _diff(kind: str) -> tuple[str, bool]:
-            """Mean RMS theta of ``kind`` minus that without loss at the fastest rate, +- two standard errors, and
-            whether the difference exceeds them."""
-            x = rm[(rm["_fp"] == fps[0]) & (rm["_kind"] == kind)]["unicycle.rmse_theta_all"]
-            y = rm[(rm["_fp"] == fps[0]) & (rm["_kind"] == "none")]["unicycle.rmse_theta_all"]
-            return mean_difference(q, x, y)
-
-        ge_text, ge_sig = _diff("Gilbert-Elliott bursts")
-        be_text, be_sig = _diff("Bernoulli")
-        L += [f"- Rate: from {q.g(1e3 / fps[0])} to {q.g(1e3 / fps[-1])} Hz without loss the RMS y error after the "
-              f"turn goes from {_f(ry.get((fps[0], 'none'), nan) * 1e3)} to {_f(ry.get((fps[-1], 'none'), nan) * 1e3)} mm: fewer "
-              "readings of a weak sensor; theta is hardly observed by either rate.",
-              f"- Loss: independent loss of {_pct(rm[rm['_kind'] == 'Bernoulli']['net.radio.loss_rate'].mean())} "
-              f"of the frames moves the theta error from {_f(m.get((fps[0], 'none'), nan))} to "
-              f"{_f(m.get((fps[0], 'Bernoulli'), nan))} rad at {q.g(1e3 / fps[0])} Hz (difference {be_text}: "
-              f"{'beyond' if be_sig else 'within'} two standard errors); the same share lost in bursts gives "
-              f"{_f(m.get((fps[0], 'Gilbert-Elliott bursts'), nan))} rad (difference {ge_text}: "
-              f"{'beyond' if ge_sig else 'within'} two standard errors) and theta coverage "
-              f"{_pct(c.get((fps[0], 'Gilbert-Elliott bursts'), nan))} (without loss "
-              f"{_pct(c.get((fps[0], 'none'), nan))}). A lost wheel command matters where the command changes (the "
-              "start and the end of the turn): the drive keeps the old one, a burst keeps it for several periods, and "
-              "the filter, which knows the command it sent but not whether it arrived, predicts with the new one. "
-              + ("With these runs bursts raise the heading error measurably." if ge_sig else
-                 "With these runs that does not raise the mean heading error beyond the Monte-Carlo error."), ""]
+    L += radio_mc_section(q, T, F)
     # ------------------------------------------------------------ CAN sweeps (fewer runs)
     net = F.get("net")
     if net is not None and len(net):

@@ -237,6 +237,25 @@ def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
     return {"delay_aware": frame, "table": T.frame()}
 
 
+@register("report", "unicycle_radio_mc",
+          "2WD cart: only the radio Monte-Carlo study (per-attempt loss); splices its README section, quotes and rows")
+def unicycle_radio_mc_report(out_dir: Path | None = None, plots: bool = True, *,
+                             workers: int | None = None) -> dict[str, pd.DataFrame]:
+    """Run (or resume) ``unicycle_radio_mc`` and replace the README's radio Monte-Carlo section in place, with
+    ``template.md``, ``quoted.csv`` and ``table.csv`` kept consistent
+    (:func:`models.unicycle.readme_net.splice_radio_mc`); the rest of the report is left as it is (``netsim report
+    unicycle`` runs everything, this section included)."""
+    from models.unicycle.quoting import Quotes
+    from models.unicycle.readme_net import radio_mc_section, splice_radio_mc
+
+    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
+    q, T = Quotes(), _Table()
+    q.section = "s5"  # the section's keys are fixed names (s5.radio_runs, s5.rm_*), the same as in the full report
+    marked = radio_mc_section(q, T, {"radio_mc": _sweep("unicycle_radio_mc", out, workers)})
+    splice_radio_mc(out, marked, q.rows, T.frame())
+    return {"table": T.frame()}
+
+
 def _code_hash() -> str:
     """Hash of the study's numeric code: a cached Monte-Carlo result is reused only for the same code."""
     h = hashlib.sha256()
