@@ -12,7 +12,9 @@ loop calls, in this order:
 
 :class:`OutputFeedback` does exactly this and is itself a control law fed with ``y``, so any estimator feeds
 any state-feedback law. A delayed measurement is fused at its own sample (``KalmanFilter.correct(y, k=...)``);
-:func:`sample_index` turns its sample time in nanoseconds into that sample index. Everything here is plain numerics: no simpy, kernel or network.
+:func:`sample_index` turns its sample time in nanoseconds into that sample index. An estimator
+without history may offer ``correct_previous(y)`` for a measurement of the previous sample read at this one
+(the Luenberger observer and ``none`` re-filter that one step exactly). Everything here is plain numerics: no simpy, kernel or network.
 
 *The input the plant really holds* (issue 26 section 5). By default ``predict(u)`` assumes that ``u[k]`` acts on
 the plant over the whole period ``[t_k, t_k + h)``. When the input reaches the plant later, the model of one

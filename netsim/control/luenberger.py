@@ -20,6 +20,16 @@ with ``L`` placing the eigenvalues of ``A - L C A`` at the requested poles (``L'
 this needs ``(A, C A)`` observable, so ``A`` may not have a zero eigenvalue in an unobservable direction).
 The prediction error ``x - x_bar`` has the same eigenvalues (``A (I - L C)`` is similar to ``(I - L C) A``).
 
+*A measurement one sample late* (:meth:`LuenbergerObserver.correct_previous`: ``y[k-1]`` reaches the estimator
+at sample ``k`` and sample ``k-1`` fused none). The observer re-filters that one step exactly: with ``x_bar[k-1]``
+the estimate held at the start of sample ``k-1`` (before any correction there), ::
+
+    x_hat[k] <- x_hat[k] + A L (y[k-1] - C x_bar[k-1])     (current form)
+    x_hat[k] <- x_hat[k] + L (y[k-1] - C x_hat[k-1])       (predictor form: its own update, one sample late)
+
+which is the estimate the observer would hold had ``y[k-1]`` come in time (the model is linear and the input
+``u[k-1]`` is known), so a sensor sampling more than half a period before the controller is not dropped.
+
 The gain is computed once at construction with python-control's ``acker`` (one output: handles repeated
 poles) or ``place`` (several outputs); the steps are plain numpy.
 """
@@ -107,7 +117,8 @@ class LuenbergerObserver:
     poles
         ``n`` observer poles, strictly inside the unit circle, complex ones in conjugate pairs.
     form
-        ``"predictor"`` (estimate at ``k`` from ``y`` up to ``k-1``) or ``"current"`` (uses ``y[k]``).
+        ``"current"`` (default, as the YAML ``estimator: {type: luenberger}``: the estimate at ``k`` uses ``y[k]``)
+        or ``"predictor"`` (estimate at ``k`` from ``y`` up to ``k-1``).
     x0
         Initial estimate (default zeros).
 
@@ -125,7 +136,7 @@ class LuenbergerObserver:
         C: Any,
         poles: Any,
         *,
-        form: Literal["predictor", "current"] = "predictor",
+        form: Literal["predictor", "current"] = "current",
         x0: Any = None,
     ) -> None:
         self.A = as_matrix("A", A)
@@ -143,6 +154,9 @@ class LuenbergerObserver:
         """Back to the initial estimate, no stored measurement."""
         self.x = self.x0.copy() if x0 is None else as_vector("x0", x0, self.n)
         self._y: np.ndarray | None = None
+        self._prior = self.x.copy()  # the estimate at the start of this sample, before any correction
+        self._prev_prior: np.ndarray | None = None  # the same at the previous sample (None: no previous sample)
+        self._prev_fused = False  # whether the previous sample fused a measurement
 
     @property
     def x_hat(self) -> np.ndarray:
@@ -162,14 +176,45 @@ class LuenbergerObserver:
         from netsim.control.interface import first_measurement_estimate
 
         self.x = first_measurement_estimate(self.C, y, self.x)
+        self._prior = self.x.copy()
+
+    def _measurement(self, y: Any) -> np.ndarray:
+        y = np.asarray(y, dtype=float).reshape(-1)
+        if y.shape[0] != self.p:
+            raise SimulationError(f"Luenberger observer: the measurement has {y.shape[0]} entries, C has {self.p} rows")
+        return y
+
+    def start_previous(self, y: Any) -> None:
+        """Start the estimate from a measurement of the previous sample (``x0_hat: first_measurement`` when the
+        first measurement is one sample late): as if :meth:`start_from` had run there; call it before
+        :meth:`correct_previous`."""
+        from netsim.control.interface import first_measurement_estimate
+
+        if self._prev_prior is None:
+            return
+        d = first_measurement_estimate(self.C, self._measurement(y), self._prev_prior) - self._prev_prior
+        self._prev_prior = self._prev_prior + d
+        self.x = self.x + self.A @ d
+        self._prior = self._prior + self.A @ d
+
+    def correct_previous(self, y: Any) -> bool:
+        """Fuse the measurement ``y[k-1]`` of the previous sample now (the one-step re-filter of the module
+        docstring); call it before :meth:`correct`. ``False`` (nothing changed) at the first sample or when the
+        previous sample fused a measurement already."""
+        if self._prev_prior is None or self._prev_fused or self._y is not None:
+            return False
+        e = self._measurement(y) - self.C @ self._prev_prior
+        dx = (self.A @ self.L @ e) if self.form == "current" else self.L @ e
+        self.x = self.x + dx
+        self._prior = self._prior + dx
+        self._prev_fused = True
+        return True
 
     def correct(self, y: Any) -> bool:
         """Use the measurement of the current sample; ``False`` if one was already used at this sample."""
         if self._y is not None:
             return False
-        y = np.asarray(y, dtype=float).reshape(-1)
-        if y.shape[0] != self.p:
-            raise SimulationError(f"Luenberger observer: the measurement has {y.shape[0]} entries, C has {self.p} rows")
+        y = self._measurement(y)
         self._y = y
         if self.form == "current":
             self.x = self.x + self.L @ (y - self.C @ self.x)
@@ -184,5 +229,7 @@ class LuenbergerObserver:
             x = self.A @ self.x
         if self.form == "predictor" and self._y is not None:
             x = x + self.L @ (self._y - self.C @ self.x)
+        self._prev_prior, self._prev_fused = self._prior, self._y is not None
         self.x = x
+        self._prior = x.copy()
         self._y = None

@@ -104,7 +104,7 @@ class DirectState:
                               f"{n}x{n}); the measured outputs give C of shape {C.shape[0]}x{C.shape[1]}: choose "
                               "an estimator (kalman, luenberger)")
         self.A, self.B, self._Cinv = A, B, np.linalg.inv(C)
-        self.x = np.zeros(n)
+        self.reset()
 
     @property
     def x_hat(self) -> np.ndarray:
@@ -112,14 +112,27 @@ class DirectState:
 
     def correct(self, y: Any) -> bool:
         self.x = self._Cinv @ np.asarray(y, dtype=float).reshape(-1)
+        self._fused = True
+        return True
+
+    def correct_previous(self, y: Any) -> bool:
+        """``y[k-1]`` fused at ``k``: ``x_hat = A C^-1 y[k-1] + B u[k-1]`` (as if it had come in time); ``False``
+        at the first sample or when sample ``k-1`` fused one already (call it before :meth:`correct`)."""
+        if self._u_prev is None or self._prev_fused or self._fused:
+            return False
+        self.x = self.A @ (self._Cinv @ np.asarray(y, dtype=float).reshape(-1)) + self.B @ self._u_prev
+        self._prev_fused = True
         return True
 
     def predict(self, u: Any = None) -> None:
         u = np.zeros(self.B.shape[1]) if u is None else np.asarray(u, dtype=float).reshape(-1)
         self.x = self.A @ self.x + self.B @ u
+        self._u_prev, self._prev_fused, self._fused = u, self._fused, False
 
     def reset(self) -> None:
         self.x = np.zeros(self.A.shape[0])
+        self._u_prev: np.ndarray | None = None
+        self._prev_fused = self._fused = False
 
 
 # --------------------------------------------------------------------------------------------- estimators

@@ -25,9 +25,14 @@ state to zero. Feed-through ``D`` on a measured output is refused (the estimator
 ``sender`` and ``tag`` (both optional): the program takes the messages that match out of the node's inbox for
 that network and leaves the others for other programs, so two sensors can feed one estimator. A message from
 the ``sensor`` program carries ``{value, t_ns}``: its sample time. ``fuse_at: sample_time`` (default) fuses it at
-the controller sample nearest to that time (:func:`~netsim.control.interface.sample_index`): the Kalman filter
-re-filters from its history (``history`` samples), the other estimators use only measurements of the current
-sample; ``fuse_at: arrival`` fuses it at the sample where it is read (the baseline it is compared against).
+the controller sample nearest to that time (:func:`~netsim.control.interface.sample_index`): the Kalman filters
+and ``ekf`` re-filter from their history (``history`` samples); ``luenberger`` and ``none`` keep no history but
+fuse a measurement of the previous sample ``k-1`` read at ``k`` by the exact one-step re-filter (``correct_previous``:
+``x_hat[k] += A L (y[k-1] - C x_bar[k-1])`` for the current-form observer, ``+= L (y[k-1] - C x_hat[k-1])`` for the
+predictor form, ``x_hat[k] = A C^-1 y[k-1] + B u[k-1]`` for ``none``), so a sensor sampling more than half a
+period before the controller (its samples map to ``k-1``) still closes the loop; older ones are ``stale``. A
+measurement nearer to a sample before the first one (a task ``offset`` over half a period) is ``stale`` too.
+``fuse_at: arrival`` fuses it at the sample where it is read (the baseline it is compared against).
 A payload without ``t_ns`` (the ``sampler`` program's float) is fused at arrival. When several measurement
 sources make up ``y`` and the estimator is the time-varying Kalman filter with no cross-covariance in ``R``
 between the sources (independent sensors), each source's measurement is fused on its own at its sample, with
@@ -355,16 +360,24 @@ class StateFeedbackProgram:
         else:
             start(y)
 
+    def _start_previous(self, y: np.ndarray) -> None:
+        """``x0_hat: first_measurement`` from a measurement one sample late (estimators without history)."""
+        self.started = True
+        start = getattr(self.estimator, "start_previous", None)
+        if start is not None:  # 'none' has none: the measurement is the estimate
+            start(y)
+
     # ------------------------------------------------------------------ measurements
-    def _k_of(self, t_ns: int | None, k_now: int) -> int:
+    def _k_of(self, t_ns: int | None, k_now: int) -> int | None:
+        """The sample a measurement belongs to; ``None`` for one nearest to a sample before the first."""
         if t_ns is None or self.p.fuse_at == "arrival":
             return k_now
         from netsim.control.interface import sample_index
 
         try:
             k = sample_index(int(t_ns), self.period, self.offset)  # type: ignore[arg-type]
-        except ValueError:
-            k = 0
+        except ValueError:  # taken more than half a period before the first sample (an offset over h/2)
+            return None
         return min(k, k_now)
 
     def _offer(self, source: int, k: int, value: Any) -> None:
@@ -400,7 +413,11 @@ class StateFeedbackProgram:
                 if isinstance(payload, dict):
                     t_ns = payload.get("t_ns")
                     payload = payload.get("value")
-                self._offer(i, self._k_of(t_ns, k_now), payload)
+                k = self._k_of(t_ns, k_now)
+                if k is None:
+                    self.counts["stale"] += 1
+                    continue
+                self._offer(i, k, payload)
             inbox.extend(keep)
 
     def _fuse(self, k_now: int) -> bool:
@@ -408,10 +425,12 @@ class StateFeedbackProgram:
             return self._fuse_parts(k_now)
         fused_any = False
         n_src = len(self.p.measurements)
+        late = None if self.takes_k else getattr(self.estimator, "correct_previous", None)
+        oldest = k_now - self.history if self.takes_k else k_now - (late is not None)
         for k in sorted(self.pending):
             got = self.pending[k]
             if len(got) < n_src:
-                if k < k_now - self.history or (not self.takes_k and k < k_now):
+                if k < oldest:
                     self.counts["partial"] += 1
                     del self.pending[k]
                 continue
@@ -420,12 +439,20 @@ class StateFeedbackProgram:
             for src, v in got.items():
                 y[self.slots[src]] = v
             self.y_last = y
-            if not self.started and (self.takes_k or k == k_now):
-                self._start(y, k)
             if self.takes_k:
+                if not self.started:
+                    self._start(y, k)
                 ok = self.estimator.correct(y, k)
             elif k == k_now:
+                if not self.started:
+                    self._start(y, k)
                 ok = self.estimator.correct(y)
+            elif k == k_now - 1 and late is not None:  # one sample late: the one-step re-filter
+                if not self.started:
+                    self._start_previous(y)
+                ok = late(y)
+                if not ok:
+                    self.counts["duplicates"] += 1
             else:
                 ok = False
                 self.counts["stale"] += 1
