@@ -283,6 +283,55 @@ def test_ten_runs_started_at_once_get_ten_folders(files, tmp_path) -> None:
     FAULTS.append(("10 netsim runs of one scenario at once", 10, "nothing (10 folders)"))
 
 
+# ------------------------------------------------------------------------------------------------- disk full
+def _small_disk(limit: int):
+    """A child whose files cannot grow past ``limit`` bytes (RLIMIT_FSIZE: EFBIG, "File too large", as a full
+    disk gives ENOSPC; no mount needed, so the test runs as any user)."""
+    import resource
+
+    def limit_files() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return limit_files
+
+
+def _netsim_small(cwd: Path, limit: int, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "netsim", *args], cwd=cwd, env=ENV, capture_output=True, text=True,
+                          timeout=600, preexec_fn=_small_disk(limit))
+
+
+def test_a_run_on_a_full_disk_is_incomplete_and_a_rerun_completes(files, tmp_path) -> None:
+    base, _, _, _ = files
+    shutil.copy(base, tmp_path / "base.yaml")
+    assert netsim(tmp_path, "run", "base.yaml", "--out", "whole").returncode == 0
+    want = (tmp_path / "whole" / "metrics.csv").read_bytes()
+    biggest = max(p.stat().st_size for p in (tmp_path / "whole").iterdir())
+    full = _netsim_small(tmp_path, biggest // 2, "run", "base.yaml", "--out", "full")
+    assert full.returncode != 0
+    assert "Traceback" not in full.stderr and "File too large" in full.stderr, full.stderr
+    assert not (tmp_path / "full" / "meta.json").exists()  # incomplete
+    report = netsim(tmp_path, "report", "full")
+    assert report.returncode != 0 and "Traceback" not in report.stderr, report.stderr
+    again = netsim(tmp_path, "run", "base.yaml", "--out", "full")  # space freed
+    assert again.returncode == 0, again.stderr
+    assert (tmp_path / "full" / "metrics.csv").read_bytes() == want
+    FAULTS.append(("disk full (file size limit) during netsim run", 1, "nothing"))
+
+
+def test_a_sweep_on_a_full_disk_resumes_to_the_whole_summary(files, tmp_path) -> None:
+    base, sweep, reference, _ = files
+    point = sorted((reference / "points").iterdir())[0]
+    biggest = max(p.stat().st_size for p in point.iterdir())
+    out = tmp_path / "out"
+    full = _netsim_small(tmp_path, biggest // 2, *_sweep_args(sweep, out))
+    assert full.returncode != 0 and "Traceback" not in full.stderr, full.stderr
+    assert (out / "summary.csv").read_bytes() != (reference / "summary.csv").read_bytes()
+    again = netsim(tmp_path, *_sweep_args(sweep, out))
+    assert again.returncode == 0, again.stderr
+    assert (out / "summary.csv").read_bytes() == (reference / "summary.csv").read_bytes()
+    FAULTS.append(("disk full (file size limit) during netsim sweep", 1, "nothing"))
+
+
 def test_zz_print_the_fault_table() -> None:
     print("\nfault | tries | lost")
     for fault, tries, lost in FAULTS:
