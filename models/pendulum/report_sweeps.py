@@ -29,7 +29,7 @@ import numpy as np
 
 __all__ = ["SWEEPS", "run_sweeps", "point_values", "estimator_name", "tuning_table", "delay_cost_table",
            "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS", "CI_LEVEL",
-           "DELAY_AWARE_SWEEP", "run_delay_aware", "delay_aware_table", "delay_aware_margins"]
+           "DELAY_AWARE_SWEEP", "run_delay_aware", "delay_aware_table", "delay_aware_margins", "with_results"]
 
 log = logging.getLogger("netsim.progress.pendulum")
 
@@ -54,8 +54,31 @@ def run_sweeps(out: Path, workers: int | None = None) -> dict[str, Any]:
         res = run_sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers,
                         progress=sys.stderr.isatty())
         log.info("pendulum: %s", res.describe().splitlines()[0])
-        summaries[name] = res.summary
+        summaries[name] = with_results(res.summary, name)
     return summaries
+
+
+def with_results(summary: Any, name: str) -> Any:
+    """``summary`` when every run gave a result; the tables count a diverged or unstable run as a run that did not
+    stay balanced (``stable`` 0), so a run that gave none (``error``, ``interrupted``, ``pending``) would be
+    miscounted as a fall.
+
+    Raises
+    ------
+    NetsimError
+        Naming the first run without a result and its error.
+    """
+    from netsim.errors import NetsimError
+    from netsim.status import DIVERGED, OK, UNSTABLE, kind_of
+
+    bad = summary[~summary["status"].map(kind_of).isin([OK, DIVERGED, UNSTABLE])]
+    if len(bad):
+        first = bad.iloc[0]
+        why = str(first.get("error", "") or "").strip()
+        raise NetsimError(f"sweep {name}: {len(bad)} of {len(summary)} runs gave no result (run "
+                          f"{first.get('index', '?')}: {first['status']}{': ' + why if why else ''}); fix the cause "
+                          "and run the report again (finished runs are resumed)")
+    return summary
 
 
 def point_values(name: str) -> list[dict[str, Any]]:
@@ -215,7 +238,7 @@ def run_delay_aware(out: Path, workers: int | None = None) -> Any:
     log.info("pendulum: sweep %s ...", DELAY_AWARE_SWEEP)
     res = run_sweep(_SCEN / f"{DELAY_AWARE_SWEEP}.yaml", out=out / "runs" / DELAY_AWARE_SWEEP, workers=workers,
                     progress=sys.stderr.isatty())
-    return res.summary
+    return with_results(res.summary, DELAY_AWARE_SWEEP)
 
 
 def delay_aware_table(summary: Any, estimators: Mapping[str, dict[str, Any]], unaware: Any) -> Any:

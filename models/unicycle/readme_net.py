@@ -23,7 +23,7 @@ from models.unicycle.model import TS
 from models.unicycle.quoting import Quotes
 
 __all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference", "delay_aware_section",
-           "delay_aware_frame", "GROWTH", "LOST_E3", "DELAY_AWARE_MARK", "RADIO_MC_MARK", "radio_mc_section",
+           "delay_aware_frame", "GROWTH", "LOST_E3", "lost_runs", "DELAY_AWARE_MARK", "RADIO_MC_MARK", "radio_mc_section",
            "splice_radio_mc", "loss_params"]
 
 #: The README lines of the delay-aware study sit between these (``netsim report unicycle_delay_aware`` splices them).
@@ -65,13 +65,22 @@ def mean_difference(q: Quotes, x: Any, y: Any, key: str | None = None) -> tuple[
     return f"{q.f(d, 2, k1)} +- {q.f(2 * se, 2, k2)} rad", abs(d) > 2 * se
 
 
+def lost_runs(d: Any) -> Any:
+    """Per run: the loop was lost (``max |e3| >`` :data:`LOST_E3`, or the run's status is diverged or unstable:
+    the ``_failed`` column of :func:`models.unicycle.report.counted_runs`)."""
+    lost = d["unicycle.track_max_e3"].astype(float) > LOST_E3
+    if "_failed" in d:
+        lost = lost | d["_failed"].astype(bool)
+    return lost
+
+
 def stability_limits(d: Any) -> dict[str, float]:
     """Per delay sweep (one sensor setting): the smallest delay [ms] whose mean RMS e1 reaches :data:`GROWTH`
-    times the no-delay value, and the smallest at which more than half of the runs have ``max |e3| >``
-    :data:`LOST_E3` (NaN: none in the sweep)."""
-    g = d.groupby("_ms", sort=True)
+    times the no-delay value, and the smallest at which more than half of the runs lost the loop
+    (:func:`lost_runs`; NaN: none in the sweep)."""
+    g = d.assign(_lost=lost_runs(d)).groupby("_ms", sort=True)
     e1 = g["unicycle.track_rms_e1"].mean()
-    lost = g["unicycle.track_max_e3"].apply(lambda s: float(np.mean(s > LOST_E3)))
+    lost = g["_lost"].mean()
     base = float(e1.iloc[0])
     grow = [ms for ms, v in e1.items() if v >= GROWTH * base]
     gone = [ms for ms, v in lost.items() if v > 0.5]
@@ -347,7 +356,7 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
                 L.append(f"| {sens} | {q.g(dv)} ms | {q.i(len(d))} | {_f(d['unicycle.track_rms_e1'].mean() * 1e3)} | "
                          f"{_f(d['unicycle.track_rms_e2'].mean() * 1e3)} | {_f(d['unicycle.track_rms_e3'].mean())} | "
                          f"{_f(d['unicycle.track_max_e3'].mean())} | "
-                         f"{_pct(np.mean(d['unicycle.track_max_e3'] > LOST_E3))} | "
+                         f"{_pct(np.mean(lost_runs(d)))} | "
                          f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} |")
                 T.add("5 delay radio", f"{sens} sensors, {dv:g} ms", "RMS e1 [m]", d["unicycle.track_rms_e1"].mean(),
                       "", "")
@@ -455,7 +464,7 @@ def delay_aware_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
     for (net, sens, ms, filt), g in d.groupby(["network", "sensors", "_ms", "filter"], sort=True):
         L.append(f"| {net} | {sens} | {q.g(ms)} ms | {filt} | {q.i(len(g))} | "
                  f"{_f(g['unicycle.track_rms_e1'].mean() * 1e3)} | {_f(g['unicycle.track_rms_e3'].mean())} | "
-                 f"{_f(g['unicycle.track_max_e3'].mean())} | {_pct(np.mean(g['unicycle.track_max_e3'] > LOST_E3))} | "
+                 f"{_f(g['unicycle.track_max_e3'].mean())} | {_pct(np.mean(lost_runs(g)))} | "
                  f"{_pct(g['unicycle.cover_y_all'].mean())} / {_pct(g['unicycle.cover_theta_all'].mean())} |")
         T.add("5 delay-aware", f"{net}, {sens} sensors, {ms:g} ms, {filt}", "RMS e1 [m]",
               g["unicycle.track_rms_e1"].mean(), "", "")

@@ -27,7 +27,7 @@ from netsim.registry import register
 
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
-__all__ = ["unicycle_report"]
+__all__ = ["unicycle_report", "counted_runs"]
 
 _ROOT = Path(__file__).resolve().parents[2]
 _SCEN = _ROOT / "scenarios"
@@ -57,12 +57,38 @@ class _Table:
         return pd.DataFrame(self.rows, columns=["experiment", "setting", "quantity", "ours", "source", "reason"])
 
 
+def counted_runs(summary: pd.DataFrame, name: str) -> pd.DataFrame:
+    """Every run of sweep ``name``'s summary, each one counted: a run that diverged or ended unstable is kept and
+    marked ``_failed`` (:func:`models.unicycle.readme_net.lost_runs` counts it as a lost loop; its metrics, when
+    it has them, enter the means like any other run's).
+
+    Raises
+    ------
+    NetsimError
+        When a run gave no result (status ``error``, ``interrupted`` or ``pending``): the report would otherwise
+        count fewer runs than the sweep has without saying so.
+    """
+    from netsim.errors import NetsimError
+    from netsim.status import DIVERGED, UNSTABLE, kind_of
+
+    kinds = summary["status"].map(kind_of)
+    bad = summary[~kinds.isin(["ok", DIVERGED, UNSTABLE])]
+    if len(bad):
+        first = bad.iloc[0]
+        why = str(first.get("error", "") or "").strip()
+        raise NetsimError(f"sweep {name}: {len(bad)} of {len(summary)} runs gave no result (run "
+                          f"{first.get('index', '?')}: {first['status']}{': ' + why if why else ''}); fix the cause "
+                          "and run the report again (finished runs are resumed)")
+    out = summary.copy()
+    out["_failed"] = kinds.isin([DIVERGED, UNSTABLE]).to_numpy()
+    return out
+
+
 def _sweep(name: str, out: Path, workers: int | None) -> pd.DataFrame:
     from netsim.sweep.run import run_sweep
 
     res = run_sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers, progress=False)
-    df = res.summary
-    return df[df["status"] == "ok"].copy()
+    return counted_runs(res.summary, name)
 
 
 def _plots(out: Path, base: Any, qr: dict[str, list[dict]], t: np.ndarray) -> None:
