@@ -41,7 +41,7 @@ noise enters as a jump at the step instant), a stochastic disturbance update. Ex
 Modules
 -------
 ``base`` (:class:`Plant`, the lazy-advance machinery), ``lti`` (:class:`LTIPlant`), ``discrete`` (:class:`DiscretePlant`),
-``nonlinear`` (:class:`NonlinearPlant`, :class:`Mode`, :class:`Guard`), ``integrator`` (the RK4 steps and their interpolant), ``disturbance`` (:class:`LTIDisturbance`
+``nonlinear`` (:class:`NonlinearPlant`, :class:`Mode`, :class:`Guard`), ``modes`` (hybrid modes, stick-slip friction), ``integrator`` (the RK4 steps and their interpolant), ``disturbance`` (:class:`LTIDisturbance`
 and the classification of disturbances), ``noise`` (:class:`~netsim.plant.noise.HeldNoise`, the ``process_noise``
 entries), ``shared`` (matrix validation helpers, ``NEVER``). The concrete plants
 are imported on first use (``scipy.integrate`` is not needed to build an LTI plant).

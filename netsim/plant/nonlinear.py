@@ -21,7 +21,6 @@ crawl with tiny steps, or chatter forever around the switching surface. Two mech
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -31,12 +30,11 @@ from netsim.errors import ConfigError, SimulationError
 from netsim.plant.base import Plant
 from netsim.plant.disturbance import _Source
 from netsim.plant.integrator import Rk4Buffers, hermite, rk4_steps, steps_for
+from netsim.plant.modes import Fn, Guard, Mode, stick_slip_modes
 from netsim.plant.shared import NEVER, _vector
 from netsim.timebase import S
 
 __all__ = ["NonlinearPlant", "Mode", "Guard", "stick_slip_modes"]
-
-Fn = Callable[[float, np.ndarray, np.ndarray, Any], Any]
 
 #: Mode switches allowed at one instant before the plant reports Zeno behaviour.
 MAX_SWITCHES_PER_INSTANT = 20
@@ -50,104 +48,6 @@ class _SwitchCount:
     def __init__(self) -> None:
         self.here = 0
         self.last_t: float | None = None
-
-
-@dataclass(frozen=True)
-class Guard:
-    """A zero-crossing function ``fn(t, x, u, params)``; ``direction`` as in solve_ivp events
-    (+1: only upward crossings, -1: only downward, 0: both)."""
-
-    fn: Fn
-    direction: float = 0.0
-
-
-@dataclass(frozen=True)
-class Mode:
-    """One mode of a hybrid plant: its right-hand side (None: the plant's ``f``) and its guards."""
-
-    f: Fn | None = None
-    guards: tuple[Guard, ...] = field(default_factory=tuple)
-
-
-def stick_slip_modes(
-    f: Fn,
-    *,
-    velocity: int,
-    applied_force: Fn,
-    coulomb: float,
-    static: float | None = None,
-    mass: float = 1.0,
-    v_eps: float = 1e-9,
-) -> tuple[dict[str, Mode], Callable[..., tuple[str, np.ndarray]]]:
-    """Modes and selector of Coulomb friction with stiction on state ``velocity``.
-
-    Parameters
-    ----------
-    f
-        Dynamics without friction.
-    velocity
-        Index of the velocity state.
-    applied_force
-        Net non-friction force ``F(t, x, u, params)`` on the mass (its effect is already in ``f``).
-    coulomb, static
-        Sliding and static friction forces (``static`` defaults to ``coulomb``).
-    mass
-        Mass that converts the friction force into acceleration.
-    v_eps
-        Speeds below this count as zero when a mode is chosen.
-
-    Returns
-    -------
-    (modes, select_mode)
-        Pass both to :class:`NonlinearPlant`. Modes: ``slip+`` (``v > 0``, friction ``-coulomb``),
-        ``slip-`` and ``stick`` (``v`` held at exactly 0 while ``|F| <= static``).
-    """
-    fc = float(coulomb) / mass
-    fs = float(coulomb if static is None else static)
-    if fc < 0 or fs < 0:
-        raise ConfigError("friction forces must be non-negative")
-
-    def f_pos(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> np.ndarray:
-        dx = np.array(f(t, x, u, p), dtype=float)
-        dx[velocity] -= fc
-        return dx
-
-    def f_neg(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> np.ndarray:
-        dx = np.array(f(t, x, u, p), dtype=float)
-        dx[velocity] += fc
-        return dx
-
-    def f_stick(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> np.ndarray:
-        dx = np.array(f(t, x, u, p), dtype=float)
-        dx[velocity] = 0.0
-        return dx
-
-    def speed(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> float:
-        return float(x[velocity])
-
-    def breakaway(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> float:
-        return abs(float(applied_force(t, x, u, p))) - fs
-
-    modes = {
-        "slip+": Mode(f_pos, (Guard(speed, -1.0),)),
-        "slip-": Mode(f_neg, (Guard(speed, +1.0),)),
-        "stick": Mode(f_stick, (Guard(breakaway, +1.0),)),
-    }
-
-    def select(t: float, x: np.ndarray, u: np.ndarray, p: Any) -> tuple[str, np.ndarray]:
-        v = float(x[velocity])
-        if v > v_eps:
-            return "slip+", x
-        if v < -v_eps:
-            return "slip-", x
-        x = np.array(x, dtype=float)
-        x[velocity] = 0.0
-        force = float(applied_force(t, x, u, p))
-        if abs(force) <= fs:
-            return "stick", x
-        return ("slip+" if force > 0 else "slip-"), x
-
-    return modes, select
 
 
 class NonlinearPlant(Plant):
