@@ -6,6 +6,10 @@ delay with the report's sensors), ``radio_delay`` (802.15.4: command delay, the 
 ``zigbee`` is one run's metrics; ``delay_aware_can`` and ``delay_aware_radio`` (issue 26 section 5: the same
 command delays with the filter unaware of them and told them, ``input_delay``) feed :func:`delay_aware_section`.
 Every number goes through the :class:`~models.unicycle.quoting.Quotes`.
+
+Why this module is long: it is one README section of six studies, each a table and the sentences that quote
+it, with the shared run counting (:func:`lost_runs`, :func:`stability_limits`) and the radio study's splice; a
+split would separate each study's text from the helpers every study uses.
 """
 
 from __future__ import annotations

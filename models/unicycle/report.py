@@ -239,7 +239,7 @@ def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
          "delay_aware_radio": _sweep("unicycle_radio_delay_aware", out, workers),
          "delay_margin": {0.03: S.delay_margin(0.03)}}
     frame = delay_aware_frame(F["delay_aware_can"], F["delay_aware_radio"])
-    frame.drop(columns=["values"], errors="ignore").to_csv(out / "delay_aware.csv", index=False)
+    frame.drop(columns=["values", "_failed"], errors="ignore").to_csv(out / "delay_aware.csv", index=False)
     q, T = Quotes(), _Table()
     q.section = "s5da"
     marked = "\n".join(delay_aware_section(q, T, F))
