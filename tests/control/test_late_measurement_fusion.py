@@ -158,3 +158,19 @@ def test_luenberger_form_defaults_to_current_as_in_yaml() -> None:
     from netsim.control.parts import LuenbergerPart
 
     assert LuenbergerObserver(np.array([[1.0, 0.1], [0.0, 0.9]]), None, C, POLES).form == LuenbergerPart.Params.model_fields["form"].default == "current"
+
+
+def test_first_measurement_one_sample_late_starts_the_estimate_at_its_own_sample() -> None:
+    # x0_hat: first_measurement with the first measurement one sample late: the estimate at sample 2 is the one
+    # the observer would hold had it started at sample 1 from y[1] (x = x_prior + pinv(C) (y - C x_prior)),
+    # fused it there and predicted with u[1]
+    A = np.array([[1.0, 0.1], [0.0, 0.9]])
+    B = np.array([[0.005], [0.1]])
+    obs = LuenbergerObserver(A, B, C, POLES, x0=[0.3, -0.2])
+    obs.predict([1.0])
+    obs.predict([-0.5])
+    obs.start_previous([0.7])
+    assert obs.correct_previous([0.7])
+    x1 = A @ np.array([0.3, -0.2]) + B.ravel() * 1.0
+    xs = x1 + np.linalg.pinv(C) @ (np.array([0.7]) - C @ x1)  # C xs = 0.7: the correction after it is zero
+    np.testing.assert_allclose(obs.x_hat, A @ xs + B.ravel() * -0.5, rtol=1e-12)
