@@ -7,8 +7,8 @@ interrupted sweep keeps every finished point. Last of all it writes ``manifest.j
 every file of the folder. A point is trusted on resume only when its folder is a real folder (no symlink, in
 it or as it) holding exactly those files with those digests (:func:`verified_record`): a point killed half-way,
 an edited ``point.json``, ``metrics.csv`` or ``meta.json`` or a planted symlink is run again, never read
-(issue 31). A point is run in a fresh folder: whatever was there (a symlink is removed, not followed) goes first. Where the chunks run (this process, a pool, Dask) is
-:mod:`netsim.sweep.executor`.
+(issue 31). A point is run in a fresh folder: whatever was there (a symlink is removed, not followed) goes first.
+Where the chunks run (this process, a pool, Dask) is :mod:`netsim.sweep.executor`.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
 
-__all__ = ["PointFn", "RECORD_NAME", "MANIFEST_NAME", "default_point_fn", "metrics_point_fn", "run_chunk", "read_record",
-           "point_hash", "write_manifest", "verified_record", "fresh_folder"]
+__all__ = ["PointFn", "RECORD_NAME", "MANIFEST_NAME", "default_point_fn", "metrics_point_fn", "run_chunk",
+           "read_record", "point_hash", "write_manifest", "verified_record", "fresh_folder"]
 
 #: ``fn(raw_scenario, run_folder, seed) -> {metric: value}``
 PointFn = Callable[[Mapping[str, Any], Path, int], Mapping[str, float]]

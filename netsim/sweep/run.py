@@ -3,14 +3,17 @@
 Output folder layout::
 
     <out>/sweep.json                 which sweep this folder holds (name, file, factors, number of runs)
-    <out>/points/<index>-<key>/      one run folder per run (scenario.yaml, *.csv, meta.json) + point.json
+    <out>/points/<index>-<key>/      one run folder per run (scenario.yaml, *.csv, meta.json) + point.json, and
+                                     manifest.json (sha256 of its files) written last
+    <out>/.sweep.lock                held (flock, with the pid) by the sweep writing the folder
     <out>/summary.csv                one row per run (see netsim.sweep.summary)
     <out>/optimum.json, surface.png  when the sweep file has a ``surface:`` section (netsim.sweep.surface)
     <out>/dask-scratch/              Dask's scratch space when a local Dask cluster ran the sweep, and
                                      workers.log: the output of its worker processes
 
-A run is *finished* when its ``point.json`` says ``ok`` with the same seed and the same scenario hash
-(:func:`netsim.scenario.scenario_hash` of the point's scenario with its seed, as in the run's
+A run is *finished* when its folder matches its manifest (:func:`netsim.sweep.points.verified_record`: nothing
+added, changed or symlinked since it was written) and its ``point.json`` says ``ok`` with the same seed and the
+same scenario hash (:func:`netsim.scenario.scenario_hash` of the point's scenario with its seed, as in the run's
 ``meta.json``) as now; running the sweep again skips those
 and runs the rest (failed runs are retried). Ctrl-C stops the sweep, whatever the executor and whenever it
 comes (while a local Dask cluster starts, runs or closes): runs in progress are abandoned, finished ones
