@@ -27,8 +27,8 @@ from models.unicycle.model import TS
 from models.unicycle.quoting import Quotes
 
 __all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference", "delay_aware_section",
-           "delay_aware_frame", "GROWTH", "LOST_E3", "lost_runs", "DELAY_AWARE_MARK", "RADIO_MC_MARK", "radio_mc_section",
-           "splice_radio_mc", "loss_params"]
+           "delay_aware_frame", "GROWTH", "LOST_E3", "lost_runs", "DELAY_AWARE_MARK", "RADIO_MC_MARK",
+           "radio_mc_section", "splice_radio_mc", "loss_params"]
 
 #: The README lines of the delay-aware study sit between these (``netsim report unicycle_delay_aware`` splices them).
 DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report unicycle_delay_aware -->", "<!-- /delay-aware -->")
@@ -127,7 +127,9 @@ def radio_mc_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
     order = {"none": 0, "Bernoulli": 1, "Gilbert-Elliott bursts": 2}
     rm = rm.copy().assign(_fp=_ms(rm["sensor_period"]), _kind=loss_kind(rm["loss_model"]))
     rm = rm.assign(_k=rm["_kind"].map(order), _erased=_attempt_share(rm),
-                   _apm=rm["net.radio.attempts"] / rm["net.radio.messages"])
+                   _apm=rm["net.radio.attempts"] / rm["net.radio.messages"],
+                   _late=rm["control.ekf.filter.late"] / (rm["control.ekf.filter.fused_front"]
+                                                          + rm["control.ekf.filter.fused_side"]))
     g = rm.sort_values(["_fp", "_k"]).groupby(["_fp", "_k"], sort=True)
     se = [_tol(d, f"unicycle.cover_{s}_all") for _, d in g for s in ("x", "y", "theta")]
     bern = loss_params(rm[rm["_kind"] == "Bernoulli"]["loss_model"].iloc[0]) if (rm["_kind"] == "Bernoulli").any() \
@@ -141,7 +143,7 @@ def radio_mc_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
         gb, bg = float(ge["p_good_to_bad"]), float(ge["p_bad_to_good"])
         model.append(f"Gilbert-Elliott bursts stepping once per attempt (good -> bad {q.g(gb, 'rm_p_gb')}, bad -> good "
                      f"{q.g(bg, 'rm_p_bg')}, every attempt lost while bad: {_pct(gb / (gb + bg), 'rm_bad_share')} of "
-                     f"the attempts in bursts of {_f(1 / bg, 2, 'rm_burst_len')} on average)")
+                     f"the attempts in bursts of {_f(1 / bg, 2, 'rm_burst_len')} attempts on average)")
     L = [RADIO_MC_MARK[0],
          "802.15.4 radio (`unicycle_radio_mc.yaml`, base `unicycle_zigbee.yaml`): both IR sensors at the same rate; "
          "the loss model erases single transmission attempts, drawn at the end of each reception before the ACK "
@@ -167,7 +169,7 @@ def radio_mc_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
                  f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3, 3, k + '_rms_y')} | "
                  f"{_f(d['unicycle.rmse_theta_all'].mean(), 3, k + '_rms_theta')} | "
                  f"{_f(fused.mean(), 3, k + '_fused')} | "
-                 f"{_pct((d['control.ekf.filter.late'] / fused).mean(), k + '_late')} |")
+                 f"{_pct(d['_late'].mean(), k + '_late')} |")
         for col, name in (("unicycle.cover_theta_all", "coverage theta"), ("unicycle.cover_y_all", "coverage y"),
                           ("unicycle.rmse_theta_all", "RMS theta all [rad]"),
                           ("unicycle.rmse_y_front", "RMS y front part [m]"),
@@ -215,7 +217,10 @@ def radio_mc_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
           f"at {_f(_mean('Bernoulli', '_apm'), 3, 'rm_bern_apm_fast')} attempts per message (without "
           f"{_f(_mean('none', '_apm'), 3, 'rm_none_apm_fast')}) and a mean message delay of "
           f"{_f(_mean('Bernoulli', 'net.radio.mean_delay_s') * 1e3, 3, 'rm_bern_delay_fast')} ms (without "
-          f"{_f(_mean('none', 'net.radio.mean_delay_s') * 1e3, 3, 'rm_none_delay_fast')} ms). The theta error moves "
+          f"{_f(_mean('none', 'net.radio.mean_delay_s') * 1e3, 3, 'rm_none_delay_fast')} ms), and "
+          f"{_pct(_mean('Bernoulli', '_late'), 'rm_bern_late_fast')} of the fused samples arrive after their sample's "
+          f"filter job (without loss {_pct(_mean('none', '_late'), 'rm_none_late_fast')}; they are fused at their "
+          "sample time). The theta error moves "
           f"from {_f(_mean('none', 'unicycle.rmse_theta_all'), 3, 'rm_none_theta_fast')} to "
           f"{_f(_mean('Bernoulli', 'unicycle.rmse_theta_all'), 3, 'rm_bern_theta_fast')} rad (difference {be_text}: "
           f"{'beyond' if be_sig else 'within'} two standard errors). Bursts erase "
