@@ -186,8 +186,11 @@ class _Params(StrictModel):
                                                       "continuous model discretised by ZOH, or a discrete plant's "
                                                       "own matrices)")
     fuse_at: Literal["sample_time", "arrival"] = Field("sample_time", description="sample_time: a message's "
-                                                       "measurement is fused at the sample nearest its t_ns; "
-                                                       "arrival: at the sample where it is read")
+                                                       "measurement is fused at the sample nearest its t_ns (the "
+                                                       "Kalman filters and ekf re-filter from their history; "
+                                                       "luenberger and none fuse one of the previous sample one "
+                                                       "step late, older ones are stale); arrival: at the sample "
+                                                       "where it is read")
     input_delay: Time | None = Field(None, description="known delay from the instant x_hat[k] refers to (the "
                                                        "sample time of the measurement fused at k) until the plant "
                                                        "receives u[k], e.g. "
