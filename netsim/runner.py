@@ -14,8 +14,10 @@ Failures are recorded, never lost:
   and the error text, but no ``metrics.csv`` (a run that failed has no metrics), then re-raises;
 * Ctrl-C (``KeyboardInterrupt``; the CLI turns SIGTERM into one) during the simulation writes the tables up to
   that instant with ``status: "interrupted at t = ... s"`` and no ``metrics.csv``, then re-raises. A process
-  killed outright (SIGKILL) cannot write anything: a folder without ``meta.json`` is incomplete (a :class:`~netsim.errors.NetsimError` carries a user message, anything
-  else is a bug).
+  killed outright (SIGKILL) cannot write anything: ``meta.json`` is removed before the run and written last,
+  so a folder without it is incomplete and ``netsim report`` refuses it.
+
+A :class:`~netsim.errors.NetsimError` carries a user message; any other exception is a bug.
 
 A scenario with ``baseline: {overrides: {...}}`` first runs the baseline (the same scenario with those
 overrides, same seed, nothing written) and passes its result to every metric as ``baseline``.
@@ -27,6 +29,9 @@ has reset the parameters its other settings make inert (e.g. the thresholds of a
 mode). An entry is reused for any seed when the baseline run did not use its seed (no random stream drawn
 from, see :meth:`~netsim.scenario.builder.Simulation.used_seed`), else only for the same seed. Results are
 identical with and without the cache; :func:`clear_baseline_cache` empties it.
+
+Why this module is long: the run's stages (load, baseline, simulate, metrics, verdict, write) share one failure
+policy (what is written, with which status, for each way a run can end); kept together it reads in one place.
 """
 
 from __future__ import annotations

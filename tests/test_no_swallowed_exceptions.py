@@ -36,6 +36,8 @@ REVIEWED = {
     ("is_sweep_file", "OSError, YamlRefused"),  # an unreadable file is not a sweep file (read again, reported)
     ("_line", "ConfigError"),  # sweep: no line for a path that does not parse
     ("read_record", "OSError, ValueError"),  # a missing or torn point.json: the point is run again
+    ("verified_record", "OSError, ValueError, TypeError, KeyError"),  # no readable manifest: the point is rerun
+    ("verified_record", "OSError"),  # a file gone while its digest is taken: not verified, the point is rerun
     ("_run_hash", "OSError, ValueError, TypeError, AttributeError"),  # no readable meta.json: hash the inputs
     ("_finished", "ConfigError"),  # a point whose scenario no longer loads is not finished
     ("_drive", "SchedulerLost"),  # the caller handles a lost Dask scheduler from the returned "lost"
