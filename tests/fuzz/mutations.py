@@ -75,9 +75,10 @@ class Outcome:
     leaked_warnings: list[str] = dataclasses.field(default_factory=list)
 
     def error_lines(self) -> list[str]:
-        """The problem lines validate printed (not 'valid', not warnings)."""
+        """The problem lines validate printed (not 'valid', not warnings, not the closing count 'N problems')."""
         return [ln for ln in self.validate_out.splitlines()
-                if ln.strip() and " warning: " not in ln and not ln.endswith(": valid") and "valid (" not in ln]
+                if ln.strip() and " warning: " not in ln and not ln.endswith(": valid") and "valid (" not in ln
+                and not re.fullmatch(r"\d+ problems?( in total)?", ln.strip())]
 
 
 # ------------------------------------------------------------------------------------------ reading/writing
