@@ -1,8 +1,9 @@
 """Section 5 of the 2WD cart README (:mod:`models.unicycle.readme`): what only a networked simulator shows.
 
 Sweeps (``facts`` keys): ``net`` (CAN: front rate x Bernoulli loss), ``burst`` (CAN: Bernoulli against
-Gilbert-Elliott), ``radio_mc`` (802.15.4: sensor rate x loss model, 200 replicates), ``delay`` (CAN: command
-delay with the report's sensors), ``radio_delay`` (802.15.4: command delay, the report's and accurate sensors);
+Gilbert-Elliott), ``radio_mc`` (802.15.4: sensor rate x loss model drawn per attempt, 200 replicates:
+:func:`radio_mc_section`, which :func:`splice_radio_mc` writes alone), ``delay`` (CAN: command delay with the
+report's sensors), ``radio_delay`` (802.15.4: command delay, the report's and accurate sensors);
 ``zigbee`` is one run's metrics; ``delay_aware_can`` and ``delay_aware_radio`` (issue 26 section 5: the same
 command delays with the filter unaware of them and told them, ``input_delay``) feed :func:`delay_aware_section`.
 Every number goes through the :class:`~models.unicycle.quoting.Quotes`.
