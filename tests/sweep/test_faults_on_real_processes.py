@@ -129,8 +129,10 @@ def test_a_killed_sweep_resumes_to_the_uninterrupted_summary(files, tmp_path, si
         code = signal_at(start(tmp_path, *_sweep_args(sweep, out)), sig, rng.uniform(0.1, 0.6) * t_full)
         if code is not None:
             signalled += 1
-            # killed; SIGTERM stops like Ctrl-C (130), or kills outright before the CLI set its handler (-15)
-            assert code in (-signal.SIGKILL, -signal.SIGTERM, 130), code
+            # killed; SIGTERM stops like Ctrl-C (130), or kills outright before the CLI set its handler (-15); a
+            # SIGTERM after the last point (while the pool closes) leaves nothing pending: exit 0, summary whole
+            assert code in (-signal.SIGKILL, -signal.SIGTERM, 130) or (
+                code == 0 and (out / "summary.csv").read_bytes() == want), code
         if (out / "summary.csv").exists():  # written by SIGTERM: every row it calls finished is the reference's
             for index, row in _rows(out / "summary.csv").items():
                 assert row == ok_rows[index] or ",pending," in row, row
