@@ -48,7 +48,7 @@ from pydantic import ValidationError
 
 from netsim.errors import ConfigError
 from netsim.scenario.messages import problems_from_validation_error, shorten_problem
-from netsim.scenario.paths import PathPart, parse_path
+from netsim.scenario.paths import PathPart, get_path, parse_path
 from netsim.scenario.overrides import apply_overrides, shadowed_overrides
 from netsim.scenario.problems import ERROR, Problem, ScenarioError, sort_problems
 from netsim.scenario.python_values import plain_values
@@ -63,6 +63,7 @@ __all__ = [
     "raw_copy",
     "dump_resolved",
     "scenario_hash",
+    "shadow_verdict",
 ]
 
 log = logging.getLogger(__name__)
@@ -327,6 +328,39 @@ def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: 
     scenario._source = file
     scenario._baseline = base_scenario
     return done(problems), scenario, base_warnings
+
+
+def shadow_verdict(base: dict[str, Any], values: Mapping[str, Any]) -> tuple[list[tuple[PathPart, ...]],
+                                                                            list[Problem]] | None:
+    """What the shadow check does to ``values`` written as overrides into (a copy of) ``base``: the paths of the
+    siblings it removes and its problems; None when the overridden scenario does not validate (nothing to check).
+
+    A sweep (:meth:`netsim.sweep.spec.Sweep.point_raw`) runs this once per distinct preset level and applies the
+    verdict to every point with that level.
+    """
+    raw = copy.deepcopy(base)
+    applied, refused = apply_overrides(raw, values)
+    if refused:
+        return None
+    _, scenario = _validate(raw, None)
+    if scenario is None:
+        return None
+    before = copy.deepcopy(raw)
+    problems, changed = shadowed_overrides(raw, scenario, applied)
+    removed: list[tuple[PathPart, ...]] = []
+    if changed:
+        for item in applied:
+            old, new = _at(before, item.parts[:-1]), _at(raw, item.parts[:-1])
+            if isinstance(old, dict) and isinstance(new, dict):
+                removed += [(*item.parts[:-1], k) for k in old if k not in new]
+    return removed, problems
+
+
+def _at(raw: Any, parts: tuple[PathPart, ...]) -> Any:
+    try:
+        return get_path(raw, list(parts)) if parts else raw
+    except ConfigError:  # a path the override did not reach: no siblings there were removed
+        return None
 
 
 def raw_copy(scenario: Scenario) -> dict[str, Any]:

@@ -63,7 +63,7 @@ def show_bytes(n: float) -> str:
 def _physical() -> int | None:
     try:
         return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
+    except (ValueError, OSError, AttributeError):  # no sysconf names here: the address-space limit or 2 GiB serve
         return None
 
 

@@ -55,7 +55,7 @@ class _Lines:
                 self._index = LineIndex()
         try:
             return self._index.line_of(where)
-        except ConfigError:
+        except ConfigError:  # a path that does not parse: the problem keeps its file, without a line
             return None
 
 

@@ -295,16 +295,13 @@ class Sweep:
         """The :class:`~netsim.scenario.problems.Problem` s of the point's overrides that the base shadows."""
         return self._point(point)[1]
 
-    def _values(self, point: Point) -> dict[str, Any]:
-        return {path: value for name, value in point.values.items() for path in self.spec.factors[name].paths}
-
     def _point(self, point: Point) -> tuple[dict[str, Any], list[Any]]:
         import copy
 
-        from netsim.scenario.paths import parse_path, set_path
+        from netsim.scenario.paths import get_path, parse_path, set_path
 
         raw = copy.deepcopy(self.base)
-        values = self._values(point)
+        values = {path: value for name, value in point.values.items() for path in self.spec.factors[name].paths}
         for path, value in values.items():
             set_path(raw, path, copy.deepcopy(value))
         texts = [tuple(parse_path(p)) for p, v in values.items() if isinstance(v, str) and _NAME.fullmatch(v)]
@@ -313,42 +310,16 @@ class Sweep:
         parents = {t[:-1] for t in texts}
         key = canonical_json(sorted((p, v) for p, v in values.items() if tuple(parse_path(p))[:-1] in parents))
         if key not in self._shadow:
-            verdict = self._shadowing(values)
+            from netsim.scenario.loader import shadow_verdict
+
+            verdict = shadow_verdict(self.base, values)
             if verdict is None:
                 return raw, []  # the point does not validate: check_scenario reports why; nothing cached
             self._shadow[key] = verdict
         removed, problems = self._shadow[key]
-        for parts in removed:
-            parent: Any = raw
-            for part in parts[:-1]:
-                parent = parent[part]
-            parent.pop(parts[-1], None)
+        for parts in removed:  # siblings that spelled out the old preset: the new one fills them
+            get_path(raw, list(parts[:-1])).pop(parts[-1], None)
         return raw, list(problems)
-
-    def _shadowing(self, values: dict[str, Any]) -> tuple[list[tuple[Any, ...]], list[Any]] | None:
-        """Apply ``values`` as overrides to the base and run the loader's shadow check once; the sibling paths it
-        removed and its problems, or None when the scenario does not validate."""
-        import copy
-
-        from netsim.scenario.loader import _validate
-        from netsim.scenario.overrides import apply_overrides, shadowed_overrides
-
-        raw = copy.deepcopy(self.base)
-        applied, refused = apply_overrides(raw, values)
-        if refused:
-            return None
-        _, scenario = _validate(raw, None)
-        if scenario is None:
-            return None
-        before = copy.deepcopy(raw)
-        problems, changed = shadowed_overrides(raw, scenario, applied)
-        removed: list[tuple[Any, ...]] = []
-        if changed:
-            for item in applied:
-                parent_before, parent_after = _get(before, item.parts[:-1]), _get(raw, item.parts[:-1])
-                if isinstance(parent_before, dict) and isinstance(parent_after, dict):
-                    removed += [(*item.parts[:-1], k) for k in parent_before if k not in parent_after]
-        return removed, problems
 
     @property
     def name(self) -> str:
@@ -358,15 +329,6 @@ class Sweep:
 
 #: A level that may name a preset (``modes6``, ``inband``): text that is not a number or a time ("5 ms").
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
-
-
-def _get(raw: Any, parts: tuple[Any, ...]) -> Any:
-    for part in parts:
-        try:
-            raw = raw[part]
-        except (KeyError, IndexError, TypeError):
-            return None
-    return raw
 
 
 _FLOW_PATHS = re.compile(r"^(?P<head>\s*paths\s*:\s*)\[(?P<items>[^\"'#]*)\](?P<tail>\s*(?:#.*)?)$")
