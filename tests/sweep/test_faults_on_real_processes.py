@@ -118,15 +118,22 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path, f
 
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
 def test_a_killed_sweep_resumes_to_the_uninterrupted_summary(files, tmp_path, sig) -> None:
-    base, sweep, reference, t_full = files
+    base, sweep, reference, _ = files
     want = (reference / "summary.csv").read_bytes()
     ok_rows = _rows(reference / "summary.csv")
     rng = random.Random(31 + int(sig))
     out = tmp_path / "out"
+    shutil.copytree(reference, out)
+    for name in rng.sample(sorted(os.listdir(out / "points")), 8):
+        shutil.rmtree(out / "points" / name)
+    t0 = time.monotonic()
+    assert netsim(tmp_path, *_sweep_args(sweep, out)).returncode == 0
+    t_half = time.monotonic() - t0  # a sweep with 8 of its 16 points to run, start-up included, as each try below
     signalled = 0
     for _ in range(TRIES):
-        # half the points are left to run (below): the sweep lasts about 0.7 t_full, start-up included
-        code = signal_at(start(tmp_path, *_sweep_args(sweep, out)), sig, rng.uniform(0.1, 0.6) * t_full)
+        for name in rng.sample(sorted(os.listdir(out / "points")), 8):  # 8 points to run in this try
+            shutil.rmtree(out / "points" / name)
+        code = signal_at(start(tmp_path, *_sweep_args(sweep, out)), sig, rng.uniform(0.1, 0.95) * t_half)
         if code is not None:
             signalled += 1
             # killed; SIGTERM stops like Ctrl-C (130), or kills outright before the CLI set its handler (-15); a
@@ -139,10 +146,8 @@ def test_a_killed_sweep_resumes_to_the_uninterrupted_summary(files, tmp_path, si
         rerun = netsim(tmp_path, *_sweep_args(sweep, out))
         assert rerun.returncode == 0, rerun.stderr
         assert (out / "summary.csv").read_bytes() == want
-        for name in rng.sample(sorted(os.listdir(out / "points")), 8):  # half the points to run in the next try
-            shutil.rmtree(out / "points" / name)
-    assert signalled >= TRIES // 2  # most instants fell inside the sweep
-    FAULTS.append((f"{sig.name} of netsim sweep (4x4, 2 workers)", TRIES, "nothing"))
+    assert signalled >= 3  # instants fell inside the sweep (the rest came after its end: nothing to resume)
+    FAULTS.append((f"{sig.name} of netsim sweep (4x4, 2 workers)", TRIES, f"nothing ({signalled} mid-sweep)"))
 
 
 def _tamper_point_json(point: Path) -> None:
@@ -268,8 +273,8 @@ def test_a_killed_run_leaves_a_folder_report_refuses_and_a_rerun_completes(files
         rerun = netsim(tmp_path, "run", "base.yaml", "--out", out.name)
         assert rerun.returncode == 0, rerun.stderr
         assert (out / "metrics.csv").read_bytes() == want
-    assert signalled >= TRIES // 2
-    FAULTS.append((f"{sig.name} of netsim run", TRIES, "nothing"))
+    assert signalled >= 3
+    FAULTS.append((f"{sig.name} of netsim run", TRIES, f"nothing ({signalled} mid-run)"))
 
 
 def test_ten_runs_started_at_once_get_ten_folders(files, tmp_path) -> None:
