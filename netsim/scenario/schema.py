@@ -172,7 +172,12 @@ Range = Annotated[tuple[float, float], BeforeValidator(_range)]
 
 
 def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(float(v))
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        return False
+    try:
+        return math.isfinite(float(v))
+    except OverflowError:  # an integer too large for a float: not usable (limits.py says so at its path)
+        return False
 
 
 def _noise(value: Any) -> Any:

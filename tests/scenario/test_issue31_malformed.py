@@ -320,3 +320,11 @@ def test_a_run_out_of_memory_ends_in_one_line_and_marks_its_folder_failed(tmp_pa
     assert len(errors) == 1 and "out of memory" in errors[0] and "output: {jobs: summary" in errors[0], done.stderr
     meta = json.loads((tmp_path / "out" / "meta.json").read_text())
     assert meta["status"] == "error" and meta["error"].startswith("out of memory at t = ")
+
+
+def test_an_integer_too_large_for_a_float_in_process_noise_is_refused_at_its_path() -> None:
+    """Found by the fuzz figures (issue 31 session): OverflowError from the process_noise check, a traceback."""
+    raw = _raw("dc_servo_lqr_kalman.yaml")
+    raw["plant"]["process_noise"][1] = 10**4299  # what the loader reads for a 5000-digit integer
+    errors = _errors(raw)
+    assert "write a smaller value" in errors["plant.process_noise[1]"]
