@@ -13,9 +13,11 @@ the node's CPU runs anything (tasks, handlers, context switches, ISR latencies),
 ``tx`` while it transmits a frame or an ACK, ``rx`` while it senses other transmissions, ``idle`` while it
 listens to a quiet channel, ``sleep`` while a radio with ``listen: own_frames`` has no frame to send).
 A ``battery`` of ``capacity`` joules runs out when the energy used reaches it: the node stops
-(:meth:`netsim.kernel.Kernel.halt`: its jobs are killed, nothing more is released, receptions are ignored) and its
-radios neither send nor receive (:meth:`~netsim.network.wireless.WirelessMedium.radio_off`). On a wired network the
-frames already queued at the node's controller still go out.
+(:meth:`netsim.kernel.Kernel.halt`: its jobs are killed, nothing more is released, receptions are ignored) and it
+sends nothing more on any network it is on (:meth:`netsim.network.pipeline.Network.halt_node`, and
+:meth:`~netsim.network.wireless.WirelessMedium.halt_node` on a radio): its queued frames and those still in
+their pre-processing delay are dropped as ``sender_dead`` (on a radio also the frame its MAC holds), a frame on
+the air ends, and its radios receive nothing.
 """
 
 from __future__ import annotations
