@@ -44,6 +44,29 @@ from netsim.units import Duration
 __all__ = ["FlexRayBus"]
 
 
+def _dynamic_id_message(node: str, fid: int, n_static: int, m: int) -> str:
+    """The message for a dynamic frame ID outside the dynamic segment, saying what to change.
+
+    Frame IDs ``1 .. n_static`` are the static slots; the dynamic segment has one minislot per ID, so its IDs run
+    from ``n_static + 1`` to ``n_static + m``. An ID past the last minislot needs more minislots (at least
+    ``fid - n_static``, as long as the cycle still holds them); an ID at or below ``n_static`` belongs to a static
+    slot and must be raised.
+    """
+    where = f"'{node}' has frame ID {fid}"
+    if fid > n_static:  # past the dynamic segment: more minislots, or a lower ID
+        have = "the dynamic segment has no minislot" if m == 0 else (
+            f"dynamic frame IDs run from {n_static + 1} to {n_static + m} ({m} minislots after {n_static} static slots)")
+        return (f"{where}, but {have}; set minislots to at least {fid - n_static} (one minislot per dynamic frame "
+                f"ID, so ID {fid} needs {fid - n_static} after the {n_static} static slots) or give '{node}' a lower "
+                "frame ID")
+    if m == 0:
+        return (f"{where}, but the dynamic segment has no minislot; set minislots to at least 1 and give '{node}' a "
+                f"frame ID above the {n_static} static slots (from {n_static + 1})")
+    return (f"{where}, inside the static segment; dynamic frame IDs run from {n_static + 1} to {n_static + m} "
+            f"(IDs 1 to {n_static} are the {n_static} static slots, then one ID per minislot): give '{node}' a frame "
+            "ID in that range")
+
+
 @register("network", "flexray", "FlexRay: static segment of TDMA slots, dynamic segment of minislots by frame ID")
 class FlexRayBus(Network):
     """A FlexRay bus, one channel (see the module docstring)."""
@@ -101,8 +124,7 @@ class FlexRayBus(Network):
                 if node not in nodes:
                     raise ValueError(f"'{node}' is not one of the network's nodes {nodes}")
                 if "static_schedule" in info.data and "minislots" in info.data and not n_static < fid <= n_static + m:
-                    raise ValueError(f"'{node}' has frame ID {fid}; dynamic frame IDs run from {n_static + 1} (after "
-                                     f"the {n_static} static slots) to {n_static + m} (one per minislot)")
+                    raise ValueError(_dynamic_id_message(node, fid, n_static, m))
                 if fid in owner:
                     raise ValueError(f"frame ID {fid} is given to both '{owner[fid]}' and '{node}'")
                 owner[fid] = node
@@ -119,10 +141,12 @@ class FlexRayBus(Network):
             static = len(d.get("static_schedule") or []) * (d.get("static_slot") or 0)
             dynamic = (d.get("minislots") or 0) * (d.get("minislot") or 0)
             if static + dynamic > value:
+                fits = (value - static) // d["minislot"] if d.get("minislot") and value >= static else 0
                 raise ValueError(
                     f"the static segment ({format_time(static)}) and the dynamic segment ({format_time(dynamic)}) "
                     f"take {format_time(static + dynamic)}, longer than the cycle ({format_time(value)}); lengthen "
-                    "the cycle or shorten the slot table")
+                    "the cycle or shorten the slot table"
+                    + (f" (the cycle holds at most {fits} minislots after the static segment)" if dynamic else ""))
             if static + dynamic == 0:
                 raise ValueError("the cycle has no slot: give static_schedule with static_slot, or minislots with "
                                  "minislot and dynamic_ids")
