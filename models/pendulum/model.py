@@ -226,7 +226,7 @@ def process_noise_cov(lin: Linear, std: float = DISTURBANCE_STD, hold: float = D
     for j in range(n_hold):
         G = np.linalg.matrix_power(Ah, n_hold - 1 - j) @ Bh
         Q += G @ G.T
-    return std**2 * Q
+    return _variance(std, None) * Q
 
 
 def observability_rank(Ad: np.ndarray, C: np.ndarray) -> int:
@@ -238,6 +238,24 @@ def observability_rank(Ad: np.ndarray, C: np.ndarray) -> int:
 
 class PendulumPlant:
     """Marker base for documentation; the plant is a :class:`netsim.plant.NonlinearPlant` (see the factory)."""
+
+
+def _variance(std: float, where: str | None) -> float:
+    """``std ** 2``, or a :class:`~netsim.errors.ConfigError` (at ``where.disturbance_std`` when ``where`` is
+    given) saying what to write when the square overflows a float (a std past about 1.3e154 V; netsim's number
+    limit, 1e15, is far below it, so only a direct Python call gets this far)."""
+    from netsim.errors import ConfigError
+    from netsim.units import NUMBER_LIMIT
+
+    try:
+        var = std**2
+    except OverflowError:
+        var = math.inf
+    if not math.isfinite(var):
+        raise ConfigError(f"a disturbance std of {std:g} V has a variance too large for a float; write a std of at "
+                          f"most {NUMBER_LIMIT:g} V (the QUBE-Servo 2's is {DISTURBANCE_STD:g} V)",
+                          path=f"{where}.disturbance_std" if where else None)
+    return var
 
 
 @register("plant", "furuta_pendulum",
@@ -261,7 +279,7 @@ def furuta_pendulum(params: PendulumParams | None = None, **kwargs: object):  # 
     if p.disturbance_std > 0:
         dt_ns = int(round(p.disturbance_hold * 1e9))
         plant.add_disturbance("u", LTIDisturbance([[0.0]], [[1.0]], [[1.0]], dt_ns=dt_ns,
-                                                  noise_cov=p.disturbance_std**2))
+                                                  noise_cov=_variance(p.disturbance_std, "plant.params")))
     return plant
 
 
