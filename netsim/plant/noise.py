@@ -185,12 +185,26 @@ def apply_entries(plant: Any, noise: Any) -> None:
             f"plant {plant.name} takes process noise as entries {{states: [...], sigma: ..., sample: ...}} or "
             f"{{inputs: [...], sigma: ..., sample: ...}}; got {noise!r}"
         )
-    for entry in noise_entries(noise):
+    entries = noise_entries(noise)
+    for i, entry in enumerate(entries):
+        # the scenario schema hands a single mapping over as a list of one: index only when there are several
+        _check_names(plant, entry, f"plant.process_noise{f'[{i}]' if len(entries) > 1 else ''}.{entry.kind}")
         if entry.kind == "inputs":
             for target, sigma in zip(entry.targets, entry.sigmas()):
                 plant.add_input_noise(target, sigma, entry.sample)
         else:
             plant.add_state_noise(entry.targets, entry.sigmas(), entry.sample, entry.model or "increment")
+
+
+def _check_names(plant: Any, entry: NoiseEntry, at: str) -> None:
+    """Refuse a state or input ``entry`` names that ``plant`` does not have, at ``at[j]``, listing the known
+    names (a renamed ``plant.states``/``inputs`` entry leaves a noise entry naming the old one)."""
+    names = list(plant.state_names if entry.kind == "states" else plant.input_names)
+    what = entry.kind[:-1]
+    for j, target in enumerate(entry.targets):
+        if isinstance(target, str) and target not in names:
+            raise ConfigError(f"plant {plant.name} has no {what} '{target}'; use one of its {entry.kind} "
+                              f"(known: {', '.join(map(str, names))}) or a {what} index", path=f"{at}[{j}]")
 
 
 def add_held_noise(plant: Any, index: int, sigma: float, sample_ns: int) -> None:
