@@ -38,7 +38,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from pydantic import Field, ValidationError
+from pydantic import Field, ValidationError, field_validator
 
 from netsim.errors import ConfigError
 from netsim.registry import lookup, register
@@ -303,11 +303,23 @@ def control_error(result: Any, params: Any, baseline: Any = None) -> dict[str, f
 
 
 # ----------------------------------------------------------------------------------------------------- latency
+#: The message for an empty ``chain``: what to list in it.
+EMPTY_CHAIN = "'chain' is empty; list the tasks of the chain as 'node.task', e.g. [sensor.sample, controller.control]"
+
+
 class LatencyParams(StrictModel):
     """Parameters of the ``latency`` metric: the task chain as ``node.task`` names."""
 
-    chain: list[str]
+    chain: list[str] = Field(min_length=1)
     name: str = "latency"
+
+    @field_validator("chain", mode="before")
+    @classmethod
+    def _not_empty(cls, value: Any) -> Any:
+        # before min_length's generic "at least 1 item": say what goes in the list (the words validate uses)
+        if isinstance(value, (list, tuple)) and not value:
+            raise ValueError(EMPTY_CHAIN)
+        return value
 
 
 def _split_task(ref: str) -> tuple[str, str]:
