@@ -44,7 +44,11 @@ log = logging.getLogger("netsim.cli")
 def _setup_logging(verbose: int, quiet: bool) -> None:
     level = logging.ERROR if quiet else (logging.WARNING, logging.INFO, logging.DEBUG)[min(verbose, 2)]
     root = logging.getLogger()
-    if not any(getattr(h, "_netsim_cli", False) for h in root.handlers):
+    ours = [h for h in root.handlers if getattr(h, "_netsim_cli", False)]
+    for h in ours:  # a second main() in one process (tests, notebooks): write to today's stderr, not the first one's
+        if isinstance(h, logging.StreamHandler) and h.stream is not sys.stderr:
+            h.stream = sys.stderr  # not setStream(): it flushes the old stream, which may be closed
+    if not ours:
         handler = logging.StreamHandler(sys.stderr)
         handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
         handler._netsim_cli = True  # type: ignore[attr-defined]
