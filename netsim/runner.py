@@ -245,15 +245,19 @@ def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | N
     t_end_ns = int(round(result.meta["t_end_s"] * S))
     capture = _WarningCapture()
     loggers = [logging.getLogger("netsim"), logging.getLogger("models")]
-    for lg in loggers:
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:  # meta.json keeps the warnings even when the console shows only errors (netsim -q)
         lg.addHandler(capture)
+        if lg.getEffectiveLevel() > logging.WARNING:
+            lg.setLevel(logging.WARNING)
     view = _metrics_view(result)  # a table a metric reads is built on the view: the run folder's CSVs are still
     try:                           # written straight from the records (RunResult._table_rows)
         values = generic_metrics(view, sim, t_end_ns)
         values.update(compute_metrics(view, list(scenario.metrics), baseline))
     finally:
-        for lg in loggers:
+        for lg, level in zip(loggers, levels):
             lg.removeHandler(capture)
+            lg.setLevel(level)
     if capture.texts:
         result.meta["warnings"] = list(result.meta.get("warnings") or []) + capture.texts
     from netsim.results.verdict import apply_finding, judge_metrics

@@ -53,6 +53,9 @@ def _setup_logging(verbose: int, quiet: bool) -> None:
         handler.setFormatter(logging.Formatter("%(levelname)s: %(message)s"))
         handler._netsim_cli = True  # type: ignore[attr-defined]
         root.addHandler(handler)
+        ours = [handler]
+    for h in ours:  # the console's own level: a run may lower a logger's level to keep warnings in meta.json
+        h.setLevel(level)
     root.setLevel(level)
 
 
