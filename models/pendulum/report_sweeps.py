@@ -68,17 +68,9 @@ def with_results(summary: Any, name: str) -> Any:
     NetsimError
         Naming the first run without a result and its error.
     """
-    from netsim.errors import NetsimError
-    from netsim.status import DIVERGED, OK, UNSTABLE, kind_of
+    from netsim.sweep.summary import require_results
 
-    bad = summary[~summary["status"].map(kind_of).isin([OK, DIVERGED, UNSTABLE])]
-    if len(bad):
-        first = bad.iloc[0]
-        why = str(first.get("error", "") or "").strip()
-        raise NetsimError(f"sweep {name}: {len(bad)} of {len(summary)} runs gave no result (run "
-                          f"{first.get('index', '?')}: {first['status']}{': ' + why if why else ''}); fix the cause "
-                          "and run the report again (finished runs are resumed)")
-    return summary
+    return require_results(summary, name)
 
 
 def point_values(name: str) -> list[dict[str, Any]]:

@@ -68,17 +68,11 @@ def counted_runs(summary: pd.DataFrame, name: str) -> pd.DataFrame:
         When a run gave no result (status ``error``, ``interrupted`` or ``pending``): the report would otherwise
         count fewer runs than the sweep has without saying so.
     """
-    from netsim.errors import NetsimError
     from netsim.status import DIVERGED, UNSTABLE, kind_of
+    from netsim.sweep.summary import require_results
 
+    require_results(summary, name)
     kinds = summary["status"].map(kind_of)
-    bad = summary[~kinds.isin(["ok", DIVERGED, UNSTABLE])]
-    if len(bad):
-        first = bad.iloc[0]
-        why = str(first.get("error", "") or "").strip()
-        raise NetsimError(f"sweep {name}: {len(bad)} of {len(summary)} runs gave no result (run "
-                          f"{first.get('index', '?')}: {first['status']}{': ' + why if why else ''}); fix the cause "
-                          "and run the report again (finished runs are resumed)")
     out = summary.copy()
     out["_failed"] = kinds.isin([DIVERGED, UNSTABLE]).to_numpy()
     return out

@@ -20,7 +20,7 @@ from typing import Any, Iterable, Mapping, Sequence
 
 from netsim.sweep.spec import canonical_json
 
-__all__ = ["format_value", "one_line", "summary_text", "write_summary", "TRAILING_COLUMNS"]
+__all__ = ["format_value", "one_line", "require_results", "summary_text", "write_summary", "TRAILING_COLUMNS"]
 
 #: Columns after the metrics.
 TRAILING_COLUMNS = ("status", "seed", "error", "folder")
@@ -83,3 +83,39 @@ def write_summary(path: Path, factors: Sequence[str], rows: Iterable[Mapping[str
     tmp.write_text(text, encoding="utf-8", newline="")
     os.replace(tmp, path)
     return path
+
+
+def require_results(summary: Any, name: str) -> Any:
+    """``summary`` (a sweep's summary table) when every run gave a result: ``ok``, ``diverged`` or ``unstable``.
+
+    A report that counts a diverged or unstable run as a lost loop must not count a run that gave no result
+    (``error``, ``interrupted``, ``pending``) as one, nor drop it silently.
+
+    Parameters
+    ----------
+    summary : pandas.DataFrame
+        The sweep's ``summary.csv`` as a table, with a ``status`` column.
+    name : str
+        The sweep's name, for the message.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``summary`` itself.
+
+    Raises
+    ------
+    NetsimError
+        Naming the first run without a result and its error.
+    """
+    from netsim.errors import NetsimError
+    from netsim.status import DIVERGED, OK, UNSTABLE, kind_of
+
+    bad = summary[~summary["status"].map(kind_of).isin([OK, DIVERGED, UNSTABLE])]
+    if len(bad):
+        first = bad.iloc[0]
+        why = str(first.get("error", "") or "").strip()
+        raise NetsimError(f"sweep {name}: {len(bad)} of {len(summary)} runs gave no result (run "
+                          f"{first.get('index', '?')}: {first['status']}{': ' + why if why else ''}); fix the cause "
+                          "and run the report again (finished runs are resumed)")
+    return summary
