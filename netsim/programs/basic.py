@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Annotated, Any, Callable, Generator
 
-from pydantic import Field, ValidationInfo, field_validator, model_serializer, model_validator
+from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_serializer, model_validator
 
 from netsim.control.pid import PID, PIDParams
 from netsim.registry import register
@@ -72,8 +72,16 @@ def _destination_given(to: str | None, info: ValidationInfo) -> str | None:
     return to
 
 
+def _destination_name(to: Any) -> Any:
+    """``to`` is a node's name or ``all``: refuse a mapping or list with that hint (not a bare type error)."""
+    if isinstance(to, (dict, list, tuple)):
+        kind = "a mapping" if isinstance(to, dict) else "a list"
+        raise ValueError(f"'to' is {kind}; write one node's name (e.g. 'to: actuator') or 'to: {BROADCAST}'")
+    return to
+
+
 #: ``to`` of a program that sends on ``network`` (declared after ``network``): required with a network.
-Destination = Annotated[str | None, Field(default=None, validate_default=True)]
+Destination = Annotated[str | None, BeforeValidator(_destination_name), Field(default=None, validate_default=True)]
 
 
 def _destination(to: str | None) -> str | None:

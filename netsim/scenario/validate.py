@@ -502,8 +502,8 @@ class _Checker:
         from netsim.programs import BROADCAST
 
         net, to = values.get("network"), values.get("to")
-        if not isinstance(net, str) or net not in self.networks:
-            return
+        if not isinstance(net, str) or net not in self.networks or not isinstance(to, (str, type(None))):
+            return  # a 'to' that is not a name: the program's parameters report it
         members = [n for n in _l(_d(self.networks[net]).get("nodes")) if isinstance(n, str)]
         reached = [n for n in members if n != node] if to in (None, BROADCAST) else [to]
         consumers = self.consumers(net)
