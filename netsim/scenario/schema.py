@@ -162,6 +162,8 @@ def _range(value: Any) -> tuple[float, float]:
     if isinstance(value, (list, tuple)) and len(value) == 2:
         lo, hi = value
         if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (lo, hi)):
+            if not all(_is_number(v) for v in (lo, hi)):
+                return value  # NaN, infinity or an integer too large for a float: limits.py refuses it at its path
             if not lo < hi:
                 raise ValueError(f"expected [low, high] with low < high, got [{lo}, {hi}]")
             return float(lo), float(hi)
