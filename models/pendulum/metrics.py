@@ -159,4 +159,6 @@ def pendulum_verdict(result: Any, params: Any) -> tuple[float, str] | None:
 
 
 pendulum_metric.Params = PendulumMetricParams  # type: ignore[attr-defined]
+#: The columns the measures need (``x_hat[i]`` are optional): validate refuses a run that would not record them.
+pendulum_metric.reads_signals = ("theta", "alpha", "u")  # type: ignore[attr-defined]
 pendulum_metric.verdict = pendulum_verdict  # type: ignore[attr-defined]

@@ -737,12 +737,18 @@ def _signal_refs(values: dict[str, Any], at: list[PathPart]) -> list[tuple[list[
     return [(where, name) for where, name in refs if isinstance(name, str) and name]
 
 
+#: Program parameters that name plant outputs the program reads (``measurements[].outputs``, ``tracked``): never
+#: a name it records under.
+_READ_KEYS = frozenset({"outputs", "tracked"})
+
+
 def _strings(tree: Any) -> set[str]:
-    """Every string value in a raw YAML tree (the names programs may record under)."""
+    """Every string value in a raw YAML tree (the names programs may record under), except under the keys of
+    :data:`_READ_KEYS`."""
     if isinstance(tree, str):
         return {tree}
     if isinstance(tree, dict):
-        return set().union(*(_strings(v) for v in tree.values())) if tree else set()
+        return set().union(*(_strings(v) for k, v in tree.items() if k not in _READ_KEYS)) if tree else set()
     if isinstance(tree, list):
         return set().union(*(_strings(v) for v in tree)) if tree else set()
     return set()
