@@ -128,9 +128,10 @@ class MeasurementSource(StrictModel):
                                                  "any sender)")
     tag: str | None = Field(None, description="take only the messages with this tag (with 'network'; default: any "
                                               "tag)")
-    outputs: list[int | str] | None = Field(None, description="plant outputs it measures (indices or names), in the "
-                                                              "order of its values; default: the ADC channel's "
-                                                              "output, or every output for the only network source")
+    outputs: list[int | str] | None = Field(None, min_length=1, description="plant outputs it measures (indices or "
+                                                              "names), in the order of its values; default: the ADC "
+                                                              "channel's output, or every output for the only "
+                                                              "network source")
 
     @model_validator(mode="after")
     def _one(self) -> MeasurementSource:
