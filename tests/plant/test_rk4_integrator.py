@@ -191,7 +191,8 @@ def test_bad_integrator_is_refused_at_its_path(integrator, where, words):
 
 def test_integrator_on_an_lti_plant_is_refused_at_its_path():
     lti = {"type": "ss", "A": [[0, 1], [0, 0]], "B": [[0], [1]], "C": [[1, 0], [0, 1]], "D": 0,
-           "outputs": ["theta", "alpha"], "inputs": ["u"]}
+           "outputs": ["theta", "alpha"], "inputs": ["u"],
+           "record_grid": "5 ms"}  # the pendulum metric reads theta and alpha, recorded on this grid
     problems = _problems(RK4, lti)
     assert any(p.startswith("plant.integrator:") and "propagated exactly" in p for p in problems), problems
 
