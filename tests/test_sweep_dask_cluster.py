@@ -213,12 +213,18 @@ def _in_thread(fn: Callable[[], object], timeout: float = WAIT_S) -> object:
     return value
 
 
+def _foreground_sigint() -> None:
+    """In the child: SIGINT as a terminal's foreground job has it. A test run started as a background job
+    (`nohup ... &`) inherits SIGINT ignored, and Python then keeps ignoring it: Ctrl-C would never arrive."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _sweep_cli(args: list[str]) -> subprocess.Popen:
     """``netsim sweep ...`` in its own process group (as a terminal runs it), output captured."""
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     return subprocess.Popen([str(BIN / "netsim"), "sweep", *args, "--no-progress"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True, env=env,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_foreground_sigint)
 
 
 # ---------------------------------------------------------------------------------------------- faults
