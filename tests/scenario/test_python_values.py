@@ -48,8 +48,9 @@ def _pair(edit_numpy: Any, edit_plain: Any) -> tuple[dict[str, Any], dict[str, A
     return given, plain
 
 
-def _same_hash(given: dict[str, Any], plain: dict[str, Any]) -> None:
-    assert scenario_hash(given) == scenario_hash(plain)
+def _hashes(given: dict[str, Any], plain: dict[str, Any]) -> tuple[str, str]:
+    """The scenario hash of the numpy-given scenario and of the same scenario written as lists."""
+    return scenario_hash(given), scenario_hash(plain)
 
 
 def _discrete() -> Any:
@@ -65,31 +66,36 @@ def test_a_gain_from_dlqr_runs_as_state_feedback_K() -> None:
                          lambda r: _ctl(r).update(law={"type": "state_feedback", "K": K.tolist()}))
     result = netsim.run(given)  # issue 26: a raw PydanticSerializationError from the hash, after validation
     assert result.meta["status"] == "ok"
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_np_diag_weights_and_a_0d_array_weight_are_accepted() -> None:
     given, plain = _pair(lambda r: _ctl(r)["law"].update(Q=np.diag([1.0, 0.0]), R=np.array(0.1)),
                          lambda r: _ctl(r)["law"].update(Q=[[1.0, 0.0], [0.0, 0.0]], R=0.1))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 @pytest.mark.parametrize("value, plain", [(np.float32(0.25), float(np.float32(0.25))), (np.int64(2), 2),
                                           (np.float64(0.1), 0.1)])
 def test_numpy_scalars_are_numbers(value: Any, plain: Any) -> None:
     given, expected = _pair(lambda r: _ctl(r)["law"].update(R=value), lambda r: _ctl(r)["law"].update(R=plain))
-    _same_hash(given, expected)
+    numpy_hash, plain_hash = _hashes(given, expected)
+    assert numpy_hash == plain_hash
 
 
 def test_a_numpy_integer_where_an_integer_is_wanted() -> None:
     given, plain = _pair(lambda r: _ctl(r).update(bits=np.int64(64)), lambda r: _ctl(r).update(bits=64))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_a_numpy_bool_where_a_bool_is_wanted() -> None:
     given, plain = _pair(lambda r: _ctl(r)["law"].update(feedforward=np.bool_(False)),
                          lambda r: _ctl(r)["law"].update(feedforward=False))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
     assert load_scenario(given).nodes["controller"].tasks[0].params["law"]["feedforward"] is False
 
 
@@ -97,19 +103,22 @@ def test_vectors_in_nested_program_params() -> None:
     """The estimator's diagonal covariance and initial estimate inside the state_feedback program's params."""
     given, plain = _pair(lambda r: _ctl(r)["estimator"].update(Q=np.array([0.0, 0.01]), x0=np.zeros(2)),
                          lambda r: _ctl(r)["estimator"].update(Q=[0.0, 0.01], x0=[0.0, 0.0]))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_plant_matrices_and_process_noise_as_arrays() -> None:
     given, plain = _pair(lambda r: r["plant"].update(A=np.array(A_C), process_noise=np.array([0.0, 1.0])),
                          lambda r: r["plant"].update(A=A_C, process_noise=[0.0, 1.0]))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_signal_parameters_as_numpy_scalars() -> None:
     given, plain = _pair(lambda r: r["signals"]["r"].update(amplitude=np.float32(0.5)),
                          lambda r: r["signals"]["r"].update(amplitude=0.5))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_a_time_given_as_a_numpy_zero_is_zero() -> None:
@@ -117,7 +126,8 @@ def test_a_time_given_as_a_numpy_zero_is_zero() -> None:
     gets the message the plain number gets."""
     given, plain = _pair(lambda r: r["nodes"]["controller"]["tasks"][0].update(offset=np.int64(0)),
                          lambda r: r["nodes"]["controller"]["tasks"][0].update(offset=0))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
     numpy_msgs = [p.message for p in check_scenario({"name": "t", "duration": np.int64(2)})]
     plain_msgs = [p.message for p in check_scenario({"name": "t", "duration": 2})]
     assert numpy_msgs == plain_msgs and "has no unit" in plain_msgs[0]
@@ -167,7 +177,8 @@ def test_a_statespace_plant_loads_as_its_ss_form(form: str) -> None:
 
     given, plain = _pair(given_edit, plain_edit)
     assert load_scenario(given).plant.model == "ss"  # load_scenario itself, not only netsim.run
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_a_transfer_function_plant_loads_as_its_tf_form() -> None:
@@ -179,7 +190,8 @@ def test_a_transfer_function_plant_loads_as_its_tf_form() -> None:
         lambda r: (weights(r), r.update(plant={"type": "tf", "num": [1000.0], "den": [1.0, 1.0, 0.0],
                                                 "inputs": ["u"], "outputs": ["y"]})))
     assert load_scenario(given).plant.model == "tf"
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_a_discrete_statespace_model_becomes_A_B_C() -> None:
@@ -187,7 +199,8 @@ def test_a_discrete_statespace_model_becomes_A_B_C() -> None:
     given, plain = _pair(lambda r: _ctl(r).update(model=sysd),
                          lambda r: _ctl(r).update(model={"A": sysd.A.tolist(), "B": sysd.B.tolist(),
                                                          "C": sysd.C.tolist()}))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 def test_a_discrete_transfer_function_model_is_realised_by_python_control() -> None:
@@ -196,7 +209,8 @@ def test_a_discrete_transfer_function_model_is_realised_by_python_control() -> N
     given, plain = _pair(lambda r: _ctl(r).update(model=tfd),
                          lambda r: _ctl(r).update(model={"A": ssd.A.tolist(), "B": ssd.B.tolist(),
                                                          "C": ssd.C.tolist()}))
-    _same_hash(given, plain)
+    numpy_hash, plain_hash = _hashes(given, plain)
+    assert numpy_hash == plain_hash
 
 
 @pytest.mark.parametrize("system, words", [
