@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import functools
 import re
-from typing import Annotated, Any, get_args
+from typing import Annotated, Any, ClassVar, get_args
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, PlainSerializer, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, PlainSerializer, model_serializer, model_validator
 
 from netsim.quantities import BITRATE, NUMBER_LIMIT, parse_bitrate, quantity_pattern
 from netsim.timebase import UNITS, TimeParseError, format_time, parse_duration, parse_time
@@ -121,4 +121,21 @@ class StrictModel(BaseModel):
             for name in _number_fields(cls).intersection(data):
                 if _has_bool(data[name]):
                     data = {**data, name: _as_yaml_text(data[name])}
+        return data
+
+
+class QuietDefaultsModel(StrictModel):
+    """A :class:`StrictModel` whose fields named in ``_QUIET_DEFAULTS`` are left out of its dump while they hold
+    the default given there: a field added later does not change the resolved scenario (its text, its hash, the
+    golden digests) of a scenario that does not use it."""
+
+    _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {}
+
+    @model_serializer(mode="wrap")
+    def _without_quiet_defaults(self, handler: Any) -> Any:
+        data = handler(self)
+        if isinstance(data, dict):
+            for key, default in self._QUIET_DEFAULTS.items():
+                if key in data and data[key] == default:
+                    del data[key]
         return data

@@ -75,7 +75,7 @@ import abc
 import math
 from typing import Any, ClassVar
 
-from pydantic import BaseModel, Field, ValidationError, field_validator, model_serializer, model_validator
+from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
 
 from netsim.env import AIR
 from netsim.errors import ConfigError
@@ -98,7 +98,7 @@ from netsim.network.records import (
 from netsim.network.stats import BusyMeter
 from netsim.network.timing import Call, call_later, tx_time_ns
 from netsim.timebase import US, format_time
-from netsim.units import Duration
+from netsim.units import Duration, QuietDefaultsModel
 
 __all__ = ["WirelessMedium", "WirelessParams", "RadioClock", "received_dbm", "RADIO_STATES"]
 
@@ -114,7 +114,7 @@ def _mw(dbm: float) -> float:
     return 10.0 ** (dbm / 10.0)
 
 
-class WirelessParams(NetworkParams):
+class WirelessParams(NetworkParams, QuietDefaultsModel):
     """What both wireless MACs share: the radio, the frame overheads and acknowledgements."""
 
     positions: dict[str, tuple[float, float]] = Field(description="node -> [x, y] in metres")
@@ -146,15 +146,6 @@ class WirelessParams(NetworkParams):
     #: Fields added in issue 20, left out of the resolved scenario while at their defaults (its text, and the
     #: golden digests of the shipped radio scenarios, stay as they were).
     _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"carrier_sense_dbm": None, "mobility": {}, "path_loss": None}
-
-    @model_serializer(mode="wrap")
-    def _without_quiet_defaults(self, handler: Any) -> Any:
-        data = handler(self)
-        if isinstance(data, dict):
-            for key, default in self._QUIET_DEFAULTS.items():
-                if key in data and data[key] == default:
-                    del data[key]
-        return data
 
     @field_validator("path_loss")
     @classmethod

@@ -35,13 +35,13 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Annotated, Any, Callable, Generator
+from typing import Annotated, Any, Callable, ClassVar, Generator
 
-from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_serializer, model_validator
+from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from netsim.control.pid import PID, PIDParams
 from netsim.registry import register
-from netsim.units import StrictModel, Time
+from netsim.units import QuietDefaultsModel, StrictModel, Time
 
 __all__ = [
     "BROADCAST",
@@ -320,20 +320,16 @@ class ActuatorReport(StrictModel):
 class Actuator:
     """Event-driven actuator: receive, execute, write the DAC."""
 
-    class Params(StrictModel):
+    class Params(QuietDefaultsModel):
+        #: 'report' (issue 26) is left out while unset: resolved scenarios stay as they were
+        _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"report": None}
+
         network: str = Field(description="the network the control messages arrive on (the newest one is applied)")
         channel: str = Field(description="the DAC channel of the scenario's io the value is written to")
         record_as: str | None = Field(None, description="record the applied value under this name, at the "
                                                         "instant it is written")
         report: ActuatorReport | None = Field(None, description="send back {value, t_ns} of each applied input "
                                                                  "(default: none)")
-
-        @model_serializer(mode="wrap")
-        def _without_quiet_defaults(self, handler: Any) -> Any:
-            data = handler(self)  # 'report' (issue 26) is left out while unset: resolved scenarios stay as they were
-            if isinstance(data, dict) and data.get("report", 0) is None:
-                del data["report"]
-            return data
 
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx

@@ -96,7 +96,7 @@ from collections.abc import Generator
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, ValidationInfo, field_validator, model_serializer, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from netsim.errors import ConfigError
 from netsim.programs.basic import (
@@ -108,7 +108,7 @@ from netsim.programs.basic import (
 from netsim.programs.feedback_design import build_parts, part_params
 from netsim.programs.state_feedback_inputs import input_options
 from netsim.registry import register
-from netsim.units import StrictModel, Time
+from netsim.units import QuietDefaultsModel, StrictModel, Time
 
 __all__ = ["AppliedInputSource", "MeasurementSource", "ModelSpec", "SolveTime", "StateFeedbackProgram"]
 
@@ -170,7 +170,7 @@ class SolveTime(StrictModel):
                                                         "factor instead (runs are then not reproducible)")
 
 
-class _Params(StrictModel):
+class _Params(QuietDefaultsModel):
     measurements: list[MeasurementSource] = Field(min_length=1, description="the sources whose values make up y "
                                                   "(ADC channels or messages), in the order of y's rows")
     estimator: dict[str, Any] = Field(default_factory=lambda: {"type": "kalman"},
@@ -224,15 +224,6 @@ class _Params(StrictModel):
     #: Fields added in issue 26, left out of the resolved scenario while at their defaults (its text, and the
     #: golden digests of the shipped scenarios, stay as they were).
     _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"input_delay": None, "applied_input": None, "x0_hat": "x0"}
-
-    @model_serializer(mode="wrap")
-    def _without_quiet_defaults(self, handler: Any) -> Any:
-        data = handler(self)
-        if isinstance(data, dict):
-            for key, default in self._QUIET_DEFAULTS.items():
-                if key in data and data[key] == default:
-                    del data[key]
-        return data
 
     @field_validator("to")
     @classmethod
