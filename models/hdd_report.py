@@ -314,7 +314,7 @@ def _dirword(new: float, old: float) -> str:
 
 def _plain_c_ise() -> float:
     """ISE over 464 samples of the ideal loop with the plain C(z) (MRCI with m = 1: no interlacing)."""
-    from models.hdd import hdd_model
+    from netsim.models.hdd import hdd_model
     from netsim.control import ControlSide, MrciController, TimeTriggered, decompose, simulate_loop
 
     m = hdd_model()
@@ -395,8 +395,8 @@ def _quote(rows: dict[str, dict], gpi: pd.DataFrame | None, gpi_meta: dict, gpi4
     q.add("c5_thr", thr, ".2g", "sqrt(delta_s + sigma_s) of hdd_case5.yaml")
     q.add("c5_thr_vs", "below" if thr < float(q.rows["noise_std"][0]) else "above", source="threshold vs noise")
     # Case 6
-    q.add("dob_bw", 1000.0, "g", "models.hdd.HddControlParams.dob_bandwidth default")
-    q.add("dob_dc", 1e-2, "g", "models.hdd.HddControlParams.dob_dc_error default")
+    q.add("dob_bw", 1000.0, "g", "netsim.models.hdd.HddControlParams.dob_bandwidth default")
+    q.add("dob_dc", 1e-2, "g", "netsim.models.hdd.HddControlParams.dob_dc_error default")
     seeds = range(1, 6)
     ne6 = [rows["case6" if s == 1 else f"case6_s{s}"]["NE"] for s in seeds]
     ne5 = [rows["case5" if s == 1 else f"case5_s{s}"]["NE"] for s in seeds]

@@ -192,7 +192,7 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
     from netsim.programs.design_summary import run_warnings as design_warnings  # D's hook (issue 26 s4)
 
     warnings = design_warnings(sim) + _unrecorded(scenario, sim.env.recorder)
-    # a program's own warnings about its setting (e.g. models.unicycle's filter and plant disagreeing)
+    # a program's own warnings about its setting (e.g. netsim.models.unicycle's filter and plant disagreeing)
     warnings += [w for prog in getattr(sim, "programs", {}).values() for w in getattr(prog, "build_warnings", ())]
     from netsim.results.verdict import apply_finding, judge_signals  # is the loop stable?
     finding, notes = judge_signals(result, scenario, t_end) if failure is None and status == "ok" else (None, [])
@@ -244,7 +244,7 @@ def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | N
 
     t_end_ns = int(round(result.meta["t_end_s"] * S))
     capture = _WarningCapture()
-    loggers = [logging.getLogger("netsim"), logging.getLogger("models")]
+    loggers = [logging.getLogger("netsim")]  # netsim.models logs under it too
     levels = [lg.level for lg in loggers]
     for lg in loggers:  # meta.json keeps the warnings even when the console shows only errors (netsim -q)
         lg.addHandler(capture)

@@ -23,7 +23,7 @@ def test_a_radio_whose_ack_cannot_arrive_says_so_in_microseconds():
 
 
 def test_cart_timing_errors_use_units():
-    from models.cart.controllers import EventController
+    from netsim.models.cart.controllers import EventController
 
     with pytest.raises(ConfigError) as err:
         EventController(None, None, None, -1_500_000)  # a period of -1.5 ms

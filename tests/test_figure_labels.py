@@ -145,7 +145,7 @@ def test_report_bar_figures_name_their_values(tmp_path: Path) -> None:
 
 # ------------------------------------------------------------------------------------------ case studies
 def test_hdd_report_figures_have_no_raw_identifiers() -> None:
-    from models.hdd_report import case_figure, gpi_figure
+    from netsim.models.hdd_report import case_figure, gpi_figure
 
     t = np.arange(0, 100) * 20e-6
     signals = pd.DataFrame({"time_s": t, "r": 1.0, "y": np.tanh(t * 1e3), "y_hat": np.tanh(t * 1e3), "u": 0.1,
@@ -166,8 +166,8 @@ def test_hdd_report_figures_have_no_raw_identifiers() -> None:
 
 
 def test_cart_report_figures_have_no_raw_identifiers() -> None:
-    from models.cart.figures import cart_figures
-    from models.cart.report import CONTROLLERS, _agg
+    from netsim.models.cart.figures import cart_figures
+    from netsim.models.cart.report import CONTROLLERS, _agg
 
     rows = []
     for c in CONTROLLERS:
@@ -188,7 +188,7 @@ def test_cart_report_figures_have_no_raw_identifiers() -> None:
 
 
 def test_hdd_gpi_figure_marks_a_run_that_was_not_ok() -> None:
-    from models.hdd_report import gpi_figure
+    from netsim.models.hdd_report import gpi_figure
 
     gpi = _summary()[["sigma_s", "sigma_c", "et.GPI", "status"]].copy()
     gpi.loc[gpi.index[2], "status"] = "unstable at t = 0.008 s"

@@ -62,6 +62,8 @@ def _module_name(path: Path) -> str:
     parts = list(path.relative_to(ROOT).with_suffix("").parts)
     if parts[-1] == "__init__":
         parts.pop()
+    if parts[0] == "models":  # the checkout's models/ folder installs as netsim.models
+        parts.insert(0, "netsim")
     return ".".join(parts)
 
 
@@ -113,14 +115,14 @@ _SNAPSHOT = textwrap.dedent(
         for info in pkgutil.iter_modules(getattr(module, "__path__", [])):
             if info.name != "__main__":
                 walk(name + "." + info.name)
-    walk("netsim"); walk("models")
+    walk("netsim"); walk("netsim.models")
     from netsim.io.signals import Signal
     from netsim.kernel.policies import Policy
     from netsim.network.pipeline import Network
     registered = {id(e.obj) for k in registry.kinds() for e in registry._REGISTRY[k].values()}
     unregistered = sorted(
         f"{base.__name__}: {cls.__module__}.{cls.__qualname__}"
-        for mod in list(sys.modules.values()) if getattr(mod, "__name__", "").startswith(("netsim.", "models."))
+        for mod in list(sys.modules.values()) if getattr(mod, "__name__", "").startswith("netsim.")
         for cls in vars(mod).values()
         for base in (Network, Policy, Signal)
         if isinstance(cls, type) and issubclass(cls, base) and cls.__module__ == mod.__name__

@@ -64,7 +64,7 @@ def test_each_declaration_names_the_module_whose_import_registers_it(lazy_vs_ful
     # the object may be defined elsewhere (an alias), but the declaring module is the one under a plugin package
     assert all(registry.is_plugin_module(m) for m in lazy_vs_full["declared_in"].values())
     assert lazy_vs_full["declared_in"]["network/can"] == "netsim.network.can"
-    assert lazy_vs_full["declared_in"]["plant/dc_servo"] == "models.dc_servo"
+    assert lazy_vs_full["declared_in"]["plant/dc_servo"] == "netsim.models.dc_servo"
 
 
 def test_a_lookup_imports_only_the_module_that_declares_the_name(tmp_path):
@@ -72,9 +72,9 @@ def test_a_lookup_imports_only_the_module_that_declares_the_name(tmp_path):
         import json, sys
         from netsim import registry
         registry.lookup("plant", "dc_servo")
-        print(json.dumps(sorted(m for m in sys.modules if m.startswith("models"))))
+        print(json.dumps(sorted(m for m in sys.modules if m.startswith("netsim.models"))))
     """
-    assert _python(code, tmp_path) == ["models", "models.dc_servo"]
+    assert _python(code, tmp_path) == ["netsim.models", "netsim.models.dc_servo"]
 
 
 def test_netsim_validate_of_a_simple_scenario_imports_no_pandas_or_python_control(tmp_path):
@@ -85,10 +85,10 @@ def test_netsim_validate_of_a_simple_scenario_imports_no_pandas_or_python_contro
             rc = main(["validate", "scenarios/dc_servo_can.yaml"])
         heavy = ("pandas", "control", "matplotlib", "dask", "scipy.signal", "scipy.sparse", "scipy.integrate")
         print(json.dumps({"rc": rc, "heavy": sorted(m for m in heavy if m in sys.modules),
-                          "models": sorted(m for m in sys.modules if m.startswith("models"))}))
+                          "models": sorted(m for m in sys.modules if m.startswith("netsim.models"))}))
     """
     out = _python(code, tmp_path)
-    assert out == {"rc": 0, "heavy": [], "models": ["models", "models.dc_servo"]}
+    assert out == {"rc": 0, "heavy": [], "models": ["netsim.models", "netsim.models.dc_servo"]}
 
 
 def test_the_cache_is_written_and_a_changed_file_is_read_again(tmp_path, monkeypatch):

@@ -1,7 +1,7 @@
 """Verdicts on the claims of Henningsson & Cervin (section VII) from the runs of the cart report.
 
 Every number a verdict quotes is computed here from the run tables (one row per run, the columns of
-:func:`models.cart.metrics.cart_metrics` plus ``controller``, ``wc``, ``q``, ``vref``, ``seed`` and
+:func:`netsim.models.cart.metrics.cart_metrics` plus ``controller``, ``wc``, ``q``, ``vref``, ``seed`` and
 ``sigma_u_pooled``); the only other numbers are the paper's own parameters (``PAPER_*``), quoted where a
 verdict compares them with the paper's text.
 

@@ -13,7 +13,7 @@ time stamp of the last encoder edge (what the encoder ISR stores) -- and returns
     Eqs 4-5: ``V = (sY + Tfilter (U + Ubias))/(s Tfilter + 1)``, ``Ubias = K (sY - V)/(s Ti)``, ``beta = 1``,
     ``Ti' = Ti/4`` (variant ``ti4``) or ``Ti' = Ti/2, Tfilter' = 2 Tfilter`` (``ti2``), ``Ti'`` lower bounded.
 ``basic_event``, ``position_prediction``, ``full_event``
-    The event estimators of :mod:`models.cart.estimators` with the control law above (``beta = 0.5`` and the
+    The event estimators of :mod:`netsim.models.cart.estimators` with the control law above (``beta = 0.5`` and the
     Pure PI gains for the first two, ``beta = 1`` and the observer gains for the Full Event).
 
 The two PI controllers are the continuous designs discretized exactly at the control period for a held
@@ -28,14 +28,14 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
-from models.cart.encoding import Quantizer
-from models.cart.estimators import (
+from netsim.models.cart.encoding import Quantizer
+from netsim.models.cart.estimators import (
     BasicEventEstimator,
     EventEstimator,
     FullEventEstimator,
     PositionPredictionEstimator,
 )
-from models.cart.tuning import Tuning, observer_tuning, pure_pi_tuning
+from netsim.models.cart.tuning import Tuning, observer_tuning, pure_pi_tuning
 from netsim.errors import ConfigError
 from netsim.timebase import format_time
 
@@ -187,7 +187,7 @@ class ObserverPI(_LTIController):
 
 
 class EventController(CartController):
-    """An event estimator (:mod:`models.cart.estimators`) followed by the common control law."""
+    """An event estimator (:mod:`netsim.models.cart.estimators`) followed by the common control law."""
 
     def __init__(
         self,

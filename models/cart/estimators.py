@@ -28,8 +28,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from models.cart.encoding import Quantizer
-from models.cart.tuning import Tuning
+from netsim.models.cart.encoding import Quantizer
+from netsim.models.cart.tuning import Tuning
 
 __all__ = [
     "EstimatorState",

@@ -10,7 +10,7 @@ from typing import Any
 
 import pandas as pd
 
-from models.cart.controllers import CONTROLLERS
+from netsim.models.cart.controllers import CONTROLLERS
 
 __all__ = ["CONTROLLER_NAMES", "cart_figures"]
 

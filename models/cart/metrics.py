@@ -164,7 +164,7 @@ def cart_metrics(
         n_ev = int(np.count_nonzero((et > t0) & (et <= t1)))
         out["events_per_tfilter"] = n_ev * tfilter / (t1 - t0) if t1 > t0 else math.nan
     if jmap and counts_full is not None and len(t) >= 3:
-        from models.cart.jmap import reconstruct
+        from netsim.models.cart.jmap import reconstruct
 
         h = float(np.median(np.diff(t)))
         end = min(len(t), int(np.nonzero(mask)[0][-1]) + 50)  # the run, not the tail after the 1 m

@@ -8,10 +8,10 @@ Model (Henningsson & Cervin, section II-B)::
 Inputs ``uV`` (motor command, full-voltage units; saturated here at +-1) and ``u_bias`` (an extra
 disturbance acceleration in m/s^2, default 0, for scenario disturbances); outputs and states ``p`` (m) and
 ``v`` (m/s). ``Td`` (the paper's identified 0.23 s velocity time constant) is off by default, as in the
-paper's ``1/Td ~ 0`` design model. Friction: :class:`models.cart.friction.Friction` -- a Coulomb level
+paper's ``1/Td ~ 0`` design model. Friction: :class:`netsim.models.cart.friction.Friction` -- a Coulomb level
 varying along the track, faster at the far end, drawn from the stream ``plant.cart.friction``.
 
-Integration is exact in closed form (:mod:`models.cart.dynamics`): the friction *level* is held on a fixed
+Integration is exact in closed form (:mod:`netsim.models.cart.dynamics`): the friction *level* is held on a fixed
 time grid (``friction_step``, 1 ms by default, i.e. the control period: the cart moves < 1 mm per step at
 0.8 m/s while the shortest friction wavelength is 0.33 m in the default model, 17 mm in ``modes6``), the
 sign follows the velocity exactly, stops and breakaway are handled analytically. Because the level is
@@ -32,9 +32,9 @@ from typing import Any
 import numpy as np
 from pydantic import Field
 
-from models.cart.controllers import KU
-from models.cart.dynamics import propagate, propagate1, stop_time
-from models.cart.friction import FRICTION_STREAM, Friction, FrictionParams
+from netsim.models.cart.controllers import KU
+from netsim.models.cart.dynamics import propagate, propagate1, stop_time
+from netsim.models.cart.friction import FRICTION_STREAM, Friction, FrictionParams
 from netsim.errors import BuildError
 from netsim.plant import Plant
 from netsim.registry import register
@@ -230,9 +230,9 @@ def _segment_end(p0: float, v0: float, u: float, f: float, fs: float,
 def first_exit(p0: float, v0: float, u: float, f: float, fs: float, off: int, tick: int, n: int, output: int,
                step: float, count: int) -> int:
     """First ``j < n`` where ``floor(y_j / step) != count``, ``y_j`` the position (``output`` 0) or velocity (1)
-    of :func:`~models.cart.dynamics.propagate1` (``Td`` off) at ``(off + j tick) 1e-9`` s; -1 if none.
+    of :func:`~netsim.models.cart.dynamics.propagate1` (``Td`` off) at ``(off + j tick) 1e-9`` s; -1 if none.
 
-    The same numbers as evaluating every tick with :func:`~models.cart.dynamics.propagate` (the same IEEE
+    The same numbers as evaluating every tick with :func:`~netsim.models.cart.dynamics.propagate` (the same IEEE
     operations per tick), found by bisection: the motion is at most two monotone pieces (before and after the
     velocity reaches zero), and on a monotone piece the ticks inside the band form a prefix. About 15 scalar
     evaluations instead of about 15 numpy operations on up to 100 ticks (issue 19: the exact encoder's

@@ -29,8 +29,8 @@ from typing import Any, Generator, Literal
 
 from pydantic import Field
 
-from models.cart.controllers import KU, make_controller
-from models.cart.encoding import Quantizer, check_q
+from netsim.models.cart.controllers import KU, make_controller
+from netsim.models.cart.encoding import Quantizer, check_q
 from netsim.errors import BuildError
 from netsim.registry import register
 from netsim.units import StrictModel

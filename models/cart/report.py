@@ -2,13 +2,13 @@
 
 Runs the two studies of Henningsson & Cervin section VII through :func:`netsim.runner.run` on
 ``scenarios/cart.yaml`` (the points of ``cart_fig2.yaml`` and ``cart_quant.yaml``; in parallel processes),
-or with ``engine="numpy"`` through the plain numpy loop :func:`models.cart.sim.simulate`, then writes
+or with ``engine="numpy"`` through the plain numpy loop :func:`netsim.models.cart.sim.simulate`, then writes
 ``reports/cart/``: ``fig2.csv``, ``quant.csv``, ``claims.csv``, the figures ``fig1_time.png``,
 ``fig2_sigma_vs_ev.png``, ``fig3_ev_vs_q.png``, ``fig4_sigma_vs_q.png`` and ``README.md`` with a verdict and
 the numbers for each of the paper's claims. ``instability.csv`` holds the wc = 80 runs of every controller over
 :data:`SEEDS_INSTABILITY` (the instability verdict counts its oscillating runs per controller).
 
-Run cache (:mod:`models.cart.cache`): each point's row is kept in ``<out>/runs/points_<hash>.pkl`` (not in
+Run cache (:mod:`netsim.models.cart.cache`): each point's row is kept in ``<out>/runs/points_<hash>.pkl`` (not in
 git), keyed by the point and the engine; ``<hash>`` covers the cart's numeric code, ``scenarios/cart.yaml``
 and the run durations, so a change there runs everything again. Delete the folder to force fresh runs.
 """
@@ -26,11 +26,11 @@ from typing import Any
 
 import numpy as np
 
-from models.cart.cache import PointCache, code_hash
-from models.cart.claims import claims as make_claims
-from models.cart.claims import fmt as _fmt
-from models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool_sigma, pooling_difference
-from models.cart.metrics import STOP_WINDOW
+from netsim.models.cart.cache import PointCache, code_hash
+from netsim.models.cart.claims import claims as make_claims
+from netsim.models.cart.claims import fmt as _fmt
+from netsim.models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool_sigma, pooling_difference
+from netsim.models.cart.metrics import STOP_WINDOW
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 
@@ -118,11 +118,11 @@ def _run_point(point: dict[str, Any], engine: str) -> dict[str, Any]:
         raise ValueError(f"unknown friction label '{label}'; use one of {', '.join(FRICTIONS)}")
     friction = FRICTIONS[label]
     if engine == "numpy":
-        from models.cart.controllers import make_controller
-        from models.cart.encoding import Quantizer
-        from models.cart.friction import Friction, FrictionParams
-        from models.cart.metrics import cart_metrics
-        from models.cart.sim import simulate
+        from netsim.models.cart.controllers import make_controller
+        from netsim.models.cart.encoding import Quantizer
+        from netsim.models.cart.friction import Friction, FrictionParams
+        from netsim.models.cart.metrics import cart_metrics
+        from netsim.models.cart.sim import simulate
 
         ctrl = make_controller(point["controller"], point["wc"], Quantizer.from_bits(point["q"], rounding="floor"))
         fp = FrictionParams.model_validate(friction or {})
@@ -191,9 +191,9 @@ def _agg(df: pd.DataFrame, by: list[str]) -> pd.DataFrame:
 
 
 def _plots(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, trace: dict[str, Any]) -> list[Path]:
-    """Write :func:`models.cart.figures.cart_figures` into ``out`` in the paper style and the current plot
+    """Write :func:`netsim.models.cart.figures.cart_figures` into ``out`` in the paper style and the current plot
     format (:mod:`netsim.figure_style`)."""
-    from models.cart.figures import cart_figures
+    from netsim.models.cart.figures import cart_figures
     from netsim.figure_style import paper_style, save_figure
 
     a = _agg(f2, ["controller", "wc"])
@@ -214,10 +214,10 @@ def _fmt_pct(x: float) -> str:
 
 
 def _fig1_traces() -> dict[str, Any]:
-    from models.cart.controllers import make_controller
-    from models.cart.encoding import Quantizer
-    from models.cart.friction import Friction, FrictionParams
-    from models.cart.sim import simulate
+    from netsim.models.cart.controllers import make_controller
+    from netsim.models.cart.encoding import Quantizer
+    from netsim.models.cart.friction import Friction, FrictionParams
+    from netsim.models.cart.sim import simulate
 
     fr = Friction.draw(FrictionParams(), seed=1)
     return {c: simulate(make_controller(c, 20.0, Quantizer.from_bits(6)), fr, vref=0.8, q=6, duration=4.0,
@@ -227,7 +227,7 @@ def _fig1_traces() -> dict[str, Any]:
 def _friction_ranges(seeds: tuple[int, ...]) -> dict[str, tuple[float, float, float, float]]:
     """Per friction label: the variation's frequency range (rad/s at vref = 0.8) at 0.3 m and at 1 m, over the
     realizations of ``seeds`` (min at 0.3 m, max at 0.3 m, min at 1 m, max at 1 m)."""
-    from models.cart.friction import Friction, FrictionParams
+    from netsim.models.cart.friction import Friction, FrictionParams
 
     out = {}
     for label, fr in FRICTIONS.items():
@@ -252,7 +252,7 @@ _SENS_COLS = (
 
 
 def sensitivity_table(f2: pd.DataFrame, sens: pd.DataFrame) -> pd.DataFrame:
-    """The headline ratios (:func:`models.cart.claims.headline`) under each friction model, one row per model.
+    """The headline ratios (:func:`netsim.models.cart.claims.headline`) under each friction model, one row per model.
 
     ``f2`` holds the default model's runs, ``sens`` the others' (``sigma_u`` pooled within each model).
     """

@@ -8,7 +8,7 @@ direction and stamp of the last edge are exactly those a 100 kHz polling ISR wou
 runs at the control period (1 ms) and its output acts after ``delay`` (0 by default).
 
 This is the reference the netsim scenario is compared against (benchmark ratio, cross-check test) and
-the quick engine of the studies (:mod:`models.cart.study`).
+the quick engine of the studies (:mod:`netsim.models.cart.study`).
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from models.cart.controllers import KU, CartController
-from models.cart.dynamics import propagate
-from models.cart.encoding import DELTA_P, Quantizer
-from models.cart.friction import Friction
+from netsim.models.cart.controllers import KU, CartController
+from netsim.models.cart.dynamics import propagate
+from netsim.models.cart.encoding import DELTA_P, Quantizer
+from netsim.models.cart.friction import Friction
 from netsim.errors import ConfigError
 from netsim.timebase import format_time
 

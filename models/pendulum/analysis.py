@@ -1,7 +1,7 @@
 """The pendulum loop's expected cost under an input-output delay, from :mod:`netsim.analysis.lqg` (Jitterbug-style).
 
 The loop of ``scenarios/pendulum_network.yaml`` linearised: the continuous plant (the upright linearisation of
-:mod:`models.pendulum.model`), sampled every ``TS``; the estimator of the study (:func:`models.pendulum.design.
+:mod:`netsim.models.pendulum.model`), sampled every ``TS``; the estimator of the study (:func:`netsim.models.pendulum.design.
 _estimator_ss`) and the LQR as one discrete controller; the input reaches the plant ``delay_s`` after the
 sample and is held. Noise: the white input-voltage disturbance as process noise of intensity ``std^2 hold``
 through ``B`` (the simulated disturbance is that noise held over ``hold = 1 ms``, short against the loop's
@@ -17,7 +17,7 @@ of ``D`` whole periods plus a fraction ``f`` is modelled as a delay line of ``D`
   the expected cost at the sampling instants (what the ``pendulum`` metric's ``lqg_cost_after_settle``
   estimates) and the spectral radius of the loop;
 * :func:`lqg_delay_margin` -- the largest delay with a mean-square stable loop (bisection on the spectral
-  radius), an exact counterpart of the phase-margin estimate :func:`models.pendulum.design.delay_margin`;
+  radius), an exact counterpart of the phase-margin estimate :func:`netsim.models.pendulum.design.delay_margin`;
 * :func:`law_delay_margin` -- the delay margin of the LQR law fed the true state: the limit of any estimator
   told the delay with an exact model (issue 26 section 5), since the loop's eigenvalues are then those of the law
   on the delayed plant and those of the estimation error (separation).
@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from models.pendulum.design import Q_LQR, R_LQR, Designs, _estimator_ss
-from models.pendulum.model import DISTURBANCE_HOLD, DISTURBANCE_STD, SENSOR_STD
+from netsim.models.pendulum.design import Q_LQR, R_LQR, Designs, _estimator_ss
+from netsim.models.pendulum.model import DISTURBANCE_HOLD, DISTURBANCE_STD, SENSOR_STD
 
 __all__ = ["controller_matrices", "sampled_loop", "analytic_cost", "lqg_delay_margin", "law_spectral_radius",
            "law_delay_margin"]

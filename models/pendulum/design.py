@@ -1,6 +1,6 @@
 """The slides' designs for the pendulum and the analytic hold-still noise of each estimator.
 
-Everything here is computed from :mod:`models.pendulum.model` (no number is typed in besides the study's
+Everything here is computed from :mod:`netsim.models.pendulum.model` (no number is typed in besides the study's
 choices, which are named constants):
 
 * :data:`POLES` -- the slides' observer poles ``0.55 +- 0.20j, 0.72, 0.82``;
@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from models.pendulum.model import SENSOR_STD, TS, Linear, PendulumParams, discretise, observability_rank, process_noise_cov
+from netsim.models.pendulum.model import SENSOR_STD, TS, Linear, PendulumParams, discretise, observability_rank, process_noise_cov
 
 __all__ = ["POLES", "Q_LQR", "R_LQR", "FD_CUTOFF_HZ", "MPC_HORIZON", "Designs", "designs", "estimator_dynamics",
            "hold_still_std", "ESTIMATORS", "kalman_entry", "linear_motion", "motion_errors",
@@ -148,7 +148,7 @@ def linear_motion(d: Designs, n: int = 400, tilt: float = 0.05, amp: float = 0.5
 def motion_errors(d: Designs, skip: int = 200) -> dict[str, np.ndarray]:
     """RMS estimation error of ``[theta, theta_dot, alpha, alpha_dot]`` per Luenberger form on
     :func:`linear_motion`, noise-free, after ``skip`` samples (the initial error has then decayed)."""
-    from models.pendulum.estimators import PrintedLuenberger
+    from netsim.models.pendulum.estimators import PrintedLuenberger
     from netsim.control import LuenbergerObserver
 
     lin = d.lin

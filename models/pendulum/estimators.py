@@ -184,7 +184,7 @@ class KalmanPart:
     """``estimator: {type: pendulum_kalman, disturbance_std, disturbance_hold, sensor_std, scale_Q, scale_R}``.
 
     ``Qn`` is the white voltage disturbance mapped through the pendulum linearised with the scenario's own
-    ``plant.params`` over one period (:func:`models.pendulum.model.process_noise_cov`), ``Rn = sensor_std^2 I``
+    ``plant.params`` over one period (:func:`netsim.models.pendulum.model.process_noise_cov`), ``Rn = sensor_std^2 I``
     (the slides: "hold the system still ... sample variances ... as initial values for Rn"); the gain is the
     DARE's (the toolbox's :class:`netsim.control.KalmanFilter` with ``steady_state=True``). The plant must be
     the ``furuta_pendulum`` (its parameters reach the design as ``design.nonlinear.params``).
@@ -194,7 +194,7 @@ class KalmanPart:
 
     @classmethod
     def build(cls, params: _KalmanParams, design: Any) -> Any:
-        from models.pendulum.model import SENSOR_STD, PendulumParams, discretise, process_noise_cov
+        from netsim.models.pendulum.model import SENSOR_STD, PendulumParams, discretise, process_noise_cov
         from netsim.control import KalmanFilter
         from netsim.errors import ConfigError
 

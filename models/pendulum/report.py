@@ -107,7 +107,7 @@ def run_case(case: dict[str, Any]) -> dict[str, Any]:
 
 
 def _measures(res: Any, case: dict[str, Any]) -> dict[str, float]:
-    from models.pendulum.metrics import pendulum_measures
+    from netsim.models.pendulum.metrics import pendulum_measures
 
     ok = str(res.status).startswith("ok")
     pm = pendulum_measures(res.signals, ok)
@@ -142,7 +142,7 @@ def _measures(res: Any, case: dict[str, Any]) -> dict[str, float]:
 
 def _mpc_vs_lqr(at: pd.DataFrame, u: np.ndarray) -> dict[str, float]:
     """At every sample of an MPC run: the LQR's input for the same estimate, and where the two agree."""
-    from models.pendulum.design import designs
+    from netsim.models.pendulum.design import designs
 
     K = designs().K_lqr
     xh = at[[f"x_hat[{i}]" for i in range(4)]].to_numpy(float)
@@ -236,9 +236,9 @@ TABLE_COLUMNS = ["estimator", "controller", "seed_count", "theta_dot_noise", "al
 def make_table(runs: pd.DataFrame) -> pd.DataFrame:
     """The stable table: mean over the seeds (``*_min``, ``*_max``: the spread) per estimator x controller, and
     ``lqg_cost_analytic``: the stationary expected cost of the linear LQR loop with this estimator and the
-    task's 0.5 ms delay (:func:`models.pendulum.analysis.analytic_cost`; LQR rows only)."""
-    from models.pendulum.analysis import analytic_cost
-    from models.pendulum.design import designs
+    task's 0.5 ms delay (:func:`netsim.models.pendulum.analysis.analytic_cost`; LQR rows only)."""
+    from netsim.models.pendulum.analysis import analytic_cost
+    from netsim.models.pendulum.design import designs
 
     d = designs()
     hs = runs[runs.kind == "hold_still"].set_index("estimator")
@@ -262,7 +262,7 @@ def make_table(runs: pd.DataFrame) -> pd.DataFrame:
 
 def hold_still_table(runs: pd.DataFrame) -> pd.DataFrame:
     """Simulated hold-still noise beside the Lyapunov value."""
-    from models.pendulum.design import designs, hold_still_std
+    from netsim.models.pendulum.design import designs, hold_still_std
 
     d = designs()
     hs = runs[runs.kind == "hold_still"]
@@ -276,12 +276,12 @@ def hold_still_table(runs: pd.DataFrame) -> pd.DataFrame:
 
 def delay_table(runs: pd.DataFrame, noise_margins: dict[str, tuple[float, float]]) -> pd.DataFrame:
     """Per estimator: the predicted delay margins (phase margin over crossover; the delay at which the expected
-    cost of :mod:`models.pendulum.analysis` becomes infinite; the exact discrete loop at whole samples) beside
+    cost of :mod:`netsim.models.pendulum.analysis` becomes infinite; the exact discrete loop at whole samples) beside
     the simulated ones (from upright over the seeds of ``pendulum_delay_sweep``: ``noise_*``; from the tilt,
     seed 1: ``stable_up_to_ms``, ``fails_at_ms``). Delays are total sample-to-actuation delays."""
-    from models.pendulum.analysis import lqg_delay_margin
-    from models.pendulum.design import delay_margin, delay_spectral_radius, designs
-    from models.pendulum.report_sweeps import NETWORK_BASE_DELAY_MS
+    from netsim.models.pendulum.analysis import lqg_delay_margin
+    from netsim.models.pendulum.design import delay_margin, delay_spectral_radius, designs
+    from netsim.models.pendulum.report_sweeps import NETWORK_BASE_DELAY_MS
 
     d = designs()
 
@@ -484,8 +484,8 @@ def fmt(x: float, digits: int = 3) -> str:
 def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.DataFrame,
           sw: pd.DataFrame, dc: pd.DataFrame) -> pd.DataFrame:
     """Every number the prose quotes: ``key, value, text, source``."""
-    from models.pendulum.design import POLES, designs, motion_errors
-    from models.pendulum.model import TS
+    from netsim.models.pendulum.design import POLES, designs, motion_errors
+    from netsim.models.pendulum.model import TS
     from netsim.control import KalmanFilter, LuenbergerObserver
 
     d = designs()
@@ -564,7 +564,7 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     q.append(("dn_bracket", float(inside.sum()), "each prediction lies in its bracket" if inside.all() else
               f"the prediction lies in its bracket for {int(inside.sum())} of {len(dl)} estimators",
               "delay: noise_stable_up_to_ms <= lqg_margin_ms < noise_fails_at_ms"))
-    from models.pendulum.report_sweeps import CI_LEVEL
+    from netsim.models.pendulum.report_sweeps import CI_LEVEL
 
     add("ci_pct", 100 * CI_LEVEL, "report_sweeps: CI_LEVEL", f"{100 * CI_LEVEL:g}")
     pm_diff = float(np.max(np.abs(dl.lqg_margin_ms - dl.predicted_margin_ms)))
@@ -611,7 +611,7 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     cl_lqr1 = runs[(runs.kind == "closed_loop") & (runs.seed == 1)].set_index("estimator")
     for tag, e in (("kal", "kalman"), ("lu", "luenberger")):
         add(f"{tag}_conv", cl_lqr1.loc[e, "est_converged_s"], f"runs: closed_loop {e} lqr seed 1")
-    from models.pendulum.metrics import PendulumMetricParams
+    from netsim.models.pendulum.metrics import PendulumMetricParams
 
     add("est_tol", PendulumMetricParams().est_tol, "metrics: PendulumMetricParams.est_tol")
     ls = runs[runs.kind == "loss"].set_index(["estimator", "loss"])
@@ -635,7 +635,7 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     add("mpt_short_miss", mt.loc["h5_3ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h5_3ms", "deadline_misses"])))
     for key, lab in (("mpt_fast_rms", "h20_0.1ms"), ("mpt_slow_rms", "h20_3ms"), ("mpt_short_rms", "h5_3ms")):
         add(key, mt.loc[lab, "rms_alpha_after_1s"], f"mpc_timing:{lab}")
-    from models.pendulum.report_sweeps import equal_ratio_gain_difference
+    from netsim.models.pendulum.report_sweeps import equal_ratio_gain_difference
 
     k = sw[sw.sweep == "kalman"]
     add("sw_seeds", sw.seed_count.max(), "tuning: seed_count", str(int(sw.seed_count.max())))
@@ -752,7 +752,7 @@ DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report pendulum_delay_aware -->", 
 def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame) -> pd.DataFrame:
     """The numbers of the delay-aware paragraph (keys ``da_*``), from ``delay_aware.csv``, its margins and
     ``delay_cost.csv`` (the raw FD row)."""
-    from models.pendulum.report_sweeps import noise_delay_margins
+    from netsim.models.pendulum.report_sweeps import noise_delay_margins
 
     q: list[tuple[str, float, str, str]] = []
 
@@ -775,8 +775,8 @@ def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame)
             q.append((f"da_{tag}_{name}", 0.0, phrase, src))
     add("da_seeds", da[da.estimation == "input_delay"].seed_count.max(), "delay_aware: seed_count")
     add("da_fd_ok", noise_delay_margins(dc)["fd_raw"][0], "delay_cost: fd_raw (noise_delay_margins)")
-    from models.pendulum.analysis import law_delay_margin
-    from models.pendulum.design import designs
+    from netsim.models.pendulum.analysis import law_delay_margin
+    from netsim.models.pendulum.design import designs
 
     add("da_law", 1e3 * law_delay_margin(designs()), "analysis.law_delay_margin (LQR fed the true state)")
     k = da[(da.estimator == "kalman")]
@@ -809,7 +809,7 @@ def pendulum_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
     """Run (or resume) ``pendulum_delay_aware_sweep`` and write ``delay_aware.csv``, ``delay_aware_margins.csv``,
     the ``da_*`` rows of ``quoted.csv`` and the README's delay-aware section, next to the full report's
     ``delay_cost.csv`` (which gives the unaware rows). The rest of the report is left as it is."""
-    from models.pendulum.report_sweeps import delay_aware_margins, delay_aware_table, run_delay_aware
+    from netsim.models.pendulum.report_sweeps import delay_aware_margins, delay_aware_table, run_delay_aware
 
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "pendulum"
     dc = pd.read_csv(out / "delay_cost.csv")
@@ -854,7 +854,7 @@ def render_readme(out: Path) -> pd.DataFrame:
 def _delay_figure(out: Path, dc: pd.DataFrame) -> None:
     import matplotlib
 
-    from models.pendulum.report_sweeps import CI_LEVEL
+    from netsim.models.pendulum.report_sweeps import CI_LEVEL
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -883,7 +883,7 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "pendulum"
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
-    from models.pendulum.report_sweeps import delay_cost_table, noise_delay_margins, run_sweeps, tuning_table
+    from netsim.models.pendulum.report_sweeps import delay_cost_table, noise_delay_margins, run_sweeps, tuning_table
 
     summaries = run_sweeps(out, workers)
     cases = hold_still_cases() + closed_loop_cases(seeds) + timing_cases()
@@ -903,11 +903,11 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     hs = hold_still_table(runs)
     dc = delay_cost_table(summaries, ESTIMATORS)
     dl = delay_table(runs, noise_delay_margins(dc))
-    from models.pendulum.report_sweeps import delay_aware_margins, delay_aware_table, run_delay_aware
+    from netsim.models.pendulum.report_sweeps import delay_aware_margins, delay_aware_table, run_delay_aware
 
     da = delay_aware_table(run_delay_aware(out, workers), ESTIMATORS, dc)
     da_margins = delay_aware_margins(da)
-    from models.pendulum.design import designs, motion_errors
+    from netsim.models.pendulum.design import designs, motion_errors
 
     me = motion_errors(designs())
     forms = pd.DataFrame([{"form": k, "theta_err": v[0], "theta_dot_err": v[1], "alpha_err": v[2],

@@ -8,7 +8,7 @@ their ``summary.csv``:
   error radius (and its time constant) and held-still velocity noise, beside the simulated convergence time
   of the estimates, chatter and costs (mean over the seeds);
 * :func:`delay_cost_table` -- per estimator and delay: the simulated stationary cost with its 95 % Monte-Carlo
-  interval over the seeds, beside the expected cost from :mod:`models.pendulum.analysis`;
+  interval over the seeds, beside the expected cost from :mod:`netsim.models.pendulum.analysis`;
 * :func:`noise_delay_margins` -- per estimator the largest delay with every seed stable and the first with a
   failing one;
 * :func:`delay_aware_table` -- the Luenberger observer and the Kalman filter told the delay
@@ -81,7 +81,7 @@ def point_values(name: str) -> list[dict[str, Any]]:
 
 
 def estimator_name(entry: dict[str, Any], estimators: Mapping[str, dict[str, Any]]) -> str:
-    """The study's name of an estimator entry: its key in ``estimators`` (``models.pendulum.report.ESTIMATORS``)."""
+    """The study's name of an estimator entry: its key in ``estimators`` (``netsim.models.pendulum.report.ESTIMATORS``)."""
     for key, value in estimators.items():
         if value == entry:
             return key
@@ -116,7 +116,7 @@ def tuning_table(summaries: dict[str, Any]) -> Any:
     """One row per Qn/Rn scaling and per pole set: analytic error dynamics and noise, simulated means over seeds."""
     import pandas as pd
 
-    from models.pendulum.design import designs
+    from netsim.models.pendulum.design import designs
     from netsim.control.luenberger import observer_gain
 
     d = designs()
@@ -153,7 +153,7 @@ def tuning_table(summaries: dict[str, Any]) -> Any:
 
 def equal_ratio_gain_difference(table: Any) -> float:
     """Largest difference between Kalman gains of grid points with the same Qn/Rn ratio (should be rounding)."""
-    from models.pendulum.design import designs
+    from netsim.models.pendulum.design import designs
 
     d = designs()
     k = table[table.sweep == "kalman"]
@@ -174,13 +174,13 @@ def _delay_ms(text: Any) -> float:
 
 def delay_cost_table(summaries: dict[str, Any], estimators: Mapping[str, dict[str, Any]]) -> Any:
     """Per estimator and act delay: simulated stationary cost (mean, 95 % interval over the seeds) beside the
-    expected cost of :func:`models.pendulum.analysis.analytic_cost` at the same total delay (``estimators``: the
+    expected cost of :func:`netsim.models.pendulum.analysis.analytic_cost` at the same total delay (``estimators``: the
     study's estimator entries by name, to name the sweep's)."""
     import pandas as pd
     from scipy import stats
 
-    from models.pendulum.analysis import analytic_cost
-    from models.pendulum.design import designs
+    from netsim.models.pendulum.analysis import analytic_cost
+    from netsim.models.pendulum.design import designs
 
     d = designs()
     name = "pendulum_delay_sweep"

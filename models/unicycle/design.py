@@ -30,7 +30,7 @@ from typing import Any, Literal, Sequence
 
 import numpy as np
 
-from models.unicycle.model import (
+from netsim.models.unicycle.model import (
     FRONT_OFFSET, P0, Q_REPORT, R_REPORT, TS, WALL_FRONT, WALL_SIDE, XI0_HAT, arc, euler_step, jac_A,
     measure, measure_jacobian, side_offset,
 )
@@ -44,7 +44,7 @@ __all__ = ["Phase", "PHASES", "Trajectory", "error_model", "lqr_gain", "LQR_Q", 
 class Phase:
     """A piece of the trajectory with constant ``(v, w)`` and the sensors that are on.
 
-    ``front``/``side`` schedule the sensors of the standalone studies (:mod:`models.unicycle.studies`); in a
+    ``front``/``side`` schedule the sensors of the standalone studies (:mod:`netsim.models.unicycle.studies`); in a
     netsim scenario the sensors' own ``on`` windows do (``unicycle_ekf``'s phases carry no flags).
     """
 

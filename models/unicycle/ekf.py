@@ -1,6 +1,6 @@
 """The study's EKF (eqs 10-17) on plain floats: the same filter as the toolbox's ``ExtendedKalmanFilter``.
 
-:func:`~models.unicycle.design.make_ekf` builds the toolbox's :class:`~netsim.control.ExtendedKalmanFilter`
+:func:`~netsim.models.unicycle.design.make_ekf` builds the toolbox's :class:`~netsim.control.ExtendedKalmanFilter`
 with this study's model functions (3x3 numpy matrices, checks of every model call). A run of the netsim
 scenario calls the filter some 3000 times, and the Monte-Carlo studies a million times; with 3 states the numpy
 call overhead is most of the cost. :class:`CartEkf` does the same arithmetic on floats:
@@ -23,7 +23,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from models.unicycle.model import FRONT_OFFSET, P0, Q_REPORT, R_REPORT, TS, WALL_FRONT, WALL_SIDE, XI0_HAT, side_offset
+from netsim.models.unicycle.model import FRONT_OFFSET, P0, Q_REPORT, R_REPORT, TS, WALL_FRONT, WALL_SIDE, XI0_HAT, side_offset
 
 __all__ = ["CartEkf", "Sensor", "sym_to_matrix", "matrix_to_sym"]
 
@@ -79,7 +79,7 @@ class CartEkf:
     ts
         Filter period [s].
     side
-        ``"derived"`` or ``"printed"`` side sensor offset (:func:`~models.unicycle.model.side_offset`).
+        ``"derived"`` or ``"printed"`` side sensor offset (:func:`~netsim.models.unicycle.model.side_offset`).
     """
 
     def __init__(self, Q: Any = Q_REPORT, R: Any = R_REPORT, x0: Any = XI0_HAT, P0_: Any = P0, ts: float = TS,

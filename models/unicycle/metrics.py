@@ -31,7 +31,7 @@ from typing import Any, Mapping, Union
 import numpy as np
 from pydantic import Field
 
-from models.unicycle.design import PHASES
+from netsim.models.unicycle.design import PHASES
 from netsim.registry import register
 from netsim.timebase import S, parse_time
 from netsim.units import StrictModel

@@ -22,7 +22,7 @@ Equations (numbers as in the report, ``/work/shared/seeds/001_*``):
 Choices the report leaves open (also stated in the scenarios' comments): filter and control period
 ``TS = 10 ms``; wheel radius ``WHEEL_RADIUS = 0.0325 m``; half wheelbase ``HALF_WHEELBASE = 0.075 m`` (a small
 2WD kit cart, consistent with the sensor offsets of 7-8 cm); walls ``y = 0`` (front sensor) and ``x = 0`` (side
-sensor) as in the report's Figure 4. The trajectory is in :mod:`models.unicycle.trajectory`.
+sensor) as in the report's Figure 4. The trajectory is in :mod:`netsim.models.unicycle.trajectory`.
 """
 
 from __future__ import annotations

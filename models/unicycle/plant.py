@@ -2,10 +2,10 @@
 
 Inputs: the wheel speeds ``omega_L, omega_R`` [rad/s] (held by the drive node's DACs). States ``x, y, theta``.
 Outputs: ``z_front, z_side`` (noiseless wall distances of eqs 8-9 with the side offset as the text states it,
-:data:`~models.unicycle.model.SIDE_DERIVED`; the IR sensors' noise is added by their ADCs) and the pose
+:data:`~netsim.models.unicycle.model.SIDE_DERIVED`; the IR sensors' noise is added by their ADCs) and the pose
 ``x, y, theta`` (for recording the truth).
 
-Between input changes the pose moves along an exact arc (:func:`~models.unicycle.model.arc`, not the filter's
+Between input changes the pose moves along an exact arc (:func:`~netsim.models.unicycle.model.arc`, not the filter's
 Euler step). Process noise: at every instant ``k * noise_period`` the pose jumps by ``w ~ N(0,
 diag(process_noise))`` (stream ``plant.unicycle.process``), the truth of eq (10)'s ``w_k``: with
 ``noise_period`` equal to the filter period and ``process_noise`` equal to the filter's ``Q``, the filter's noise
@@ -25,8 +25,8 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import Field
 
-from models.unicycle.ekf import Sensor
-from models.unicycle.model import (
+from netsim.models.unicycle.ekf import Sensor
+from netsim.models.unicycle.model import (
     FRONT_OFFSET, HALF_WHEELBASE, WALL_FRONT, WALL_SIDE, WHEEL_RADIUS, XI0_HAT, arc_floats, side_offset,
     wheels_to_body,
 )

@@ -15,7 +15,7 @@ reference, not a pose trajectory in the cart frame.
     fuses each at its own sample (``fuse_at: sample_time``; a late one by re-running the filter from the
     stored prior of its sample with the stored inputs, up to ``history`` samples back; a sample already fused
     for that source is never fused again), records the posterior, computes ``(v, w)`` by the tracking law
-    (feed-forward, LQR on the cart-frame error, or both: :class:`~models.unicycle.design.TrackingLaw`),
+    (feed-forward, LQR on the cart-frame error, or both: :class:`~netsim.models.unicycle.design.TrackingLaw`),
     converts it to wheel speeds (eq 2) and sends them to the drive node.
 ``wheel_drive``
     Event-driven: the newest wheel-speed pair to the two DACs.
@@ -39,9 +39,9 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field, model_serializer, model_validator
 
-from models.unicycle.design import PHASES, Phase, TrackingLaw, Trajectory
-from models.unicycle.ekf import CartEkf
-from models.unicycle.model import HALF_WHEELBASE, P0, Q_REPORT, R_REPORT, WHEEL_RADIUS, XI0_HAT, body_to_wheels
+from netsim.models.unicycle.design import PHASES, Phase, TrackingLaw, Trajectory
+from netsim.models.unicycle.ekf import CartEkf
+from netsim.models.unicycle.model import HALF_WHEELBASE, P0, Q_REPORT, R_REPORT, WHEEL_RADIUS, XI0_HAT, body_to_wheels
 from netsim.programs.basic import ProgramContext, _newest
 from netsim.registry import register
 from netsim.units import StrictModel, Time

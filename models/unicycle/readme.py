@@ -1,7 +1,7 @@
-"""README and table rows of the 2WD cart report from the computed facts (:func:`models.unicycle.report`).
+"""README and table rows of the 2WD cart report from the computed facts (:func:`netsim.models.unicycle.report`).
 
-Sections 0-4 are here, section 5 (the networked experiments) in :mod:`models.unicycle.readme_net`. Every number
-of the prose goes through :class:`~models.unicycle.quoting.Quotes` (``q.f``, ``q.pct``, ``q.i``, ``q.g``): the
+Sections 0-4 are here, section 5 (the networked experiments) in :mod:`netsim.models.unicycle.readme_net`. Every number
+of the prose goes through :class:`~netsim.models.unicycle.quoting.Quotes` (``q.f``, ``q.pct``, ``q.i``, ``q.g``): the
 report writes ``quoted.csv`` and ``template.md`` besides the README, and a test checks that the template holds
 no typed-in number.
 """
@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from models.unicycle.design import LQR_Q, LQR_R, PHASES
-from models.unicycle.model import (
+from netsim.models.unicycle.design import LQR_Q, LQR_R, PHASES
+from netsim.models.unicycle.model import (
     ALPHA, BETA, GAMMA, HALF_WHEELBASE, P0, R_REPORT, TS, WALL_FRONT, WALL_SIDE, WHEEL_RADIUS, XI0_HAT,
 )
-from models.unicycle.quoting import Quotes
+from netsim.models.unicycle.quoting import Quotes
 
 __all__ = ["write_readme"]
 
@@ -28,7 +28,7 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
     README's text."""
     import pandas as pd
 
-    from models.unicycle.readme_net import network_section
+    from netsim.models.unicycle.readme_net import network_section
 
     q = Quotes()
     _f, _pct = q.f, q.pct

@@ -1,4 +1,4 @@
-"""Section 5 of the 2WD cart README (:mod:`models.unicycle.readme`): what only a networked simulator shows.
+"""Section 5 of the 2WD cart README (:mod:`netsim.models.unicycle.readme`): what only a networked simulator shows.
 
 Sweeps (``facts`` keys): ``net`` (CAN: front rate x Bernoulli loss), ``burst`` (CAN: Bernoulli against
 Gilbert-Elliott), ``radio_mc`` (802.15.4: sensor rate x loss model drawn per attempt, 200 replicates:
@@ -6,7 +6,7 @@ Gilbert-Elliott), ``radio_mc`` (802.15.4: sensor rate x loss model drawn per att
 report's sensors), ``radio_delay`` (802.15.4: command delay, the report's and accurate sensors);
 ``zigbee`` is one run's metrics; ``delay_aware_can`` and ``delay_aware_radio`` (issue 26 section 5: the same
 command delays with the filter unaware of them and told them, ``input_delay``) feed :func:`delay_aware_section`.
-Every number goes through the :class:`~models.unicycle.quoting.Quotes`.
+Every number goes through the :class:`~netsim.models.unicycle.quoting.Quotes`.
 
 Why this module is long: it is one README section of six studies, each a table and the sentences that quote
 it, with the shared run counting (:func:`lost_runs`, :func:`stability_limits`) and the radio study's splice; a
@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from models.unicycle.model import TS
-from models.unicycle.quoting import Quotes
+from netsim.models.unicycle.model import TS
+from netsim.models.unicycle.quoting import Quotes
 
 __all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference", "delay_aware_section",
            "delay_aware_frame", "GROWTH", "LOST_E3", "lost_runs", "DELAY_AWARE_MARK", "RADIO_MC_MARK",
@@ -72,7 +72,7 @@ def mean_difference(q: Quotes, x: Any, y: Any, key: str | None = None) -> tuple[
 
 def lost_runs(d: Any) -> Any:
     """Per run: the loop was lost (``max |e3| >`` :data:`LOST_E3`, or the run's status is diverged or unstable:
-    the ``_failed`` column of :func:`models.unicycle.report.counted_runs`)."""
+    the ``_failed`` column of :func:`netsim.models.unicycle.report.counted_runs`)."""
     lost = d["unicycle.track_max_e3"].astype(float) > LOST_E3
     if "_failed" in d:
         lost = lost | d["_failed"].astype(bool)

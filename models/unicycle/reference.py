@@ -13,9 +13,9 @@ from typing import Any, Literal, Sequence
 
 import numpy as np
 
-from models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, TrackingLaw, Trajectory
-from models.unicycle.ekf import CartEkf, Sensor
-from models.unicycle.model import (
+from netsim.models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, TrackingLaw, Trajectory
+from netsim.models.unicycle.ekf import CartEkf, Sensor
+from netsim.models.unicycle.model import (
     FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, TS, WALL_FRONT, WALL_SIDE, XI0_HAT, arc_floats,
 )
 

@@ -3,7 +3,7 @@
 Writes ``reports/unicycle/README.md`` (one section per experiment: what the report claims, what we measured,
 why it differs), ``table.csv`` (``experiment, setting, quantity, ours, source, reason``) and figures. Every
 number in the README is computed here from runs: the numpy loop for the Monte-Carlo studies with hundreds of
-runs per setting (:mod:`models.unicycle.studies`), netsim scenarios and sweeps (``replicates``) for everything
+runs per setting (:mod:`netsim.models.unicycle.studies`), netsim scenarios and sweeps (``replicates``) for everything
 with sensors, estimator and drive on their own nodes (sweep folders under ``reports/unicycle/runs/``; a second
 call resumes them).
 """
@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from models.unicycle import studies as S
-from models.unicycle.design import PHASES
+from netsim.models.unicycle import studies as S
+from netsim.models.unicycle.design import PHASES
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 
@@ -46,7 +46,7 @@ class _Table:
         self.rows: list[dict[str, Any]] = []
 
     def add(self, experiment: str, setting: str, quantity: str, ours: Any, source: str = "", reason: str = "") -> Any:
-        from models.unicycle.quoting import Quotes
+        from netsim.models.unicycle.quoting import Quotes
 
         self.rows.append({"experiment": experiment, "setting": setting, "quantity": quantity,
                           "ours": Quotes.render(ours) if isinstance(ours, str) else _f(float(ours), 4), "source": source,
@@ -59,7 +59,7 @@ class _Table:
 
 def counted_runs(summary: pd.DataFrame, name: str) -> pd.DataFrame:
     """Every run of sweep ``name``'s summary, each one counted: a run that diverged or ended unstable is kept and
-    marked ``_failed`` (:func:`models.unicycle.readme_net.lost_runs` counts it as a lost loop; its metrics, when
+    marked ``_failed`` (:func:`netsim.models.unicycle.readme_net.lost_runs` counts it as a lost loop; its metrics, when
     it has them, enter the means like any other run's).
 
     Raises
@@ -162,7 +162,7 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
     out.mkdir(parents=True, exist_ok=True)
     T = _Table()
-    from models.unicycle.readme import write_readme
+    from netsim.models.unicycle.readme import write_readme
 
     facts: dict[str, Any] = {"runs": runs}
     # ---------------------------------------------------------------- model and design facts
@@ -202,7 +202,7 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
         facts[f"{key}_study"] = (S.net_qr_study(df, out / "runs" / f"unicycle_{key}", t)
                                  if df is not None and len(df) else None)
     facts["wall_dist"] = S.wall_distances()
-    from models.unicycle.programs import UnicycleEkf
+    from netsim.models.unicycle.programs import UnicycleEkf
 
     facts["history"] = UnicycleEkf.Params.model_fields["history"].default
     speed = out / "speed.json"
@@ -225,8 +225,8 @@ def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
     ``delay_aware.csv`` and the README's delay-aware section (with ``template.md``, ``quoted.csv`` and
     ``table.csv`` kept consistent: the section's quotes are ``s5da.*``, its rows ``5 delay-aware``). The rest of
     the report is left as it is (``netsim report unicycle`` runs everything, this section included)."""
-    from models.unicycle.quoting import Quotes
-    from models.unicycle.readme_net import DELAY_AWARE_MARK, delay_aware_frame, delay_aware_section
+    from netsim.models.unicycle.quoting import Quotes
+    from netsim.models.unicycle.readme_net import DELAY_AWARE_MARK, delay_aware_frame, delay_aware_section
 
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
     F = {"delay_aware_can": _sweep("unicycle_lqr_delay_aware", out, workers),
@@ -263,10 +263,10 @@ def unicycle_radio_mc_report(out_dir: Path | None = None, plots: bool = True, *,
                              workers: int | None = None) -> dict[str, pd.DataFrame]:
     """Run (or resume) ``unicycle_radio_mc`` and replace the README's radio Monte-Carlo section in place, with
     ``template.md``, ``quoted.csv`` and ``table.csv`` kept consistent
-    (:func:`models.unicycle.readme_net.splice_radio_mc`); the rest of the report is left as it is (``netsim report
+    (:func:`netsim.models.unicycle.readme_net.splice_radio_mc`); the rest of the report is left as it is (``netsim report
     unicycle`` runs everything, this section included)."""
-    from models.unicycle.quoting import Quotes
-    from models.unicycle.readme_net import radio_mc_section, splice_radio_mc
+    from netsim.models.unicycle.quoting import Quotes
+    from netsim.models.unicycle.readme_net import radio_mc_section, splice_radio_mc
 
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
     q, T = Quotes(), _Table()
@@ -289,7 +289,7 @@ def _monte_carlo(facts: dict[str, Any], runs: int, workers: int | None, t: np.nd
     qr_runs: dict[str, list[dict]] = {}
     facts["qr"] = {}
     for name, (fq, fr) in S.QR_SETTINGS.items():
-        from models.unicycle.model import Q_REPORT, R_REPORT
+        from netsim.models.unicycle.model import Q_REPORT, R_REPORT
 
         rs = S.mc_runs(runs, seed0=10_000, workers=workers, Q_filter=fq * Q_REPORT, R_filter=fr * R_REPORT)
         qr_runs[name] = rs

@@ -1,6 +1,6 @@
-"""The experiments of the 2WD cart report (numbers only; :mod:`models.unicycle.report` writes them up).
+"""The experiments of the 2WD cart report (numbers only; :mod:`netsim.models.unicycle.report` writes them up).
 
-Monte-Carlo studies with hundreds of runs per setting use the numpy loop (:mod:`models.unicycle.reference`, the
+Monte-Carlo studies with hundreds of runs per setting use the numpy loop (:mod:`netsim.models.unicycle.reference`, the
 same EKF and law without network, ~0.2 s a run); the networked experiments run the scenarios through netsim
 sweeps (``replicates``). Every function returns plain numbers and arrays.
 """
@@ -15,13 +15,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, Trajectory, cart_frame_error, error_model, lqr_gain
-from models.unicycle.metrics import run_measures
-from models.unicycle.model import (
+from netsim.models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, Trajectory, cart_frame_error, error_model, lqr_gain
+from netsim.models.unicycle.metrics import run_measures
+from netsim.models.unicycle.model import (
     FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, SIDE_PRINTED, WALL_FRONT, WALL_SIDE, jac_A, measure,
     measure_jacobian,
 )
-from models.unicycle.reference import simulate
+from netsim.models.unicycle.reference import simulate
 
 __all__ = ["QR_SETTINGS", "mc_runs", "qr_study", "observability", "lqr_facts", "printed_side_study",
            "printed_lqr_study", "PHASE_NAMES", "PHASE_ENDS"]
@@ -46,7 +46,7 @@ def _one(args: tuple[int, dict[str, Any]]) -> dict[str, Any]:
 
 def mc_runs(n: int, seed0: int = 0, workers: int | None = None, keep: bool = True,
             progress: Callable[[int, int, str], None] | None = None, what: str = "", **kw: Any) -> list[dict]:
-    """``n`` runs of :func:`~models.unicycle.reference.simulate` with seeds ``seed0 .. seed0 + n - 1``."""
+    """``n`` runs of :func:`~netsim.models.unicycle.reference.simulate` with seeds ``seed0 .. seed0 + n - 1``."""
     jobs = [(seed0 + i, kw) for i in range(n)]
     workers = workers or min(os.cpu_count() or 1, 4)
     out: list[dict] = []

@@ -2,7 +2,7 @@
 
 The engine never imports ``models/``; case-study modules register their plants, controllers, task
 programs and the like under a *kind* and a name, and a scenario names them (``plant: {model: hdd}``) or
-gives an import path (``"models.hdd:HddPlant"``). ``netsim list`` prints the registry, ``netsim list KIND
+gives an import path (``"netsim.models.hdd:HddPlant"``). ``netsim list`` prints the registry, ``netsim list KIND
 NAME`` one plugin's parameters (:mod:`netsim.registry.params`).
 
 Where registered things come from (issue 14: a scenario file is data, it cannot name arbitrary code):
@@ -30,7 +30,7 @@ A ``"module:attr"`` path (:func:`resolve`) is only another way to name a registe
 to an object registered under the kind, or to a subclass of the kind's base class (:data:`KIND_BASES`, e.g.
 :class:`netsim.plant.Plant`). ``"os:system"`` or ``"subprocess:Popen"`` is refused without being called, and a
 module that is not already imported is imported only when it is one of netsim's own (``netsim.*``,
-``models.*``) or a ``netsim.plugins`` entry point.
+``netsim.models.*``) or a ``netsim.plugins`` entry point.
 
 Kinds (:data:`KINDS`), each looked up where a scenario names it:
 
@@ -138,7 +138,7 @@ _PLUGIN_FILES: dict[str, str] = {}
 
 
 #: netsim's own plugin modules and packages. :func:`load_plugins` imports each, and every module below a
-#: listed package (a new file in ``netsim/network/`` or ``models/`` registers without being imported anywhere).
+#: listed package (a new file in ``netsim/network/`` or ``models/`` (``netsim.models``) registers without being imported anywhere).
 #: The application layer (CLI, scenario loading, runner, sweeps, plots) is not listed: it uses plugins and
 #: defines none, and ``tests/test_registry.py`` fails when a module outside these registers something. A lookup
 #: imports only the modules that declare the name (:mod:`netsim.registry.index`); ``netsim list`` and ``netsim
@@ -152,7 +152,7 @@ PLUGIN_MODULES: list[str] = [
     "netsim.io.signals",
     "netsim.programs",
     "netsim.plant.described",
-    "models",
+    "netsim.models",
 ]
 
 

@@ -146,9 +146,25 @@ def _locate(dotted: str) -> tuple[str | None, bool]:
                 if not nxt and os.path.isfile(os.path.join(d, part + ".py")):
                     return os.path.join(d, part + ".py"), False
         if not nxt:
-            return None, False
+            # a package mapped from another folder (``netsim.models`` is the checkout's ``models/`` in an
+            # editable install): ask the import system, which imports the already-loaded parent only
+            mapped = _mapped_dirs(".".join([top, *rest[: i + 1]]))
+            if not mapped:
+                return None, False
+            nxt = mapped
         dirs = nxt
     return dirs[0], True
+
+
+def _mapped_dirs(dotted: str) -> list[str]:
+    """The package directories of ``dotted`` found by the import system (its parent package is imported)."""
+    try:
+        spec = importlib.util.find_spec(dotted)
+    except (ImportError, ValueError):
+        return []
+    if spec is None:
+        return []
+    return [os.path.abspath(p) for p in (spec.submodule_search_locations or [])]
 
 
 def _walk(dotted: str) -> Iterator[tuple[str, Any]]:

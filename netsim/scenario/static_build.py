@@ -18,7 +18,7 @@ programs are never constructed (their ``Params`` are checked by :mod:`netsim.sce
 signals and networks are built only when they come from netsim's own plugin modules
 (:func:`netsim.registry.is_builtin`), and kernels only when every node uses a built-in policy. Cost: about
 a millisecond per node, plus the plant's own construction (the HDD plant's first design in a process imports
-python-control, about 1.3 s, then ``models.hdd`` caches it; a second check of hdd_case4 takes about 10 ms).
+python-control, about 1.3 s, then ``netsim.models.hdd`` caches it; a second check of hdd_case4 takes about 10 ms).
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 1. One 1 m run at q = 6 with the 100 kHz encoder ISR modelled, through netsim, against a plain numpy loop of
    the same cart and controller written here: wall time, simulated control periods per second, and the
    ratio (target <= 10x the plain loop). Also against the vectorised numpy loop of the same closed loop
-   (:func:`models.cart.sim.simulate`: the cart evaluated in closed form at the 100 ISR ticks of each period
+   (:func:`netsim.models.cart.sim.simulate`: the cart evaluated in closed form at the 100 ISR ticks of each period
    at once), per control period (issue 19's target: ``run()`` <= 5x it). "ISR modelled" means its CPU time
    at every tick shows in the controller's response time and the utilization: the exact encoder with the
    ISR's periodic load (``isr_load: true``, the scenario's default) and the polling ISR (a handler run every
@@ -18,9 +18,9 @@ import time
 import numpy as np
 import pytest
 
-from models.cart.controllers import make_controller
-from models.cart.encoding import Quantizer
-from models.cart.friction import Friction, FrictionParams
+from netsim.models.cart.controllers import make_controller
+from netsim.models.cart.encoding import Quantizer
+from netsim.models.cart.friction import Friction, FrictionParams
 
 pytestmark = pytest.mark.benchmark
 
@@ -69,7 +69,7 @@ def test_bench_one_run_vs_plain_loop():
 
     periods = time_plain()
     print(f"\nplain numpy loop: {periods} control periods (1 m)")
-    from models.cart.sim import simulate
+    from netsim.models.cart.sim import simulate
 
     vec = math.inf
     ref = None
@@ -82,7 +82,7 @@ def test_bench_one_run_vs_plain_loop():
         vec = min(vec, time.process_time() - t0)
 
     time_vectorised()
-    print(f"vectorized reference sim (models.cart.sim): {len(ref.t)} periods, {vec:.3f} s")
+    print(f"vectorized reference sim (netsim.models.cart.sim): {len(ref.t)} periods, {vec:.3f} s")
     jobs = {}
     ratios = {}
     cases = (("exact encoder + ISR load (100 kHz ISR modelled)", "exact", True),
@@ -126,7 +126,7 @@ def test_bench_one_run_vs_plain_loop():
 
 
 def test_bench_fig2_sweep_wall_time():
-    from models.cart.report import _run_all, fig2_points
+    from netsim.models.cart.report import _run_all, fig2_points
 
     t0 = time.perf_counter()
     df = _run_all(fig2_points(), "netsim", None)

@@ -31,7 +31,7 @@ SCEN = Path(__file__).resolve().parents[2] / "scenarios"
 
 def _numpy_tts_loop(n=464):
     """The same closed loop as hdd_case1 in plain numpy: plant update, MRCI step, nothing else."""
-    from models.hdd import hdd_model
+    from netsim.models.hdd import hdd_model
     from netsim.control import MrciController, decompose
 
     m = hdd_model()
@@ -49,7 +49,7 @@ def _numpy_tts_loop(n=464):
 
 def _reference_loop(n=464):
     """hdd_case1 through netsim.control.reference_loop.simulate_loop (control side + playout, ideal timing)."""
-    from models.hdd import hdd_model
+    from netsim.models.hdd import hdd_model
     from netsim.control import ControlSide, MrciController, TimeTriggered, decompose, simulate_loop
 
     m = hdd_model()

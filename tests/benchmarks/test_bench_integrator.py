@@ -8,7 +8,7 @@ default integrator (one ``scipy.integrate.solve_ivp`` call per inter-event segme
 * the whole run, and its plant-integration part (the time inside ``NonlinearPlant._step``: every advance of
   the plant between events, right-hand-side evaluations included);
 * the baseline measured in the same process: the same number of RK4 steps of the pendulum's right-hand side
-  (``models.pendulum.model.dynamics``) in a bare numpy loop, without netsim -- the cost an RK4 plant cannot go
+  (``netsim.models.pendulum.model.dynamics``) in a bare numpy loop, without netsim -- the cost an RK4 plant cannot go
   below with this right-hand side. Ratios against it cancel most of the machine load.
 
 Issue 29's target for the integration part is 0.25 s CPU; the figures are the best of two interleaved runs.
@@ -37,7 +37,7 @@ RK4 = {"plant.integrator": {"method": "rk4", "max_step": "1 ms"}}
 
 
 def _closed_form_dynamics(t, x, u, p):
-    """``models.pendulum.model.dynamics`` with the 2x2 mass matrix solved by Cramer's rule on Python floats."""
+    """``netsim.models.pendulum.model.dynamics`` with the 2x2 mass matrix solved by Cramer's rule on Python floats."""
     th_d, a, a_d = float(x[1]), float(x[2]), float(x[3])
     s, c = math.sin(a), math.cos(a)
     J0, mlL = p.J0, p.mp * p.l * p.Lr
@@ -52,7 +52,7 @@ def _closed_form_dynamics(t, x, u, p):
 def _run(overrides: dict, rhs=None) -> tuple[float, float, int, dict]:
     """``(run CPU s, integration CPU s, plant advances, metrics)`` of one run of pendulum_lqr (``rhs``: the
     pendulum's right-hand side instead of the model's)."""
-    import models.pendulum.model as model
+    import netsim.models.pendulum.model as model
 
     spent = [0.0, 0]
     step = NonlinearPlant._step
@@ -81,7 +81,7 @@ def _run(overrides: dict, rhs=None) -> tuple[float, float, int, dict]:
 
 def _bare_rk4(steps: int) -> float:
     """CPU s of ``steps`` RK4 steps of 1 ms of the pendulum's right-hand side in a plain numpy loop."""
-    from models.pendulum.model import PendulumParams, dynamics
+    from netsim.models.pendulum.model import PendulumParams, dynamics
 
     p, u, h = PendulumParams(), np.array([0.5]), 1e-3
     x = np.array([0.0, 0.0, 0.2, 0.0])
@@ -96,7 +96,7 @@ def _bare_rk4(steps: int) -> float:
 
 
 def test_bench_pendulum_lqr_rk4_against_solve_ivp():
-    from models.pendulum.model import PendulumParams, dynamics
+    from netsim.models.pendulum.model import PendulumParams, dynamics
 
     rng = np.random.default_rng(0)
     for _ in range(100):

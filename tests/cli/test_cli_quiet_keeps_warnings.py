@@ -23,7 +23,6 @@ def test_quiet_run_keeps_a_metric_warning_in_meta_json_and_prints_none(tmp_path,
     assert "past the end of its packet" not in capsys.readouterr().err
     # the run put the loggers' levels back
     assert logging.getLogger("netsim").level == logging.NOTSET
-    assert logging.getLogger("models").level == logging.NOTSET
 
 
 def test_a_second_main_in_one_process_logs_to_the_current_stderr(monkeypatch):

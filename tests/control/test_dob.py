@@ -11,7 +11,7 @@ T = 20e-6
 
 @pytest.fixture(scope="module")
 def hdd():
-    from models.hdd import hdd_model
+    from netsim.models.hdd import hdd_model
 
     return hdd_model()
 
@@ -118,7 +118,7 @@ def test_dob_tracks_the_60hz_disturbance_of_eq32_in_closed_loop(dob, hdd):
 def test_eq18_closed_loop_form_is_refused_because_its_filter_is_unstable(hdd):
     import re
 
-    import models.hdd
+    import netsim.models.hdd
     import netsim.control.dob
 
     with pytest.raises(BuildError, match="unstable") as err:
@@ -126,7 +126,7 @@ def test_eq18_closed_loop_form_is_refused_because_its_filter_is_unstable(hdd):
     # the docstrings of models/hdd.py and netsim.control.dob quote the largest pole modulus of the eq (18)
     # filter: it must be the figure the error computes
     printed = re.search(r"largest pole modulus ([0-9.]+)", str(err.value)).group(1)
-    for doc in (models.hdd.__doc__, netsim.control.dob.__doc__):
+    for doc in (netsim.models.hdd.__doc__, netsim.control.dob.__doc__):
         assert re.search(r"largest pole modulus\s+([0-9.]+)", doc).group(1) == printed
 
 

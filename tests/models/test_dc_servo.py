@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from models.dc_servo import DcServoParams, dc_servo_matrices
+from netsim.models.dc_servo import DcServoParams, dc_servo_matrices
 
 
 def test_state_space_realises_the_transfer_function():

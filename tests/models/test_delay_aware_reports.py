@@ -8,7 +8,7 @@ import pandas as pd
 
 
 def test_pendulum_delay_aware_margins_bracket_the_first_fallen_run() -> None:
-    from models.pendulum.report_sweeps import delay_aware_margins
+    from netsim.models.pendulum.report_sweeps import delay_aware_margins
 
     rows = []
     # unaware: all 5 balanced up to 21.1 ms, 4 of 5 at 26.1, 0 at 31.1; told the delay: 5 of 5 everywhere but
@@ -26,7 +26,7 @@ def test_pendulum_delay_aware_margins_bracket_the_first_fallen_run() -> None:
 
 
 def test_pendulum_delay_aware_margins_say_when_nothing_failed() -> None:
-    from models.pendulum.report_sweeps import delay_aware_margins
+    from netsim.models.pendulum.report_sweeps import delay_aware_margins
 
     rows = [{"estimator": "luenberger", "estimation": "input_delay", "total_delay_ms": t, "seed_count": 5,
              "stable_runs": 5} for t in (1.1, 31.1, 61.1)]
@@ -35,7 +35,7 @@ def test_pendulum_delay_aware_margins_say_when_nothing_failed() -> None:
 
 
 def test_unicycle_delay_aware_frame_names_the_rows_and_shares_the_zero_delay_run() -> None:
-    from models.unicycle.readme_net import delay_aware_frame
+    from netsim.models.unicycle.readme_net import delay_aware_frame
 
     can = pd.DataFrame({"delay": ["0 ms", "100 ms", "100 ms"], "input_delay": [0, 0, 10],
                         "unicycle.track_rms_e1": [1.0, 2.0, 3.0]})
@@ -53,8 +53,8 @@ def test_unicycle_delay_aware_frame_names_the_rows_and_shares_the_zero_delay_run
 def test_pendulum_law_spectral_radius_matches_hand_built_loops() -> None:
     import numpy as np
 
-    from models.pendulum.analysis import law_spectral_radius
-    from models.pendulum.design import designs
+    from netsim.models.pendulum.analysis import law_spectral_radius
+    from netsim.models.pendulum.design import designs
 
     d = designs()
     A, B, K = d.lin.Ad, d.lin.Bd, d.K_lqr

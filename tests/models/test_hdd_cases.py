@@ -25,7 +25,7 @@ def _m(res, key):
 
 
 def test_case1_equals_the_plain_numpy_loop(cases):
-    from models.hdd import hdd_model
+    from netsim.models.hdd import hdd_model
     from netsim.control import ControlSide, MrciController, TimeTriggered, decompose, simulate_loop
 
     m = hdd_model()

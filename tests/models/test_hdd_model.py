@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from models.hdd import T_HDD, closed_loop_radius, hdd_model
+from netsim.models.hdd import T_HDD, closed_loop_radius, hdd_model
 
 
 def test_plant_is_tenth_order_and_has_the_expected_dc_gain():
@@ -41,11 +41,11 @@ def test_notch_gain_at_5khz_quoted_in_the_docstring():
     # independent: |N1(e^{jwT})| of eq (31) at w = 2 pi 5 kHz, zeros alpha_1 = 0.965, poles beta_1 = 0.975
     import re
 
-    import models.hdd
+    import netsim.models.hdd
 
     z = np.exp(1j * 2 * np.pi * 5000 * T_HDD)
     c = np.cos(2 * np.pi * 5000 * T_HDD)
     gain_db = 20 * np.log10(abs((z * z - 2 * 0.965 * c * z + 0.965**2) / (z * z - 2 * 0.975 * c * z + 0.975**2)))
-    quoted = [float(x) for x in re.findall(r"([+-][0-9.]+) dB \*peak\* at 5 kHz", models.hdd.__doc__)]
+    quoted = [float(x) for x in re.findall(r"([+-][0-9.]+) dB \*peak\* at 5 kHz", netsim.models.hdd.__doc__)]
     assert quoted == [pytest.approx(gain_db, abs=0.005)]
-    assert f"-{gain_db:.2f} dB notch at 5 kHz" in " ".join(models.hdd.__doc__.split())
+    assert f"-{gain_db:.2f} dB notch at 5 kHz" in " ".join(netsim.models.hdd.__doc__.split())

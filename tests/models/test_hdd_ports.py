@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from models.hdd import HddPlantParams, hdd_plant
+from netsim.models.hdd import HddPlantParams, hdd_plant
 
 
 def test_declared_ports_are_the_built_plants() -> None:

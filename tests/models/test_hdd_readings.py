@@ -29,7 +29,7 @@ def _k_of(msgs, tag):
 def test_every_period_controller_matches_an_independent_numpy_loop():
     # the "runs every T" reading of Case 2, rebuilt here without kernel or network: sensor eq (6) (squared
     # norm), the MRCI stepping at every k on the last received y, eq (22) at every k, ZOH actuator
-    from models.hdd import hdd_model
+    from netsim.models.hdd import hdd_model
     from netsim.control import ControllerTrigger, MixedTrigger, MrciController, decompose
 
     res = _ok(run(SCEN / "hdd_case2.yaml", write=False, overrides=EVERY_PERIOD))

@@ -1,6 +1,6 @@
 """Honesty of reports/hdd/README.md: every number its prose quotes comes from the runs.
 
-* the templates of :data:`models.hdd_report.TEXT` hold no number other than labels (a typed-in number
+* the templates of :data:`netsim.models.hdd_report.TEXT` hold no number other than labels (a typed-in number
   fails here);
 * the committed README's prose is the templates filled with the committed ``quoted.csv``, and its table
   is ``table.csv``;
@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from models import hdd_report as hr
+from netsim.models import hdd_report as hr
 
 REPORT = Path(__file__).resolve().parents[2] / "reports" / "hdd"
 

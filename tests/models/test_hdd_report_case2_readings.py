@@ -11,7 +11,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from models import hdd_report as hr
+from netsim.models import hdd_report as hr
 
 REPORT = Path(__file__).resolve().parents[2] / "reports" / "hdd"
 #: Section 5.2 of Cuenca et al.: Nsc, Nca, Uc, Ua, ISEP, NE of Case 2.

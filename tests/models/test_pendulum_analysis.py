@@ -8,9 +8,9 @@ import pytest
 from scipy.linalg import expm, solve_discrete_lyapunov
 
 import netsim  # noqa: F401 - pins BLAS before numpy work
-from models.pendulum.analysis import analytic_cost, controller_matrices, lqg_delay_margin
-from models.pendulum.design import Q_LQR, R_LQR, delay_margin, delay_spectral_radius, designs
-from models.pendulum.model import DISTURBANCE_HOLD, DISTURBANCE_STD
+from netsim.models.pendulum.analysis import analytic_cost, controller_matrices, lqg_delay_margin
+from netsim.models.pendulum.design import Q_LQR, R_LQR, delay_margin, delay_spectral_radius, designs
+from netsim.models.pendulum.model import DISTURBANCE_HOLD, DISTURBANCE_STD
 
 ESTIMATORS = ("fd_raw", "fd_lowpass", "luenberger", "kalman")
 

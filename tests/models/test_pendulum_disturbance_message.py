@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from models.pendulum.model import discretise, furuta_pendulum, PendulumParams, process_noise_cov
+from netsim.models.pendulum.model import discretise, furuta_pendulum, PendulumParams, process_noise_cov
 from netsim.errors import ConfigError
 from netsim.scenario.loader import check_scenario
 from tests.fuzz.mutations import message_has_fix

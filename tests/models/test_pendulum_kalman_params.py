@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import netsim  # noqa: F401 - pins BLAS before numpy work
-from models.pendulum.model import PendulumParams, dynamics
+from netsim.models.pendulum.model import PendulumParams, dynamics
 from netsim.errors import ConfigError
 from netsim.scenario.builder import build
 from netsim.scenario.loader import load_scenario
@@ -73,7 +73,7 @@ def test_the_default_plant_still_gets_the_default_gain():
 
 
 def test_another_plant_is_refused_with_a_message():
-    from models.pendulum.estimators import KalmanPart, _KalmanParams
+    from netsim.models.pendulum.estimators import KalmanPart, _KalmanParams
     from netsim.control.parts import Design
 
     Ad = np.eye(4)

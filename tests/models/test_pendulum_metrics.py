@@ -8,7 +8,7 @@ import pandas as pd
 import pytest
 
 import netsim  # noqa: F401
-from models.pendulum.metrics import PendulumMetricParams, pendulum_measures
+from netsim.models.pendulum.metrics import PendulumMetricParams, pendulum_measures
 
 
 def _signals(n=600, h=0.005):

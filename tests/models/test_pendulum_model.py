@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import netsim  # noqa: F401 - pins BLAS before numpy work
-from models.pendulum import design as pd_
-from models.pendulum import estimators as est
-from models.pendulum import model as pm
+from netsim.models.pendulum import design as pd_
+from netsim.models.pendulum import estimators as est
+from netsim.models.pendulum import model as pm
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """Honesty of reports/pendulum/README.md: every number its prose quotes comes from the runs.
 
-* the templates of :data:`models.pendulum.report.TEXT` hold no number besides labels (a typed-in number fails);
+* the templates of :data:`netsim.models.pendulum.report.TEXT` hold no number besides labels (a typed-in number fails);
 * the committed README's prose is the templates filled with the committed ``quoted.csv``, its closed-loop table
   is ``table.csv``, and ``table.csv`` has the issue's stable columns;
 * quoted values agree with fresh computations: the analytic ones (designs) and two fresh closed-loop runs
@@ -16,7 +16,7 @@ import pytest
 import yaml
 
 import netsim  # noqa: F401 - pins BLAS before numpy work
-from models.pendulum import report as rp
+from netsim.models.pendulum import report as rp
 
 ROOT = Path(__file__).resolve().parents[2]
 REPORT = ROOT / "reports" / "pendulum"
@@ -73,7 +73,7 @@ def test_quoted_tilt_is_the_scenarios():
 
 
 def test_analytic_quotes_match_a_fresh_computation(quoted):
-    from models.pendulum.design import designs, motion_errors
+    from netsim.models.pendulum.design import designs, motion_errors
 
     d = designs()
     q = quoted.set_index("key")["value"].astype(float)
@@ -115,7 +115,7 @@ def test_the_tuning_rows_are_the_sweep_files_runs():
 
 
 def test_report_delays_are_the_scenarios():
-    from models.pendulum.report_sweeps import NETWORK_BASE_DELAY_MS
+    from netsim.models.pendulum.report_sweeps import NETWORK_BASE_DELAY_MS
     from netsim.scenario import load_scenario
 
     net = load_scenario(ROOT / "scenarios" / "pendulum_network.yaml")
@@ -128,7 +128,7 @@ def test_report_delays_are_the_scenarios():
 
 
 def test_delay_sweep_points_are_the_study_estimators():
-    from models.pendulum.report_sweeps import estimator_name, point_values
+    from netsim.models.pendulum.report_sweeps import estimator_name, point_values
 
     names = {estimator_name(v["estimator"], rp.ESTIMATORS) for v in point_values("pendulum_delay_sweep")}
     assert names == set(rp.DELAY_ESTIMATORS)

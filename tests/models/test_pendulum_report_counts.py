@@ -6,7 +6,7 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from models.pendulum.report_sweeps import with_results
+from netsim.models.pendulum.report_sweeps import with_results
 from netsim.errors import NetsimError
 
 

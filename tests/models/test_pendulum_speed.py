@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 import netsim
-from models.pendulum import design as pd_
-from models.pendulum import model as pm
+from netsim.models.pendulum import design as pd_
+from netsim.models.pendulum import model as pm
 
 pytestmark = pytest.mark.benchmark
 

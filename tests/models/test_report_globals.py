@@ -16,7 +16,7 @@ import pytest
 
 import netsim  # noqa: F401 - pins BLAS before numpy is imported by the models
 
-REPORT_MODULES = ["models.hdd_report", "models.pendulum.report", "models.unicycle.report", "models.cart.report"]
+REPORT_MODULES = ["netsim.models.hdd_report", "netsim.models.pendulum.report", "netsim.models.unicycle.report", "netsim.models.cart.report"]
 
 
 def _code_objects(code: types.CodeType):

@@ -78,7 +78,7 @@ def test_state_noise_adds_random_walk_increments_to_a_plugin_plant():
     # The unicycle (seed 001's two-wheel cart) at rest, no noise of its own: the pose moves only by the slip
     # increments. x and theta take sigma_i * sqrt(0.01 s) * e at 10, 20, ..., 90 ms (9 instants before 95 ms),
     # drawn from plant.unicycle.state_noise two at a time (x, theta).
-    from models.unicycle.plant import unicycle
+    from netsim.models.unicycle.plant import unicycle
 
     env = SimEnv(seed=2)
     plant = unicycle(pose0=[0.1, 0.2, 0.3])

@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from models.cart.claims import (
+from netsim.models.cart.claims import (
     EVENT,
     LTI,
     OSC_THRESHOLD,
@@ -22,7 +22,7 @@ from models.cart.claims import (
     pool_sigma,
     pooling_difference,
 )
-from models.cart.metrics import STOP_WINDOW, cart_metrics, stop_rms
+from netsim.models.cart.metrics import STOP_WINDOW, cart_metrics, stop_rms
 
 REPORT = Path(__file__).resolve().parents[3] / "reports" / "cart"
 WCS = (5, 10, 20, 40, 80)
@@ -201,7 +201,7 @@ def test_committed_report_quotes_the_numbers_of_its_runs():
 
 @pytest.mark.slow
 def test_tiny_report_regenerates_consistent_tables(tmp_path):
-    from models.cart.report import cart_report
+    from netsim.models.cart.report import cart_report
 
     calls = []
     tables = cart_report(tmp_path, plots=False, quant=False, sensitivity=False, seeds=(1,), workers=2,

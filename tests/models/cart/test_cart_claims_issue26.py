@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from models.cart.claims import OSC_THRESHOLD, claims, ev_ranking, fmt, pool_sigma
-from models.cart.cache import PointCache, code_hash
-from models.cart.report import CONTROLLERS, _run_all, instability_points
+from netsim.models.cart.claims import OSC_THRESHOLD, claims, ev_ranking, fmt, pool_sigma
+from netsim.models.cart.cache import PointCache, code_hash
+from netsim.models.cart.report import CONTROLLERS, _run_all, instability_points
 
 REPORT = Path(__file__).resolve().parents[3] / "reports" / "cart"
 WCS = (5, 10, 20, 40, 80)
@@ -161,7 +161,7 @@ def test_code_hash_changes_with_the_scenario_and_the_extra_key(tmp_path):
 
 
 def test_run_cache_keeps_only_runs_that_ended_ok(tmp_path, monkeypatch):
-    import models.cart.report as rep
+    import netsim.models.cart.report as rep
 
     pts = instability_points((1,))[:2]
 

@@ -6,10 +6,10 @@ with the round numbers K = 10 1/s, Ti = 0.1 s, Tfilter = 10 ms (or 2 ms), step 1
 
 import pytest
 
-from models.cart.controllers import make_controller
-from models.cart.encoding import Quantizer
-from models.cart.estimators import BasicEventEstimator, FullEventEstimator, PositionPredictionEstimator
-from models.cart.tuning import Tuning
+from netsim.models.cart.controllers import make_controller
+from netsim.models.cart.encoding import Quantizer
+from netsim.models.cart.estimators import BasicEventEstimator, FullEventEstimator, PositionPredictionEstimator
+from netsim.models.cart.tuning import Tuning
 from netsim.errors import ConfigError
 
 MS = 1_000_000

@@ -1,13 +1,13 @@
-"""models.cart.plant.first_exit (bisection on the scalar closed form) against the array form it replaces:
-every tick evaluated with models.cart.dynamics.propagate, the first tick whose band differs."""
+"""netsim.models.cart.plant.first_exit (bisection on the scalar closed form) against the array form it replaces:
+every tick evaluated with netsim.models.cart.dynamics.propagate, the first tick whose band differs."""
 
 import math
 
 import numpy as np
 import pytest
 
-from models.cart.dynamics import propagate
-from models.cart.plant import first_exit
+from netsim.models.cart.dynamics import propagate
+from netsim.models.cart.plant import first_exit
 
 
 def _first_exit_arrays(p0, v0, u, f, fs, off, tick, n, output, step, count):

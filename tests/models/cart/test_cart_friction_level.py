@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from models.cart.friction import Friction, FrictionParams
+from netsim.models.cart.friction import Friction, FrictionParams
 
 
 def _level_formula(fr: Friction, p: float) -> float:

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from models.cart.jmap import interval_bounds, reconstruct
-from models.cart.metrics import cart_metrics, stationary_mask
+from netsim.models.cart.jmap import interval_bounds, reconstruct
+from netsim.models.cart.metrics import cart_metrics, stationary_mask
 
 H = 1e-3
 T = np.arange(0.0, 1.5, H)

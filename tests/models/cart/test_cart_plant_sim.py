@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from models.cart.controllers import CartController, make_controller
-from models.cart.dynamics import propagate
-from models.cart.encoding import Quantizer
-from models.cart.friction import Friction, FrictionParams
-from models.cart.sim import simulate
-from models.cart.tuning import pure_pi_tuning
+from netsim.models.cart.controllers import CartController, make_controller
+from netsim.models.cart.dynamics import propagate
+from netsim.models.cart.encoding import Quantizer
+from netsim.models.cart.friction import Friction, FrictionParams
+from netsim.models.cart.sim import simulate
+from netsim.models.cart.tuning import pure_pi_tuning
 
 
 @pytest.mark.parametrize("td", [None, 0.23])

@@ -4,11 +4,11 @@ import math
 
 import pytest
 
-from models.cart.controllers import make_controller
-from models.cart.encoding import Quantizer
-from models.cart.friction import Friction, FrictionParams
-from models.cart.metrics import cart_metrics
-from models.cart.sim import simulate
+from netsim.models.cart.controllers import make_controller
+from netsim.models.cart.encoding import Quantizer
+from netsim.models.cart.friction import Friction, FrictionParams
+from netsim.models.cart.metrics import cart_metrics
+from netsim.models.cart.sim import simulate
 from netsim.errors import ConfigError, NetsimError
 
 SCENARIO = "scenarios/cart.yaml"

@@ -1,4 +1,4 @@
-"""models.cart.plant._segment_end (one call per friction segment in CartPlant.predict_exit, issue 19) against the
+"""netsim.models.cart.plant._segment_end (one call per friction segment in CartPlant.predict_exit, issue 19) against the
 calls it replaces: propagate1 at the segment's end, stop_time of its first piece and propagate1 at that stop
 time. Bit-identical results are required (the exact encoder's wake-up ticks, hence the golden traces, depend
 on them)."""
@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from models.cart.dynamics import propagate1, stop_time
-from models.cart.plant import _segment_end
+from netsim.models.cart.dynamics import propagate1, stop_time
+from netsim.models.cart.plant import _segment_end
 
 
 def _bits(x: float) -> bytes:

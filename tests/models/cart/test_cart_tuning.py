@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from models.cart.controllers import make_controller
-from models.cart.encoding import Quantizer
-from models.cart.tuning import observer_tuning, phase_margin_deg, pure_pi_tuning
+from netsim.models.cart.controllers import make_controller
+from netsim.models.cart.encoding import Quantizer
+from netsim.models.cart.tuning import observer_tuning, phase_margin_deg, pure_pi_tuning
 from netsim.errors import ConfigError
 
 

@@ -24,7 +24,7 @@ SCENARIO = Path(__file__).resolve().parents[3] / "scenarios" / "unicycle_lqr.yam
 
 def _numpy_loop(seed: int) -> float:
     """The same EKF (eqs 10-17) and cart-frame LQR (eqs 24-27) as plain numpy, 1000 steps; returns the final error."""
-    from models.unicycle.design import Trajectory, lqr_gain
+    from netsim.models.unicycle.design import Trajectory, lqr_gain
 
     rng = np.random.default_rng(seed)
     ts, alpha, beta, gamma = 0.01, 0.075, 0.065, 0.078

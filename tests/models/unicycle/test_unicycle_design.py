@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import netsim  # noqa: F401  (pins BLAS before numpy work)
-from models.unicycle.design import LQR_Q, LQR_R, PHASES, Trajectory, cart_frame_error, error_model, lqr_gain
-from models.unicycle.model import P0, Q_REPORT, R_REPORT, TS, XI0_HAT, arc
-from models.unicycle.reference import simulate
+from netsim.models.unicycle.design import LQR_Q, LQR_R, PHASES, Trajectory, cart_frame_error, error_model, lqr_gain
+from netsim.models.unicycle.model import P0, Q_REPORT, R_REPORT, TS, XI0_HAT, arc
+from netsim.models.unicycle.reference import simulate
 
 
 @pytest.mark.parametrize("v_ref", [0.03, 0.02, 0.015, -0.05])
@@ -54,7 +54,7 @@ def test_derived_error_model_matches_the_nonlinear_error_dynamics():
 
 
 def test_initial_band_widths_are_sqrt_diag_P0():
-    from models.unicycle.design import Phase
+    from netsim.models.unicycle.design import Phase
 
     # sensors off at the first sample: the band at sample 0 is the prior's, sqrt(diag(P0)) (eq 21)
     o = simulate(3, phases=(Phase(1.0, 0.03, 0.0, False, False), Phase(1.0, 0.03, 0.0, True, True)))
@@ -97,7 +97,7 @@ def test_overconfident_filter_fails_the_coverage_check():
 
 def test_lqr_without_feedforward_lags_by_v_over_k11():
     # straight line, no noise: the steady longitudinal error is the one that commands v_ref: e1 = v_ref / (-k11)
-    from models.unicycle.design import Phase
+    from netsim.models.unicycle.design import Phase
 
     ph = (Phase(10.0, 0.03, 0.0, True, True),)
     o = simulate(1, phases=ph, law="lqr", Q_true=np.zeros((3, 3)), R_true=np.zeros(2), P0_=P0 * 1e-12)

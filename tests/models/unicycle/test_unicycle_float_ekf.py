@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import netsim  # noqa: F401  (pins BLAS before numpy work)
-from models.unicycle.design import PHASES, TrackingLaw, Trajectory, cart_frame_error, make_ekf
-from models.unicycle.ekf import CartEkf, matrix_to_sym, sym_to_matrix
-from models.unicycle.model import (
+from netsim.models.unicycle.design import PHASES, TrackingLaw, Trajectory, cart_frame_error, make_ekf
+from netsim.models.unicycle.ekf import CartEkf, matrix_to_sym, sym_to_matrix
+from netsim.models.unicycle.model import (
     FRONT_OFFSET, P0, Q_REPORT, WALL_FRONT, WALL_SIDE, measure, measure_jacobian, side_offset,
 )
 

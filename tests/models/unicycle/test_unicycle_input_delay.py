@@ -12,7 +12,7 @@ SCEN = Path(__file__).resolve().parents[3] / "scenarios" / "unicycle_lqr.yaml"
 
 
 def test_prediction_only_filter_uses_the_command_computed_input_delay_periods_before() -> None:
-    from models.unicycle.ekf import CartEkf
+    from netsim.models.unicycle.ekf import CartEkf
 
     d = 3
     res = netsim.run(SCEN, overrides={"nodes.front.tasks[0].params.on": [], "nodes.side.tasks[0].params.on": [],

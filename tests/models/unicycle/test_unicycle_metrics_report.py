@@ -9,9 +9,9 @@ import pandas as pd
 import pytest
 
 import netsim  # noqa: F401  (pins BLAS before numpy work)
-from models.unicycle.metrics import run_measures
-from models.unicycle.studies import delay_margin, observability
-from models.unicycle.design import PHASES
+from netsim.models.unicycle.metrics import run_measures
+from netsim.models.unicycle.studies import delay_margin, observability
+from netsim.models.unicycle.design import PHASES
 
 NAMES = ["straight", "turn", "front"]
 ENDS = [4.0, 6.0, 10.0]
@@ -74,7 +74,7 @@ def test_observability_ranks_before_and_after_the_turn():
 def test_delay_margin_against_the_continuous_heading_loop():
     # heading loop e3' = -w, w = -k23 e3 (+ the lateral coupling): a delay of about (pi/2) / k23 destabilises it;
     # with k23 = 9.8 1/s that is 0.16 s = 16 samples; the discrete margin must be within a few samples of it
-    from models.unicycle.design import lqr_gain
+    from netsim.models.unicycle.design import lqr_gain
 
     k23 = -lqr_gain(0.03)[1, 2]
     d = delay_margin(0.03)
@@ -83,7 +83,7 @@ def test_delay_margin_against_the_continuous_heading_loop():
 
 @pytest.mark.slow
 def test_report_writes_readme_and_table(tmp_path):
-    from models.unicycle.report import unicycle_report
+    from netsim.models.unicycle.report import unicycle_report
 
     out = unicycle_report(tmp_path, plots=False, runs=4, workers=1, sweeps=False)
     table = pd.read_csv(tmp_path / "table.csv")

@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import netsim  # noqa: F401  (pins BLAS before numpy work)
-from models.unicycle.model import (
+from netsim.models.unicycle.model import (
     ALPHA, BETA, FRONT_OFFSET, GAMMA, SIDE_DERIVED, SIDE_PRINTED, WALL_FRONT, WALL_SIDE, arc, body_to_wheels,
     euler_step, jac_A, jac_B, measure, measure_jacobian, rotation, wheels_to_body,
 )

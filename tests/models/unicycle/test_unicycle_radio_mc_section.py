@@ -1,4 +1,4 @@
-"""The radio Monte-Carlo part of the 2WD cart README (models.unicycle.readme_net.radio_mc_section) and its splice
+"""The radio Monte-Carlo part of the 2WD cart README (netsim.models.unicycle.readme_net.radio_mc_section) and its splice
 into an existing report folder (splice_radio_mc, used by ``netsim report unicycle_radio_mc``).
 
 Since issue 26 s7 the radios draw ``loss:`` per transmission attempt before the ACK, so the section must quote
@@ -15,9 +15,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from models.unicycle.quoting import Quotes, fill
-from models.unicycle.readme_net import RADIO_MC_MARK, loss_params, radio_mc_section, splice_radio_mc
-from models.unicycle.report import _Table
+from netsim.models.unicycle.quoting import Quotes, fill
+from netsim.models.unicycle.readme_net import RADIO_MC_MARK, loss_params, radio_mc_section, splice_radio_mc
+from netsim.models.unicycle.report import _Table
 
 BERN = {"model": "bernoulli", "p": 0.3}
 GE = {"model": "gilbert_elliott", "p_good_to_bad": 0.06, "p_bad_to_good": 0.14}

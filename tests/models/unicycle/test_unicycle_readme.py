@@ -1,7 +1,7 @@
 """Honesty of reports/unicycle/README.md: every number of its prose and tables is quoted from a computed value.
 
 * ``template.md`` (the README with each quoted number replaced by its key) holds no digit besides labels
-  (equation and figure numbers, setting names, file names: :data:`models.unicycle.quoting.LABEL_PATTERNS`);
+  (equation and figure numbers, setting names, file names: :data:`netsim.models.unicycle.quoting.LABEL_PATTERNS`);
 * the template filled with ``quoted.csv`` is the committed README, and ``table.csv`` has the stable columns;
 * quoted values agree with fresh computations: the designs (LQR gains, eigenvalues, delay margin, observability
   ranks), the study's constants, and a fresh netsim run of ``unicycle_ekf.yaml`` (the recovery time);
@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 
 import netsim  # noqa: F401  (pins BLAS before numpy work)
-from models.unicycle.quoting import Quotes, fill, strip_labels
+from netsim.models.unicycle.quoting import Quotes, fill, strip_labels
 
 ROOT = Path(__file__).resolve().parents[3]
 REPORT = ROOT / "reports" / "unicycle"
@@ -70,10 +70,10 @@ def test_table_has_the_stable_columns():
 
 
 def test_quoted_designs_match_a_fresh_computation(values):
-    from models.unicycle.design import PHASES, error_model, lqr_gain
-    from models.unicycle.model import TS
-    from models.unicycle.programs import UnicycleEkf
-    from models.unicycle.studies import delay_margin, observability
+    from netsim.models.unicycle.design import PHASES, error_model, lqr_gain
+    from netsim.models.unicycle.model import TS
+    from netsim.models.unicycle.programs import UnicycleEkf
+    from netsim.models.unicycle.studies import delay_margin, observability
 
     for v in (0.03, 0.02, 0.015):
         K = lqr_gain(v)
@@ -112,7 +112,7 @@ def test_monte_carlo_counts_are_at_least_200(values, quoted):
 
 
 def test_stability_limits_on_constructed_sweeps():
-    from models.unicycle.readme_net import GROWTH, LOST_E3, stability_limits
+    from netsim.models.unicycle.readme_net import GROWTH, LOST_E3, stability_limits
 
     # e1 doubles per step of delay; at 300 ms 3 of 4 runs pass a quarter turn, at 200 ms 2 of 4 (not most)
     rows = []
@@ -127,7 +127,7 @@ def test_stability_limits_on_constructed_sweeps():
 
 
 def test_loss_kind_names_the_sweeps_loss_models():
-    from models.unicycle.readme_net import loss_kind
+    from netsim.models.unicycle.readme_net import loss_kind
 
     col = pd.Series(['{"model":"bernoulli","p":0.0}', '{"model":"bernoulli","p":0.3}',
                      '{"model":"gilbert_elliott","p_bad_to_good":0.14,"p_good_to_bad":0.06}'])

@@ -8,8 +8,8 @@ import math
 import pandas as pd
 import pytest
 
-from models.unicycle.readme_net import LOST_E3, lost_runs, stability_limits
-from models.unicycle.report import counted_runs
+from netsim.models.unicycle.readme_net import LOST_E3, lost_runs, stability_limits
+from netsim.models.unicycle.report import counted_runs
 from netsim.errors import NetsimError
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import netsim
-from models.unicycle.programs import UnicycleEkf
+from netsim.models.unicycle.programs import UnicycleEkf
 from netsim.programs.basic import ProgramContext
 
 SCENARIO = Path(__file__).resolve().parents[3] / "scenarios" / "unicycle_ekf.yaml"

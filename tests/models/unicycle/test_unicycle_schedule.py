@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import netsim
-from models.unicycle.metrics import blackout_window
+from netsim.models.unicycle.metrics import blackout_window
 from netsim.scenario.loader import check_scenario
 
 SCENARIO = Path(__file__).resolve().parents[3] / "scenarios" / "unicycle_ekf.yaml"
