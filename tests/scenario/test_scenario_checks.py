@@ -361,11 +361,19 @@ def test_plugin_files_register_programs_when_allowed(tmp_path, base):
     raw = base()
     raw["plugins"] = [str(plugin)]
     raw["nodes"]["controller"]["tasks"][0].update(program="zzt_user_program", params={"gain": 2})
-    assert load_scenario(raw, allow_plugins=True).nodes["controller"].tasks[0].validated_params().gain == 2.0
-    raw["nodes"]["controller"]["tasks"][0]["program"] = "zzt_user_progam"
-    assert _problems(raw) == {
-        "nodes.controller.tasks[0].program": "unknown program 'zzt_user_progam'; did you mean 'zzt_user_program'?"
-    }
+    try:
+        assert load_scenario(raw, allow_plugins=True).nodes["controller"].tasks[0].validated_params().gain == 2.0
+        raw["nodes"]["controller"]["tasks"][0]["program"] = "zzt_user_progam"
+        assert _problems(raw) == {
+            "nodes.controller.tasks[0].program": "unknown program 'zzt_user_progam'; did you mean 'zzt_user_program'?"
+        }
+    finally:  # the program must not outlive this test (test_docs_and_schema lists every registered program)
+        from netsim import registry
+
+        registry._REGISTRY["program"].pop("zzt_user_program", None)
+        module = registry._PLUGIN_FILES.pop(str(plugin.resolve()), None)
+        if module:
+            sys.modules.pop(module, None)
 
 
 def test_a_node_has_one_receiver_per_network(base):
