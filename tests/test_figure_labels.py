@@ -145,7 +145,8 @@ def test_report_bar_figures_name_their_values(tmp_path: Path) -> None:
 
 # ------------------------------------------------------------------------------------------ case studies
 def test_hdd_report_figures_have_no_raw_identifiers() -> None:
-    from netsim.models.hdd_report import case_figure, gpi_figure
+    from netsim.models.hdd_figures import case_figure, gpi_figure
+    from netsim.models.hdd_report import PAPER_OPT
 
     t = np.arange(0, 100) * 20e-6
     signals = pd.DataFrame({"time_s": t, "r": 1.0, "y": np.tanh(t * 1e3), "y_hat": np.tanh(t * 1e3), "u": 0.1,
@@ -156,7 +157,7 @@ def test_hdd_report_figures_have_no_raw_identifiers() -> None:
     assert fig.axes[-1].get_xlabel() == "time (s)"
     gpi = _summary()[["sigma_s", "sigma_c", "et.GPI"]]
     gpi.loc[gpi.index[-1], "et.GPI"] = -1.0  # the minimum in the far corner, where the old star was clipped
-    fig = gpi_figure(gpi)
+    fig = gpi_figure(gpi, PAPER_OPT)
     assert not raw_identifiers(fig), figure_texts(fig)
     ax = fig.axes[0]
     stars = [line for line in ax.lines if line.get_marker() == "*"]
@@ -188,10 +189,11 @@ def test_cart_report_figures_have_no_raw_identifiers() -> None:
 
 
 def test_hdd_gpi_figure_marks_a_run_that_was_not_ok() -> None:
-    from netsim.models.hdd_report import gpi_figure
+    from netsim.models.hdd_figures import gpi_figure
+    from netsim.models.hdd_report import PAPER_OPT
 
     gpi = _summary()[["sigma_s", "sigma_c", "et.GPI", "status"]].copy()
     gpi.loc[gpi.index[2], "status"] = "unstable at t = 0.008 s"
-    fig = gpi_figure(gpi)
+    fig = gpi_figure(gpi, PAPER_OPT)
     marked = [line for line in fig.axes[0].lines if line.get_label() == "run not ok (unstable)"]
     assert len(marked) == 1 and list(marked[0].get_xdata()) == [gpi["sigma_s"].iloc[2]]

@@ -727,25 +727,6 @@ def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame
     (out / "README.md").write_text("\n".join(L))
 
 
-def _figures(out: Path, runs_signals: dict[str, pd.DataFrame]) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-    for name, s in runs_signals.items():
-        ax[0].plot(s.index, s["alpha"], label=name)
-        ax[1].plot(s.index, s["u"], label=name, lw=0.8)
-    ax[0].set_ylabel("alpha [rad]")
-    ax[1].set_ylabel("u [V]")
-    ax[1].set_xlabel("time [s]")
-    ax[0].legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "closed_loop_lqr.png", dpi=100)
-    plt.close(fig)
-
-
 DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report pendulum_delay_aware -->", "<!-- /delay-aware -->")
 
 
@@ -851,35 +832,12 @@ def render_readme(out: Path) -> pd.DataFrame:
     return quoted
 
 
-def _delay_figure(out: Path, dc: pd.DataFrame) -> None:
-    import matplotlib
-
-    from netsim.models.pendulum.report_sweeps import CI_LEVEL
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    for i, (e, g) in enumerate(dc.groupby("estimator", sort=False)):
-        c = f"C{i}"
-        fin = g[np.isfinite(g.analytic_cost)]
-        ax.plot(fin.total_delay_ms, fin.analytic_cost, "-", color=c, label=f"{e}: analysis")
-        ok = g[g.sim_cost.notna()]
-        ax.errorbar(ok.total_delay_ms, ok.sim_cost, yerr=[ok.sim_cost - ok.sim_ci_low, ok.sim_ci_high - ok.sim_cost],
-                    fmt="o", color=c, ms=4, capsize=3, label=f"{e}: runs ({100 * CI_LEVEL:g} %)")
-    ax.set_yscale("log")
-    ax.set_xlabel("total sample-to-actuation delay [ms]")
-    ax.set_ylabel("stationary cost per sample")
-    ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    fig.savefig(out / "delay_cost.png", dpi=100)
-    plt.close(fig)
-
-
 @register("report", "pendulum", "rotary inverted pendulum (seed 002): FD vs Luenberger vs Kalman under LQR and MPC")
 def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers: int | None = None,
                     seeds: tuple[int, ...] = SEEDS) -> dict[str, pd.DataFrame]:
     """Run the study and write ``reports/pendulum`` (or ``out_dir``); returns the tables by name."""
+    from netsim.models.pendulum.figures import closed_loop_figure, delay_figure
+
     out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "pendulum"
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
@@ -897,7 +855,7 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
         runs = runs.drop(columns="_signals")
     runs.to_csv(out / "runs.csv", index=False)  # kept even if a later step fails: render_readme redoes the rest
     if plots:
-        _figures(out, {e: signals[e] for e in FIGURE_ESTIMATORS if e in signals})
+        closed_loop_figure(out, {e: signals[e] for e in FIGURE_ESTIMATORS if e in signals})
     log.info("pendulum: analysis (designs, delay margins, expected costs) ...")
     table = make_table(runs)
     hs = hold_still_table(runs)
@@ -927,7 +885,7 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     if stale.exists():
         stale.unlink()
     if plots:
-        _delay_figure(out, dc)
+        delay_figure(out, dc)
     write_readme(out, quoted, tables)
     log.info("pendulum: report written to %s (%.0f s)", out, time.perf_counter() - t0)
     return tables
