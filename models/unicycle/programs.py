@@ -43,6 +43,7 @@ from netsim.models.unicycle.design import PHASES, Phase, TrackingLaw, Trajectory
 from netsim.models.unicycle.ekf import CartEkf
 from netsim.models.unicycle.model import HALF_WHEELBASE, P0, Q_REPORT, R_REPORT, WHEEL_RADIUS, XI0_HAT, body_to_wheels
 from netsim.programs.basic import ProgramContext, _newest
+from netsim.programs.inbox import take_matching
 from netsim.registry import register
 from netsim.units import StrictModel, Time
 
@@ -255,13 +256,7 @@ class UnicycleEkf:
         kernel = self.ctx.kernel
         earliest = k_now + 1
         for src in self.p.measurements:
-            inbox = kernel.inbox(src.network)
-            keep = []
-            while inbox:
-                msg = inbox.popleft()
-                if (src.sender is not None and msg.sender != src.sender) or (src.tag is not None and msg.tag != src.tag):
-                    keep.append(msg)
-                    continue
+            for msg in take_matching(kernel.inbox(src.network), src.sender, src.tag):
                 pl = msg.payload
                 y, t = (float(pl["value"]), pl.get("t_ns")) if isinstance(pl, dict) else (float(pl), None)
                 if t is None or self.p.fuse_at == "arrival":
@@ -280,7 +275,6 @@ class UnicycleEkf:
                 if k < k_now:
                     self.counts["late"] += 1
                 earliest = min(earliest, k)
-            inbox.extend(keep)
         return earliest
 
     def __call__(self, job: Any) -> Body:

@@ -106,6 +106,7 @@ from netsim.programs.basic import (
     _destination_given,
 )
 from netsim.programs.feedback_design import build_parts, part_params
+from netsim.programs.inbox import take_matching
 from netsim.programs.state_feedback_inputs import input_options
 from netsim.registry import register
 from netsim.units import QuietDefaultsModel, StrictModel, Time
@@ -315,17 +316,12 @@ class StateFeedbackProgram:
     def _take_reports(self, k_now: int) -> None:
         """Read the actuator's reports of applied inputs; re-predict the periods they change (option (a))."""
         src = self.p.applied_input
-        inbox = self.ctx.kernel.inbox(src.network)  # type: ignore[union-attr]
-        if not inbox:
+        taken = take_matching(self.ctx.kernel.inbox(src.network), src.sender, src.tag)  # type: ignore[union-attr]
+        if not taken:
             return
-        keep = []
         first: int | None = None
         tl = self.timeline
-        while inbox:
-            msg = inbox.popleft()
-            if (src.sender is not None and msg.sender != src.sender) or (src.tag is not None and msg.tag != src.tag):
-                keep.append(msg)
-                continue
+        for msg in taken:
             payload = msg.payload
             if not isinstance(payload, dict) or "t_ns" not in payload:
                 from netsim.errors import SimulationError
@@ -336,7 +332,6 @@ class StateFeedbackProgram:
             tl.report(t, payload.get("value"))  # type: ignore[union-attr]
             self.counts["inputs_reported"] += 1
             first = t if first is None else min(first, t)
-        inbox.extend(keep)
         if first is None:
             return
         est = self.estimator
@@ -394,15 +389,7 @@ class StateFeedbackProgram:
         for i, src in enumerate(self.p.measurements):
             if src.network is None:
                 continue
-            inbox = kernel.inbox(src.network)
-            if not inbox:
-                continue
-            keep = []
-            while inbox:
-                msg = inbox.popleft()
-                if (src.sender is not None and msg.sender != src.sender) or (src.tag is not None and msg.tag != src.tag):
-                    keep.append(msg)
-                    continue
+            for msg in take_matching(kernel.inbox(src.network), src.sender, src.tag):
                 payload = msg.payload
                 t_ns = None
                 if isinstance(payload, dict):
@@ -413,7 +400,6 @@ class StateFeedbackProgram:
                     self.counts["stale"] += 1
                     continue
                 self._offer(i, k, payload)
-            inbox.extend(keep)
 
     def _fuse(self, k_now: int) -> bool:
         if self.by_part:
