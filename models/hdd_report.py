@@ -31,6 +31,7 @@ import numpy as np
 
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
+from netsim.shipped import folder as shipped_scenarios
 
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
@@ -247,7 +248,7 @@ def _run_variants(names) -> dict[str, Any]:
     out = {}
     for name in names:
         v = VARIANTS[name]
-        res = run(ROOT / "scenarios" / f"hdd_case{v.case}.yaml", write=False, overrides=v.overrides or None,
+        res = run(shipped_scenarios() / f"hdd_case{v.case}.yaml", write=False, overrides=v.overrides or None,
                   seed=v.seed)
         if res.meta.get("status") != "ok":
             log.warning("%s: %s", name, res.meta.get("error"))
@@ -276,7 +277,7 @@ def _scenario_value(case: int, path: str) -> Any:
     """A value of the shipped scenario file (dotted path with ``[i]`` indices)."""
     import yaml
 
-    node: Any = yaml.safe_load((ROOT / "scenarios" / f"hdd_case{case}.yaml").read_text())
+    node: Any = yaml.safe_load((shipped_scenarios() / f"hdd_case{case}.yaml").read_text())
     for part in re.findall(r"[^.\[\]]+|\[\d+\]", path):
         node = node[int(part[1:-1])] if part.startswith("[") else node[part]
     return node
@@ -286,7 +287,7 @@ def _run_gpi(workers: int | None, sweep: str = "hdd_gpi_sweep", folder: str = "g
     """Run (or resume, in ``reports/hdd/runs/<folder>``) a GPI sweep; return its summary and run facts."""
     from netsim.sweep.run import run_sweep
 
-    res = run_sweep(ROOT / "scenarios" / f"{sweep}.yaml", out=ROOT / "reports" / "hdd" / "runs" / folder,
+    res = run_sweep(shipped_scenarios() / f"{sweep}.yaml", out=Path("reports") / "hdd" / "runs" / folder,
                     workers=workers, progress=False)
     summ = pd.read_csv(Path(res.out_dir) / "summary.csv")
     keep = [c for c in ("sigma_s", "sigma_c", "et.GPI", "et.Uc", "et.Ua", "et.NE", "et.Nsc", "et.Nca", "et.N_max",
@@ -585,7 +586,7 @@ def hdd_report(out_dir: Path | None = None, plots: bool = True) -> dict[str, pd.
     """Run Cases 1-6, the alternative readings and the GPI sweep; write the report (see the module docstring)."""
     from netsim.models.hdd_figures import case_figures, save_gpi_figure
 
-    out = Path(out_dir) if out_dir is not None else ROOT / "reports" / "hdd"
+    out = Path(out_dir) if out_dir is not None else Path("reports") / "hdd"
     out.mkdir(parents=True, exist_ok=True)
     results, rows, sweeps = collect()
     gdf, gmeta = sweeps.get("gpi", (None, {}))

@@ -33,6 +33,7 @@ from netsim.models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool
 from netsim.models.cart.metrics import STOP_WINDOW
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
+from netsim.shipped import scenario_path
 
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
@@ -46,7 +47,7 @@ progress_log = logging.getLogger("netsim.progress.cart")
 Progress = Callable[[int, int, str], None]
 
 _ROOT = Path(__file__).resolve().parents[2]
-SCENARIO = _ROOT / "scenarios" / "cart.yaml"
+SCENARIO = scenario_path("cart")
 CTRL = "nodes.cart.tasks[0].params"
 ISR = "nodes.cart.handlers[0].params"
 #: Control delay of the numpy engine: the controller's response time in the scenario, 100 us of execution
@@ -416,7 +417,7 @@ def cart_report(out_dir: Path | None = None, plots: bool = True, *, engine: str 
         for silence.
     """
     t0 = time.perf_counter()
-    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "cart"
+    out = Path(out_dir) if out_dir is not None else Path("reports") / "cart"
     out.mkdir(parents=True, exist_ok=True)
     sd = tuple(seeds) if seeds else SEEDS_FIG2
     cache = run_cache(out / "runs" if use_cache else None)

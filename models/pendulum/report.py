@@ -42,6 +42,7 @@ import numpy as np
 
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
+from netsim.shipped import folder as shipped_scenarios
 
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
@@ -50,7 +51,7 @@ __all__ = ["pendulum_report", "render_readme", "run_case", "closed_loop_cases", 
 log = logging.getLogger("netsim.progress.pendulum")
 
 _ROOT = Path(__file__).resolve().parents[2]
-SCEN = _ROOT / "scenarios"
+SCEN = shipped_scenarios()
 RIP = "nodes.rip.tasks[0].params"
 NET = "nodes.controller.tasks[0].params"
 SEEDS = (1, 2, 3)
@@ -792,7 +793,7 @@ def pendulum_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
     ``delay_cost.csv`` (which gives the unaware rows). The rest of the report is left as it is."""
     from netsim.models.pendulum.report_sweeps import delay_aware_margins, delay_aware_table, run_delay_aware
 
-    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "pendulum"
+    out = Path(out_dir) if out_dir is not None else Path("reports") / "pendulum"
     dc = pd.read_csv(out / "delay_cost.csv")
     da = delay_aware_table(run_delay_aware(out, workers), ESTIMATORS, dc)
     margins = delay_aware_margins(da)
@@ -838,7 +839,7 @@ def pendulum_report(out_dir: Path | None = None, plots: bool = True, *, workers:
     """Run the study and write ``reports/pendulum`` (or ``out_dir``); returns the tables by name."""
     from netsim.models.pendulum.figures import closed_loop_figure, delay_figure
 
-    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "pendulum"
+    out = Path(out_dir) if out_dir is not None else Path("reports") / "pendulum"
     out.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()
     from netsim.models.pendulum.report_sweeps import delay_cost_table, noise_delay_margins, run_sweeps, tuning_table

@@ -27,13 +27,15 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from netsim.shipped import folder as shipped_scenarios
+
 __all__ = ["SWEEPS", "run_sweeps", "point_values", "estimator_name", "tuning_table", "delay_cost_table",
            "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS", "CI_LEVEL",
            "DELAY_AWARE_SWEEP", "run_delay_aware", "delay_aware_table", "delay_aware_margins", "with_results"]
 
 log = logging.getLogger("netsim.progress.pendulum")
 
-_SCEN = Path(__file__).resolve().parents[2] / "scenarios"
+_SCEN = shipped_scenarios()
 SWEEPS = ("pendulum_kalman_sweep", "pendulum_poles_sweep", "pendulum_delay_sweep")
 #: The sweep of the estimators told the delay (run on its own by ``netsim report pendulum_delay_aware``).
 DELAY_AWARE_SWEEP = "pendulum_delay_aware_sweep"

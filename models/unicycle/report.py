@@ -24,13 +24,14 @@ from netsim.models.unicycle import studies as S
 from netsim.models.unicycle.design import PHASES
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
+from netsim.shipped import folder as shipped_scenarios
 
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["unicycle_report", "counted_runs"]
 
 _ROOT = Path(__file__).resolve().parents[2]
-_SCEN = _ROOT / "scenarios"
+_SCEN = shipped_scenarios()
 
 
 def _f(x: float, nd: int = 3) -> str:
@@ -107,7 +108,7 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     import netsim
 
     t0 = time.perf_counter()
-    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
+    out = Path(out_dir) if out_dir is not None else Path("reports") / "unicycle"
     out.mkdir(parents=True, exist_ok=True)
     T = _Table()
     from netsim.models.unicycle.readme import write_readme
@@ -178,7 +179,7 @@ def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
     from netsim.models.unicycle.quoting import Quotes
     from netsim.models.unicycle.readme_net import DELAY_AWARE_MARK, delay_aware_frame, delay_aware_section
 
-    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
+    out = Path(out_dir) if out_dir is not None else Path("reports") / "unicycle"
     F = {"delay_aware_can": _sweep("unicycle_lqr_delay_aware", out, workers),
          "delay_aware_radio": _sweep("unicycle_radio_delay_aware", out, workers),
          "delay_margin": {0.03: S.delay_margin(0.03)}}
@@ -218,7 +219,7 @@ def unicycle_radio_mc_report(out_dir: Path | None = None, plots: bool = True, *,
     from netsim.models.unicycle.quoting import Quotes
     from netsim.models.unicycle.readme_net import radio_mc_section, splice_radio_mc
 
-    out = Path(out_dir) if out_dir is not None else _ROOT / "reports" / "unicycle"
+    out = Path(out_dir) if out_dir is not None else Path("reports") / "unicycle"
     q, T = Quotes(), _Table()
     q.section = "s5"  # the section's keys are fixed names (s5.radio_runs, s5.rm_*), the same as in the full report
     marked = radio_mc_section(q, T, {"radio_mc": _sweep("unicycle_radio_mc", out, workers)})
