@@ -72,7 +72,11 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-_VERSION_PACKAGES = ("netsim", "simpy", "numpy", "scipy", "control", "pandas", "pydantic")
+#: Every installed package that can change a number in a run folder (an absent optional one is left out):
+#: the QP solvers (MPC, the cart's JMAP), slycot (python-control's Riccati solvers), the YAML parser, and
+#: matplotlib for the figures.
+_VERSION_PACKAGES = ("netsim", "simpy", "numpy", "scipy", "control", "slycot", "pandas", "pydantic", "pyyaml",
+                     "daqp", "clarabel", "osqp", "piqp", "matplotlib")
 
 
 def package_versions() -> dict[str, str]:
