@@ -26,7 +26,7 @@ LAYERS: list[tuple[str, tuple[str, ...]]] = [
     ("programs and metrics", ("netsim.programs", "netsim.metrics")),
     ("scenarios and results", ("netsim.scenario", "netsim.results", "netsim.plotting", "netsim.divergence",
                                "netsim.run_warnings")),
-    ("runs, reports, sweeps", ("netsim.runner", "netsim.report", "netsim.sweep")),
+    ("runs, reports, sweeps", ("netsim.runner", "netsim.report", "netsim.sweep", "netsim.casestudy")),
     ("case studies", ("netsim.models",)),
     ("command line", ("netsim.cli", "netsim.__main__")),
 ]

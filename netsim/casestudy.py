@@ -1,0 +1,283 @@
+"""The harness of the case-study reports (``netsim report hdd|cart|pendulum|unicycle``).
+
+One place for what every reproduction report needs besides its own study:
+
+* :func:`run_all` -- a list of points through one function, in one process pool (or in this process), in
+  order, with progress (:func:`log_progress`); sweep files go through :func:`netsim.sweep.run.run_sweep`;
+* :class:`RunCache` -- rows of runs already made, one JSON file per run named by its scenario hash
+  (:func:`scenario_key`: the hash :func:`netsim.sweep.points.point_hash` gives a sweep's run), in a folder
+  named by a fingerprint of the study's own code (:func:`code_fingerprint`);
+* :class:`Quotes` -- the numbers a report's prose quotes (``key, value, text, source``), each formatted once,
+  filling ``{key}`` templates (:meth:`Quotes.render`) or marked inline (:meth:`Quotes.mark`);
+* :func:`fmt` -- the one number formatter (significant digits, text for a missing value).
+
+:func:`digits_outside_labels` is the check the reports' tests make on their templates: a template holds no
+digit besides ``{key}`` placeholders and labels (equation, figure and section numbers).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import os
+import re
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any, TypeVar
+
+__all__ = ["fmt", "Quotes", "fill", "digits_outside_labels", "run_all", "log_progress", "Progress", "RunCache",
+           "scenario_key", "code_fingerprint"]
+
+log = logging.getLogger(__name__)
+
+T = TypeVar("T")
+R = TypeVar("R")
+#: ``progress(done, total, what)``, called after each run.
+Progress = Callable[[int, int, str], None]
+
+
+# ------------------------------------------------------------------------------------------------ numbers
+def fmt(x: Any, digits: int = 3, *, missing: str = "nan", sci: bool = False) -> str:
+    """``x`` with ``digits`` significant digits.
+
+    Parameters
+    ----------
+    x
+        A number (or ``None``).
+    digits
+        Significant digits (``:g`` format).
+    missing
+        The text of ``None`` and NaN. Infinities print as ``inf`` / ``-inf``; zero as ``0``.
+    sci
+        Outside ``1e-3 <= |x| < 1e5``: exponent notation with ``digits - 1`` decimals (``1.23e-05``).
+    """
+    if x is None:
+        return missing
+    v = float(x)
+    if math.isnan(v):
+        return missing
+    if v == 0:
+        return "0"
+    if sci and math.isfinite(v) and not 1e-3 <= abs(v) < 1e5:
+        return f"{v:.{digits - 1}e}"
+    return f"{v:.{digits}g}"
+
+
+def fill(template: str, texts: Mapping[str, str]) -> str:
+    """``template`` with each ``{key}`` (letters, digits, ``_`` and ``.``) replaced by ``texts[key]``.
+
+    Raises
+    ------
+    KeyError
+        A placeholder without a text.
+    """
+    return re.sub(r"\{([A-Za-z0-9_.]+)\}", lambda m: texts[m.group(1)], template)
+
+
+def digits_outside_labels(template: str, labels: Iterable[str]) -> list[str]:
+    """The digits left in ``template`` once its ``{key}`` placeholders and the ``labels`` (regular
+    expressions, matched per line) are taken out: a template whose numbers are all quoted gives ``[]``."""
+    s = re.sub(r"\{[A-Za-z0-9_.]+\}", "", template)
+    for pat in labels:
+        s = re.sub(pat, "", s, flags=re.MULTILINE)
+    return re.findall(r"\d+", s)
+
+
+#: Markers of a quote inside a text (:meth:`Quotes.mark`): open, key/text separator, close.
+OPEN, SEP, CLOSE = "\u2983", "\u2982", "\u2984"
+
+
+class Quotes:
+    """The numbers a report's prose quotes, in the order quoted: ``key -> (value, text, source)``.
+
+    Parameters
+    ----------
+    digits, missing, sci
+        The defaults of :func:`fmt` for a value quoted without a format.
+    """
+
+    def __init__(self, digits: int = 3, *, missing: str = "nan", sci: bool = False) -> None:
+        self.rows: dict[str, tuple[Any, str, str]] = {}
+        self.digits, self.missing, self.sci = digits, missing, sci
+
+    def text(self, value: Any, spec: str | None = None) -> str:
+        """How ``value`` is quoted: a string as it is; ``spec`` ``"d"`` rounds to an integer, another
+        ``spec`` is a :func:`format` spec (``".2g"``); without one, :func:`fmt` with this object's defaults."""
+        if isinstance(value, str):
+            return value
+        if spec == "d":
+            return str(int(round(float(value))))
+        if spec is not None:
+            return format(float(value), spec)
+        return fmt(value, self.digits, missing=self.missing, sci=self.sci)
+
+    def add(self, key: str, value: Any, spec: str | None = None, source: str = "", *, text: str | None = None) -> str:
+        """Quote ``value`` under ``key`` (``text`` given, or :meth:`text`); returns the text."""
+        t = self.text(value, spec) if text is None else text
+        self.rows[key] = (value, t, source)
+        return t
+
+    def mark(self, key: str, value: Any, text: str) -> str:
+        """Quote ``value`` as ``text`` and return it between markers, for :meth:`unmark` / :meth:`template`."""
+        self.rows[key] = (value, text, "")
+        return f"{OPEN}{key}{SEP}{text}{CLOSE}"
+
+    @staticmethod
+    def unmark(marked: str) -> str:
+        """The text with every marked quote replaced by its text."""
+        return re.sub(f"{OPEN}[^{SEP}]*{SEP}([^{CLOSE}]*){CLOSE}", r"\1", marked)
+
+    @staticmethod
+    def template(marked: str) -> str:
+        """The text with every marked quote replaced by ``{key}``."""
+        return re.sub(f"{OPEN}([^{SEP}]*){SEP}[^{CLOSE}]*{CLOSE}", r"{\1}", marked)
+
+    def texts(self) -> dict[str, str]:
+        """``key -> text``."""
+        return {k: t for k, (_v, t, _s) in self.rows.items()}
+
+    def render(self, template: str) -> str:
+        """``template`` (``{key}`` placeholders) filled with the quoted texts (:func:`fill`)."""
+        return fill(template, self.texts())
+
+    def frame(self, value: Callable[[Any], Any] | None = None, source: bool = True) -> Any:
+        """A DataFrame ``key, value, text[, source]``; ``value`` maps each value (default: a string's is NaN)."""
+        import pandas as pd
+
+        conv = value or (lambda v: math.nan if isinstance(v, str) else v)
+        rows = [(k, conv(v), t, s) if source else (k, conv(v), t) for k, (v, t, s) in self.rows.items()]
+        return pd.DataFrame(rows, columns=["key", "value", "text", "source"][:4 if source else 3])
+
+
+# ------------------------------------------------------------------------------------------------ runs
+def log_progress(logger: logging.Logger | str, label: str, every: float = 0.1) -> Progress:
+    """A :data:`Progress` that logs ``"<label>: <what>: done/total runs (s)"`` at INFO every ``every`` of the runs."""
+    lg = logging.getLogger(logger) if isinstance(logger, str) else logger
+    t0 = time.perf_counter()
+
+    def progress(done: int, total: int, what: str) -> None:
+        step = max(1, int(total * every))
+        if done == total or done % step == 0:
+            lg.info("%s: %s: %d/%d runs (%.0f s)", label, what, done, total, time.perf_counter() - t0)
+
+    return progress
+
+
+def run_all(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = None, progress: Progress | None = None,
+            what: str = "runs", chunksize: int = 1) -> list[R]:
+    """``[fn(item) for item in items]``, on one process pool.
+
+    Parameters
+    ----------
+    fn
+        A module-level function (it is sent to the worker processes).
+    items
+        The points; the results come back in their order.
+    workers
+        Processes (default: one per CPU, no more than there are items); ``1`` runs in this process.
+    progress
+        Called as ``progress(done, len(items), what)`` after each result.
+    chunksize
+        Items sent to a worker at a time.
+    """
+    n = len(items)
+    workers = workers or max(1, min(n, os.cpu_count() or 1))
+    out: list[R] = []
+    if workers <= 1 or n <= 1:
+        results: Iterable[R] = map(fn, items)
+        pool = None
+    else:
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # one BLAS thread per worker
+        pool = ProcessPoolExecutor(max_workers=workers)
+        results = pool.map(fn, items, chunksize=max(1, chunksize))
+    try:
+        for r in results:
+            out.append(r)
+            if progress is not None:
+                progress(len(out), n, what)
+    finally:
+        if pool is not None:
+            pool.shutdown(cancel_futures=True)
+    return out
+
+
+# ------------------------------------------------------------------------------------------------ cache
+def scenario_key(source: Any, overrides: Mapping[str, Any] | None = None, seed: int | None = None) -> str:
+    """The scenario hash of a run of ``source`` with ``overrides`` and ``seed`` (as :func:`netsim.runner.run`
+    applies them): the ``scenario_hash`` of the run's ``meta.json`` and of a sweep's point."""
+    from netsim.scenario import load_scenario, scenario_hash
+
+    ov = dict(overrides or {})
+    if seed is not None:
+        ov["seed"] = int(seed)
+    return scenario_hash(load_scenario(source, overrides=ov or None))
+
+
+def code_fingerprint(files: Iterable[Path], extra: str = "") -> str:
+    """12 hex digits over the bytes of ``files`` and ``extra``: what a scenario hash does not cover (a study's
+    own numeric modules, run lengths set in code)."""
+    h = hashlib.sha256()
+    for path in files:
+        h.update(Path(path).read_bytes())
+    h.update(extra.encode())
+    return h.hexdigest()[:12]
+
+
+def _plain(value: Any) -> Any:
+    """A numpy scalar as the Python number it holds (for JSON)."""
+    if hasattr(value, "item"):
+        return value.item()
+    raise TypeError(f"a run cache keeps numbers and strings, not {type(value).__name__}")
+
+
+class RunCache:
+    """Rows of runs made earlier with the same code: ``<folder>/<code>/<key>.json``, one file per run.
+
+    Parameters
+    ----------
+    folder
+        The cache folder (``None``: no cache, :meth:`get` finds nothing and :meth:`put` keeps nothing).
+    code
+        The code's fingerprint (:func:`code_fingerprint`); another one starts an empty cache.
+
+    A key is a run's scenario hash (:func:`scenario_key`), with a prefix where the same scenario is computed
+    another way. Values are JSON (numbers, strings, NaN), written atomically; ``reused`` counts the hits.
+    """
+
+    def __init__(self, folder: Path | None, code: str = "") -> None:
+        self.folder = None if folder is None else Path(folder) / (code or "any")
+        self.reused = 0
+
+    def _path(self, key: str) -> Path | None:
+        if self.folder is None:
+            return None
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", key):
+            raise ValueError(f"cache key {key!r}: use letters, digits, '_', '.' and '-'")
+        return self.folder / f"{key}.json"
+
+    def get(self, key: str) -> dict[str, Any] | None:
+        """The row kept under ``key``, or ``None``."""
+        path = self._path(key)
+        if path is None or not path.is_file():
+            return None
+        try:
+            row = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            log.warning("run cache: %s is unreadable; the run is made again", path)
+            return None
+        self.reused += 1
+        return row
+
+    def put(self, key: str, row: Mapping[str, Any]) -> None:
+        """Keep ``row`` under ``key``."""
+        path = self._path(key)
+        if path is None:
+            return
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(dict(row), allow_nan=True, default=_plain), encoding="utf-8")
+        tmp.replace(path)
