@@ -194,8 +194,38 @@ def _check_sources(p: Any, scenario: Any, node: str | None, pp: str) -> None:
             if net is None or (node is not None and node not in net.nodes):
                 raise ConfigError(f"node '{node}' is not attached to network '{src.network}'", path=f"{at}.network")
             if src.sender is not None and src.sender not in net.nodes:
-                raise ConfigError(f"sender '{src.sender}' is not a node on network '{src.network}' (its nodes: "
+                from netsim.kernel.task import did_you_mean
+
+                hint = did_you_mean(src.sender, net.nodes)
+                hint = hint if hint.startswith("; did you mean") else ""
+                raise ConfigError(f"sender '{src.sender}' is not a node on network '{src.network}'{hint} (its nodes: "
                                   f"{', '.join(net.nodes)})", path=f"{at}.sender")
+
+
+def _check_sender_widths(p: Any, scenario: Any, node: str | None, pp: str, per: list[list[int]]) -> None:
+    """Each ``sensor`` task that sends to this node what a network source takes sends one value per output that
+    source measures (a run would stop at the first message: "sent 1 values, it measures 2 outputs")."""
+    if scenario is None or node is None:
+        return
+    for i, src in enumerate(p.measurements):
+        if src.network is None:
+            continue
+        senders = [src.sender] if src.sender is not None else list(scenario.networks[src.network].nodes)
+        for name in senders:
+            for j, task in enumerate(getattr(scenario.nodes.get(name), "tasks", None) or []):
+                sp = task.params if isinstance(task.params, dict) else {}
+                channels = sp.get("channels")
+                if (name == node or task.program != "sensor" or sp.get("network") != src.network
+                        or sp.get("to") not in (node, "all") or not isinstance(channels, list)
+                        or (src.tag is not None and sp.get("tag", "y") != src.tag)):
+                    continue
+                if len(channels) != len(per[i]):
+                    n = len(channels)
+                    raise ConfigError(
+                        f"sender '{name}' (task '{task.name}') sends {n} value{'s' if n != 1 else ''} per message "
+                        f"(nodes.{name}.tasks[{j}].params.channels), this source measures {len(per[i])} outputs; "
+                        "give the sensor one channel per measured output, or list what it measures in 'outputs:'",
+                        path=f"{pp}.measurements[{i}]")
 
 
 def build_parts(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
@@ -224,6 +254,7 @@ def build_parts(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: 
         if sep and " " not in where and root in type(p).model_fields:  # "measurements[0].outputs: ..."
             raise ConfigError(rest, path=f"{pp}.{where}") from None
         raise ConfigError(exc.message, path=pp) from None
+    _check_sender_widths(p, scenario, node, pp, per)
     parts: list[Any] = []
     for field, kind in (("estimator", "estimator"), ("law", "controller")):
         raw = getattr(p, field)
