@@ -40,7 +40,6 @@ case-study report function ``fn(out_dir, plots)`` is called instead.
 
 from __future__ import annotations
 
-import json
 import logging
 import math
 from pathlib import Path
@@ -52,6 +51,7 @@ import pandas as pd
 from netsim.errors import ConfigError
 from netsim.lazy_import import callable_module as _callable_module
 from netsim.metrics.runtime import job_outcome_counts
+from netsim.results.folder import RunFolder, SweepFolder, run_folders_in
 
 __all__ = [
     "report",
@@ -97,91 +97,51 @@ _MAX_PLOTTED = 40
 
 
 # --------------------------------------------------------------------------------------------- finding runs
-def _is_run(folder: Path) -> bool:
-    """A complete run folder: ``meta.json`` is written last (:meth:`netsim.results.RunResult.to_csv`)."""
-    return (folder / "meta.json").exists() and ((folder / "metrics.csv").exists() or (folder / "jobs.csv").exists())
+#: One case of a report: its name, its run folder and the columns placed after ``case`` (sweep runs: index,
+#: replicate, factor values).
+Case = tuple[str, RunFolder, dict[str, Any]]
 
 
-def _is_incomplete_run(folder: Path) -> bool:
-    """Run-folder files without the ``meta.json`` that marks the folder complete (a run killed or still running:
-    ``scenario.yaml`` is written first)."""
-    return not (folder / "meta.json").exists() and any(
-        (folder / name).exists() for name in ("scenario.yaml", "metrics.csv", "jobs.csv", "signals.csv",
-                                              "messages.csv"))
+def find_runs(folder: Path) -> tuple[str, list[Case]]:
+    """The kind of ``folder`` (``run``, ``sweep`` or ``batch``) and its runs as ``(case, run folder, extra)``.
 
-
-def find_runs(folder: Path) -> tuple[str, list[tuple[str, Path, dict[str, Any]]]]:
-    """The kind of ``folder`` (``run``, ``sweep`` or ``batch``) and its runs as ``(case, folder, extra)``.
-
-    ``extra`` holds columns placed after ``case`` (sweep runs: index, replicate, factor values).
+    ``extra`` holds columns placed after ``case`` (sweep runs: index, replicate, factor values). The folders are
+    read by :mod:`netsim.results.folder`: an incomplete run folder, or a sweep point changed since the sweep
+    wrote it, is refused (:class:`~netsim.results.folder.FolderRefused`, one line); incomplete folders inside a
+    batch folder are skipped with a warning.
     """
-    from netsim.sweep.run import SWEEP_MARKER
+    kind, runs, _ = _find(folder)
+    return kind, runs
 
-    if (folder / SWEEP_MARKER).exists() and (folder / "summary.csv").exists():
-        info = json.loads((folder / SWEEP_MARKER).read_text(encoding="utf-8"))
-        factors = list(info.get("factors") or {})
-        summary = pd.read_csv(folder / "summary.csv", keep_default_na=False, na_values=[""])
-        runs = []
-        for row in summary.to_dict("records"):
-            sub = folder / str(row["folder"])
-            extra = {"index": row["index"], "replicate": row["replicate"], **{f: row[f] for f in factors}}
-            if _is_run(sub):
-                runs.append((sub.name, sub, extra))
-        return "sweep", runs
-    if _is_run(folder):
-        return "run", [(_case_name(folder), folder, {})]
-    if _is_incomplete_run(folder):
-        raise ConfigError(f"'{folder}' is an incomplete run folder (no meta.json: the run was killed or stopped "
-                          "while writing, or is still running); wait for a running one to finish, or run it again: "
-                          f"netsim run {folder / 'scenario.yaml'} --out NEW_FOLDER")
-    for sub in sorted(p for p in folder.iterdir() if p.is_dir() and _is_incomplete_run(p)):
-        log.warning("skipping incomplete run folder %s (no meta.json: stopped while writing)", sub)
-    subs = sorted(p for p in folder.iterdir() if p.is_dir() and _is_run(p))
+
+def _find(folder: Path) -> tuple[str, list[Case], SweepFolder | None]:
+    """:func:`find_runs`, and the sweep folder when ``folder`` holds a sweep."""
+    if SweepFolder.holds_sweep(folder):
+        sweep = SweepFolder.open(folder)
+        sweep.verify()
+        runs: list[Case] = [(r.folder.path.name, r.folder, {"index": r.index, "replicate": r.replicate, **r.values})
+                            for r in sweep.runs()]
+        return "sweep", runs, sweep
+    run = RunFolder(folder)
+    if run.has_results:
+        run.refuse_if_unreadable()
+        return "run", [(run.name, run, {})], None
+    if run.is_incomplete:
+        run.refuse_if_unreadable()  # raises: no meta.json
+    subs = run_folders_in(folder)
     if not subs:
         raise ConfigError(
             f"'{folder}' is not a run folder (no metrics.csv), a sweep folder (no sweep.json) or a batch folder "
             "(no run folders inside); give the folder that `netsim run/batch/sweep` wrote"
         )
-    return "batch", [(p.name, p, {}) for p in subs]
+    return "batch", [(p.path.name, p, {}) for p in subs], None
 
 
-def _case_name(folder: Path) -> str:
-    meta = _meta(folder)
-    return str(meta.get("scenario") or folder.name)
-
-
-def _meta(folder: Path) -> dict[str, Any]:
-    try:
-        data = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
-
-
-def _metrics(folder: Path) -> dict[str, float]:
-    path = folder / "metrics.csv"
-    if not path.exists():
-        return {}
-    frame = pd.read_csv(path)
+def _metrics(run: RunFolder) -> dict[str, float]:
     from netsim.metrics.et import canonical_metric_names
 
     # run folders of older versions used unprefixed names (Nsc, GPI, ...): read them under today's names
-    return canonical_metric_names({str(k): float(v) for k, v in zip(frame["metric"], frame["value"])})
-
-
-def _read(folder: Path, name: str) -> pd.DataFrame:
-    path = folder / name
-    if not path.exists():
-        return pd.DataFrame()
-    return pd.read_csv(path, keep_default_na=False, na_values=[""])
-
-
-def _duration_s(folder: Path, meta: dict[str, Any]) -> float:
-    for key in ("duration_s", "t_end_s"):
-        value = meta.get(key)
-        if isinstance(value, (int, float)) and value > 0:
-            return float(value)
-    return math.nan
+    return canonical_metric_names(run.metric_values())
 
 
 def _as_bool(series: pd.Series) -> pd.Series:
@@ -191,7 +151,7 @@ def _as_bool(series: pd.Series) -> pd.Series:
 
 
 # --------------------------------------------------------------------------------------------- tables
-def utilization_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+def utilization_table(runs: Iterable[Case]) -> pd.DataFrame:
     """The utilization table (see the module docstring) of ``runs``."""
     rows = []
     extra_cols: list[str] = []
@@ -200,7 +160,7 @@ def utilization_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.Da
             if k not in extra_cols:
                 extra_cols.append(k)
         metrics = _metrics(folder)
-        row: dict[str, Any] = {"case": case, **extra, "status": str(_meta(folder).get("status", ""))}
+        row: dict[str, Any] = {"case": case, **extra, "status": str(folder.meta.get("status", ""))}
         for metric, col in UTILIZATION_COLUMNS:
             row[col] = metrics.get(metric, math.nan)
         rows.append(row)
@@ -215,14 +175,14 @@ def _stats(values: np.ndarray) -> tuple[float, float, float, float, float]:
     return float(v.mean()), float(v.std(ddof=0)), float(v.min()), float(np.percentile(v, 95)), float(v.max())
 
 
-def task_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+def task_table(runs: Iterable[Case]) -> pd.DataFrame:
     """Per-task CPU utilization and response-time statistics (from ``jobs.csv``)."""
     rows = []
     for case, folder, _ in runs:
-        jobs = _read(folder, "jobs.csv")
-        if jobs.empty:
+        jobs = folder.jobs()
+        if jobs is None or jobs.empty:
             continue
-        duration = _duration_s(folder, _meta(folder))
+        duration = folder.duration_s
         for (node, task), g in jobs.groupby(["node", "task"], sort=True):
             response = pd.to_numeric(g["response_s"], errors="coerce")
             if "killed" in g:  # folders of older versions gave killed jobs a response time: a killed job has none
@@ -242,12 +202,12 @@ def task_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame
     return pd.DataFrame(rows, columns=TASK_COLUMNS)
 
 
-def network_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+def network_table(runs: Iterable[Case]) -> pd.DataFrame:
     """Per-network delay and loss statistics (from ``messages.csv``)."""
     rows = []
     for case, folder, _ in runs:
-        msgs = _read(folder, "messages.csv")
-        if msgs.empty:
+        msgs = folder.messages()
+        if msgs is None or msgs.empty:
             continue
         metrics = _metrics(folder)
         for net, g in msgs.groupby("network", sort=True):
@@ -268,7 +228,7 @@ def network_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFr
     return pd.DataFrame(rows, columns=NETWORK_COLUMNS)
 
 
-def node_table(runs: Iterable[tuple[str, Path, dict[str, Any]]]) -> pd.DataFrame:
+def node_table(runs: Iterable[Case]) -> pd.DataFrame:
     """Per-node CPU utilization (tasks, handlers and context switches) from the run's ``cpu.<node>.utilization``."""
     rows = []
     for case, folder, _ in runs:
@@ -306,7 +266,15 @@ def _spans_decades(values: pd.Series) -> bool:
     return bool(v.size and (v > 0).all() and v.max() / v.min() >= 100.0)
 
 
-def _sweep_heatmaps(folder: Path, out: Path) -> Path | None:
+def _as_sweep(folder: Path | SweepFolder) -> SweepFolder | None:
+    """``folder`` as a sweep folder, None when its ``sweep.json`` is missing or unreadable."""
+    if isinstance(folder, SweepFolder):
+        return folder
+    info = SweepFolder.read_info(folder)
+    return None if info is None else SweepFolder(Path(folder), info)
+
+
+def _sweep_heatmaps(folder: Path | SweepFolder, out: Path) -> Path | None:
     """``utilization.png`` of a sweep: a heat map per index (Uc, Ua, NE, GPI) over two numeric factors (the
     surface's, else the first two with several values), mean over replicates; None when the sweep has fewer
     than two such factors or none of the indices."""
@@ -314,10 +282,13 @@ def _sweep_heatmaps(folder: Path, out: Path) -> Path | None:
     from netsim.sweep.spec import SweepSpec
     from netsim.sweep.surface import metric_heatmaps
 
+    sweep = _as_sweep(folder)
+    if sweep is None or sweep.spec_data is None:  # no readable sweep record: the bar figure is drawn instead
+        return None
     try:
-        spec = SweepSpec.model_validate(json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["spec"])
-        summary = pd.read_csv(folder / "summary.csv", keep_default_na=False, na_values=[""])
-    except (OSError, ValueError, KeyError, TypeError):  # no readable sweep record: the bar figure is drawn instead
+        spec = SweepSpec.model_validate(sweep.spec_data)
+        summary = sweep.summary()
+    except (OSError, ValueError):  # a spec of another version, no summary: the bar figure is drawn instead
         return None
     if spec.surface is not None:
         axes = [spec.surface.x, spec.surface.y]
@@ -334,36 +305,35 @@ def _sweep_heatmaps(folder: Path, out: Path) -> Path | None:
     return None if fig is None else save_figure(fig, out / "utilization.png")
 
 
-def _sweep_surface(folder: Path, out: Path, plots: bool) -> pd.DataFrame | None:
+def _sweep_surface(sweep: SweepFolder, out: Path, plots: bool) -> pd.DataFrame | None:
     """Re-make the surface of a sweep folder with a ``surface:`` section; the optimum as a one-row table."""
     from netsim.sweep.surface import surface_from_summary
     from netsim.sweep.spec import SweepSpec
 
-    info = json.loads((folder / "sweep.json").read_text(encoding="utf-8"))
-    if not (info.get("spec") or {}).get("surface"):
+    data = sweep.spec_data
+    if data is None or not data.get("surface"):
         return None
-    spec = SweepSpec.model_validate(info["spec"])
+    spec = SweepSpec.model_validate(data)
     surf = spec.surface
     assert surf is not None
     logx = surf.logx if surf.logx is not None else spec.factors[surf.x].is_log
     logy = surf.logy if surf.logy is not None else spec.factors[surf.y].is_log
-    opt, _ = surface_from_summary(folder / "summary.csv", x=surf.x, y=surf.y, z=surf.z, logx=logx, logy=logy,
+    opt, _ = surface_from_summary(sweep.summary_path, x=surf.x, y=surf.y, z=surf.z, logx=logx, logy=logy,
                                   out=out, plot=plots)
     row = {k: v for k, v in opt.items() if k != "metrics"}
     row.update({f"metric:{k}": v for k, v in opt["metrics"].items()})
     return pd.DataFrame([row])
 
 
-def _by_values(frame: pd.DataFrame, folder: Path) -> pd.DataFrame:
+def _by_values(frame: pd.DataFrame, folder: Path | SweepFolder) -> pd.DataFrame:
     """A copy of a sweep table whose ``case`` column reads ``sigma_s = 1e-05, sigma_c = 0.0132`` (symbols),
     plus ``#r`` for replicates after the first."""
     from netsim.figure_style import symbol
 
-    try:
-        factors = list(json.loads((folder / "sweep.json").read_text(encoding="utf-8"))["factors"])
-    except (OSError, ValueError, KeyError, TypeError):  # no readable sweep record: rows keep their folder names
+    sweep = _as_sweep(folder)
+    if sweep is None:  # no readable sweep record: rows keep their folder names
         return frame
-    names = [f for f in factors if f in frame.columns]
+    names = [f for f in sweep.factors if f in frame.columns]
     if "case" not in frame.columns or not names or frame.empty:
         return frame
     out = frame.copy()
@@ -378,7 +348,7 @@ def _by_values(frame: pd.DataFrame, folder: Path) -> pd.DataFrame:
     return out
 
 
-def _figures(tables: dict[str, pd.DataFrame], out: Path, folder: Path, kind: str) -> list[Path]:
+def _figures(tables: dict[str, pd.DataFrame], out: Path, folder: Path | SweepFolder, kind: str) -> list[Path]:
     from netsim.figure_style import paper_style
 
     made: list[Path | None] = []
@@ -444,23 +414,23 @@ def report(path_or_name: str | Path, *, out: str | Path | None = None, plots: bo
         except ConfigError as exc:
             raise ConfigError(f"'{name}' is neither a folder nor a registered report: {exc}") from None
         return fn(Path(out) if out is not None else None, plots)
-    kind, runs = find_runs(folder)
+    kind, runs, sweep = _find(folder)
     tables: dict[str, pd.DataFrame] = {
         "utilization": utilization_table(runs),
         "nodes": node_table(runs),
         "tasks": task_table(runs),
         "networks": network_table(runs),
     }
-    if kind == "sweep":
-        tables["summary"] = pd.read_csv(folder / "summary.csv", keep_default_na=False, na_values=[""])
+    if sweep is not None:
+        tables["summary"] = sweep.summary()
     target = Path(out) if out is not None else folder / "report"
     target.mkdir(parents=True, exist_ok=True)
-    if kind == "sweep":
-        optimum = _sweep_surface(folder, target, plots)
+    if sweep is not None:
+        optimum = _sweep_surface(sweep, target, plots)
         if optimum is not None:
             tables["optimum"] = optimum
     if plots:
-        _figures(tables, target, folder, kind)
+        _figures(tables, target, sweep if sweep is not None else folder, kind)
     from netsim.results import write_csv
 
     for name, frame in tables.items():

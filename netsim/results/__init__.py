@@ -49,15 +49,12 @@ import pandas as pd
 
 from netsim.results.files import (
     FLOAT_FORMAT,
-    JOB_TYPES,
-    MESSAGE_TYPES,
     TIME_COLUMNS,
-    read_schedule,
-    read_table,
     schedule_csv_chunks,
     schedule_intervals,
     write_csv,
 )
+from netsim.results.folder import FolderRefused, RunFolder, SweepFolder, read_summary
 from netsim.results.summary import key_metrics
 
 if TYPE_CHECKING:
@@ -95,6 +92,10 @@ __all__ = [
     "check_out_dir",
     "key_metrics",
     "TIME_COLUMNS",
+    "RunFolder",
+    "SweepFolder",
+    "FolderRefused",
+    "read_summary",
 ]
 
 
@@ -578,7 +579,15 @@ class RunResult:
         Returns
         -------
         RunResult
-            Its tables, metrics, meta and scenario; ``out_dir`` is the folder.
+            Its tables, metrics, meta and scenario; ``out_dir`` is the folder. A folder written with only its
+            metrics (a sweep's ``runs: metrics``) gives empty tables.
+
+        Raises
+        ------
+        netsim.results.folder.FolderRefused
+            One line, for a folder without ``meta.json`` (a run killed while writing, or still running), with a
+            damaged one, or a sweep point changed since the sweep wrote it (:class:`netsim.results.folder.RunFolder`
+            reads the folder).
 
         Examples
         --------
@@ -587,33 +596,12 @@ class RunResult:
         >>> RunResult.read(folder).meta["scenario"]
         'demo'
         """
-        folder = Path(run_dir)
-        signals = pd.read_csv(folder / "signals.csv", dtype=np.float64)
-        jobs = read_table(folder / "jobs.csv", JOB_TYPES) if (folder / "jobs.csv").exists() else \
-            pd.DataFrame(columns=JOB_COLUMNS)
-        messages = read_table(folder / "messages.csv", MESSAGE_TYPES) if (folder / "messages.csv").exists() else \
-            pd.DataFrame(columns=MESSAGE_COLUMNS)
-        summaries = {name: pd.read_csv(folder / f"{name}_summary.csv") if (folder / f"{name}_summary.csv").exists()
-                     else None for name in ("jobs", "messages")}
-        metrics = pd.Series(dtype=float, name="value")
-        if (folder / "metrics.csv").exists():
-            metrics_frame = pd.read_csv(folder / "metrics.csv", dtype={"metric": str, "value": np.float64})
-            metrics = pd.Series(metrics_frame["value"].to_numpy(dtype=float), index=list(metrics_frame["metric"]),
-                                name="value")
-        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8")) if (folder / "meta.json").exists() else {}
-        scenario = None
-        if (folder / "scenario.yaml").exists():
-            from netsim.scenario.loader import read_yaml  # bounded and tag-free: a run folder may come from anyone
+        from netsim.results.folder import RunFolder
 
-            scenario = read_yaml(folder / "scenario.yaml")[0]
-        traces = {"jobs": "full", "messages": "full", "schedule": "on"}
-        for name in ("jobs", "messages"):
-            if not (folder / f"{name}.csv").exists():
-                traces[name] = "summary" if summaries[name] is not None else "off"
-        if (folder / "schedule.csv").exists():
-            schedule = read_schedule(folder / "schedule.csv")
-        else:  # output.schedule: off, or a folder written before schedule.csv existed
-            schedule = pd.DataFrame(columns=SCHEDULE_COLUMNS)
-            traces["schedule"] = "off"
-        return cls(signals, jobs, messages, metrics, meta, scenario, schedule=schedule, out_dir=folder, traces=traces,
-                   job_summary=summaries["jobs"], message_summary=summaries["messages"])
+        run = RunFolder.open(run_dir)  # refuses an incomplete folder, or a sweep point changed since it was written
+        jobs, messages, schedule = run.jobs(), run.messages(), run.schedule()
+        return cls(run.signals(), pd.DataFrame(columns=JOB_COLUMNS) if jobs is None else jobs,
+                   pd.DataFrame(columns=MESSAGE_COLUMNS) if messages is None else messages, run.metrics(), run.meta,
+                   run.scenario(), schedule=pd.DataFrame(columns=SCHEDULE_COLUMNS) if schedule is None else schedule,
+                   out_dir=run.path, traces=run.traces, job_summary=run.job_summary(),
+                   message_summary=run.message_summary())

@@ -14,7 +14,6 @@ Where the chunks run (this process, a pool, Dask) is :mod:`netsim.sweep.executor
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import logging
 import os
@@ -23,17 +22,16 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Iterator, Mapping
 
+# the point folder's record and manifest are read by the one folder reader (netsim.results.folder)
+from netsim.results.folder import (MANIFEST_NAME, RECORD_NAME, RunFolder, manifest_digests, read_record,
+                                   verified_record)
+
 __all__ = ["PointFn", "RECORD_NAME", "MANIFEST_NAME", "default_point_fn", "metrics_point_fn", "run_chunk",
            "read_record", "point_hash", "write_manifest", "verified_record", "fresh_folder"]
 
 #: ``fn(raw_scenario, run_folder, seed) -> {metric: value}``
 PointFn = Callable[[Mapping[str, Any], Path, int], Mapping[str, float]]
 
-#: The per-point record written by the worker when a point finishes (ok or error).
-RECORD_NAME = "point.json"
-
-#: Written last in a point folder: ``{"files": {relative path: sha256}}`` of every other file in it.
-MANIFEST_NAME = "manifest.json"
 
 _SINGLE_THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
@@ -56,10 +54,7 @@ def metrics_point_fn(raw: Mapping[str, Any], out: Path, seed: int) -> dict[str, 
 def _run_status(folder: Path) -> tuple[str, str]:
     """The run's own status and error from its ``meta.json`` (``diverged at ...``, ``unstable at ...``); ``ok``
     when the point function wrote none."""
-    try:
-        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return "ok", ""
+    meta = RunFolder(folder).meta
     status = str(meta.get("status") or "ok")
     return status, ("" if status == "ok" else str(meta.get("error") or ""))
 
@@ -70,67 +65,9 @@ def _write_json(path: Path, data: Any) -> None:
     write_atomic(path, json.dumps(data, indent=1, sort_keys=True, allow_nan=True))
 
 
-def read_record(folder: Path) -> dict[str, Any] | None:
-    """The ``point.json`` of a point folder, or ``None`` when it is missing or unreadable."""
-    try:
-        data = json.loads((folder / RECORD_NAME).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
-
-
-def _digest(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def _listing(folder: Path) -> dict[str, Path] | None:
-    """Every file below ``folder`` by relative path (the manifest aside); ``None`` when ``folder`` is a symlink
-    or holds one, or anything that is neither a file nor a folder."""
-    if folder.is_symlink() or not folder.is_dir():
-        return None
-    files: dict[str, Path] = {}
-    for root, dirs, names in os.walk(folder, followlinks=False):
-        for name in [*dirs, *names]:
-            path = Path(root) / name
-            if path.is_symlink() or not (path.is_dir() or path.is_file()):
-                return None
-        for name in names:
-            path = Path(root) / name
-            rel = path.relative_to(folder).as_posix()
-            if rel != MANIFEST_NAME:
-                files[rel] = path
-    return files
-
-
 def write_manifest(folder: Path) -> None:
     """Write ``manifest.json``: the sha256 of every file of the point folder (written last, atomically)."""
-    listing = _listing(folder) or {}
-    _write_json(folder / MANIFEST_NAME, {"files": {rel: _digest(path) for rel, path in sorted(listing.items())}})
-
-
-def verified_record(folder: Path) -> dict[str, Any] | None:
-    """The point's ``point.json`` if the folder is exactly what its manifest says (same files, same sha256, no
-    symlink); ``None`` otherwise (a point stopped before it finished, or a folder changed since)."""
-    listing = _listing(folder)
-    if listing is None or RECORD_NAME not in listing:
-        return None
-    try:
-        manifest = json.loads((folder / MANIFEST_NAME).read_text(encoding="utf-8"))
-        files = manifest["files"]
-    except (OSError, ValueError, TypeError, KeyError):
-        return None
-    if not isinstance(files, dict) or set(files) != set(listing):
-        return None
-    try:
-        if any(_digest(path) != files[rel] for rel, path in listing.items()):
-            return None
-    except OSError:
-        return None
-    return read_record(folder)
+    _write_json(folder / MANIFEST_NAME, {"files": manifest_digests(folder)})
 
 
 def fresh_folder(folder: Path) -> None:
@@ -154,12 +91,11 @@ def point_hash(raw: Mapping[str, Any], seed: int) -> str:
 
 def _run_hash(folder: Path, raw: Mapping[str, Any], seed: int) -> str:
     """The hash from the run folder's ``meta.json`` (written by the runner) or, failing that, computed."""
-    try:
-        meta = json.loads((folder / "meta.json").read_text(encoding="utf-8"))
-        if int(meta.get("seed", -1)) == int(seed) and isinstance(meta.get("scenario_hash"), str) and meta["scenario_hash"]:
-            return meta["scenario_hash"]
-    except (OSError, ValueError, TypeError, AttributeError):
-        pass
+    meta = RunFolder(folder).meta
+    given = meta.get("scenario_hash")
+    seed_given = meta.get("seed")
+    if isinstance(seed_given, int) and seed_given == int(seed) and isinstance(given, str) and given:
+        return given
     return point_hash(raw, seed)
 
 

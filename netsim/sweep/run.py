@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import Any, Iterator, Mapping
 
 from netsim.errors import ConfigError
+from netsim.results.folder import SUMMARY_NAME, SWEEP_MARKER, SweepFolder, read_summary
 from netsim.sweep.executor import SchedulerLost, open_executor, scheduler_lost
 from netsim.sweep.points import (PointFn, default_point_fn, metrics_point_fn, point_hash, run_chunk,
                                  verified_record, write_manifest)
@@ -50,11 +51,9 @@ __all__ = ["SweepResult", "run_sweep", "ChunkPlanner", "SWEEP_MARKER"]
 
 log = logging.getLogger(__name__)
 
-#: The file that marks a folder as holding a sweep.
-SWEEP_MARKER = "sweep.json"
 #: The lock a running sweep holds on its output folder (its pid inside): one sweep per folder at a time.
 LOCK_NAME = ".sweep.lock"
-_OWNED = ("points", "summary.csv", "optimum.json", "surface.png", "surface.csv", SWEEP_MARKER, "dask-scratch")
+_OWNED = ("points", SUMMARY_NAME, "optimum.json", "surface.png", "surface.csv", SWEEP_MARKER, "dask-scratch")
 
 
 @dataclass
@@ -101,7 +100,7 @@ class SweepResult:
     @property
     def summary_path(self) -> Path:
         """``<out_dir>/summary.csv``."""
-        return self.out_dir / "summary.csv"
+        return self.out_dir / SUMMARY_NAME
 
     def describe(self) -> str:
         """One paragraph for the terminal: counts, where the summary is, and the optimum."""
@@ -161,10 +160,8 @@ def _prepare_out(out: Path, sweep: Sweep, overwrite: bool) -> None:
     if out.is_dir() and any(p.name != LOCK_NAME for p in out.iterdir()):
         held = None
         if marker.exists():
-            try:
-                held = json.loads(marker.read_text(encoding="utf-8")).get("sweep")
-            except (OSError, ValueError, AttributeError):
-                held = "?"
+            info = SweepFolder.read_info(out)
+            held = "?" if info is None else info.get("sweep")
         if held != sweep.name and not overwrite:
             what = f"sweep '{held}'" if held else "files that are not a sweep"
             raise ConfigError(
@@ -576,8 +573,6 @@ def _collect(
     sweep: Sweep, folder: Path, executed: int, resumed: int, interrupted: bool, desc: str, elapsed: float
 ) -> SweepResult:
     """Read every point's record, write ``summary.csv`` (and the surface), build the result."""
-    import pandas as pd
-
     rows = []
     for point in sweep.points:
         rec = verified_record(folder / point.folder)  # a changed folder is not trusted: pending, run it again
@@ -587,8 +582,8 @@ def _collect(
         rec = {**rec, "values": point.values, "folder": point.folder}
         rows.append(rec)
     factors = list(sweep.spec.factors)
-    summary_path = write_summary(folder / "summary.csv", factors, rows)
-    summary = pd.read_csv(summary_path, keep_default_na=False, na_values=[""])
+    summary_path = write_summary(folder / SUMMARY_NAME, factors, rows)
+    summary = read_summary(summary_path)  # the one parse of summary.csv (netsim.results.folder)
     warned = [r for r in rows if r.get("warnings")]
     if warned:
         first = warned[0]
