@@ -79,7 +79,9 @@ def load_surface(
     ConfigError
         When a column is missing or a factor is not numeric.
     """
-    df = summary if isinstance(summary, pd.DataFrame) else pd.read_csv(summary, keep_default_na=False, na_values=[""])
+    from netsim.results.folder import read_summary
+
+    df = summary if isinstance(summary, pd.DataFrame) else read_summary(summary)
     for col in (x, y, z):
         if col not in df.columns:
             raise ConfigError(f"surface: no column '{col}' in the summary (columns: {', '.join(map(str, df.columns))})")
