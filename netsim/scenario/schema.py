@@ -29,7 +29,7 @@ Public classes and their fields (times in ns)
     ``model`` and ``params``.
 ``AdcChannel`` / ``DacChannel`` / ``EncoderChannel`` (the ``IOChannel`` union, discriminated by ``type``)
     adc: ``output, noise_std, quant_step, saturation``; dac: ``input, saturation, resolution``;
-    encoder: ``output, step, tick, mode``.
+    encoder: ``output, step, tick, mode``; each an optional ``unit`` (text, for figure axes).
 ``SignalSpec``
     ``type`` and ``params`` (the other keys of the YAML mapping).
 ``NodeSpec``
@@ -97,7 +97,7 @@ from netsim.scenario.schema_verdict import VerdictSpec
 from netsim.scenario.schema_task import SetPeriodRule, TimeDistribution, kernel_fields, without_unused_arrivals
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
 from netsim.kernel.task import TaskSpec as KernelTaskSpec
-from netsim.units import Duration, StrictModel, Time
+from netsim.units import Duration, QuietDefaultsModel, StrictModel, Time
 
 __all__ = [
     "NAME_PATTERN",
@@ -370,7 +370,18 @@ def _exec_spec(execution: Any) -> Any:
 
 
 # --------------------------------------------------------------------------------------------- io
-class AdcChannel(SpecModel):
+#: An io channel's optional ``unit`` (text, e.g. ``rad``, ``V``): the unit of its value, on figure axes.
+ChannelUnit = Annotated[str | None, Field(min_length=1, max_length=40)]
+
+
+class _Channel(SpecModel, QuietDefaultsModel):
+    """An io channel: its ``unit`` is left out of the resolved scenario while unset, so a scenario without units
+    resolves (and hashes) as before."""
+
+    _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"unit": None}
+
+
+class AdcChannel(_Channel):
     """Analog input: samples plant output ``output`` (index or name), with noise, quantization, saturation."""
 
     type: Literal["adc"]
@@ -378,18 +389,20 @@ class AdcChannel(SpecModel):
     noise_std: float = Field(default=0.0, ge=0)
     quant_step: float | None = Field(default=None, gt=0)
     saturation: Range | None = None
+    unit: ChannelUnit = None
 
 
-class DacChannel(SpecModel):
+class DacChannel(_Channel):
     """Analog output: sets plant input ``input`` (zero-order hold), with saturation and resolution."""
 
     type: Literal["dac"]
     input: PlantPort = 0
     saturation: Range | None = None
     resolution: float | None = Field(default=None, gt=0)
+    unit: ChannelUnit = None
 
 
-class EncoderChannel(SpecModel):
+class EncoderChannel(_Channel):
     """Incremental encoder on plant output ``output``: quantization ``step``, read by an ISR every ``tick``."""
 
     type: Literal["encoder"]
@@ -397,6 +410,7 @@ class EncoderChannel(SpecModel):
     step: float = Field(gt=0)
     tick: Duration
     mode: Literal["exact", "polling"] = "exact"
+    unit: ChannelUnit = None
 
 
 def _io_tag(value: Any) -> str | None:
