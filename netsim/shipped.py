@@ -94,8 +94,8 @@ def _summary(text: str) -> str:
             value = rest[0].strip() if rest else ""
         return value.strip("\"'")
     for line in text.splitlines():
-        if line.startswith("#"):
-            return line.lstrip("# ").strip()
+        if line.startswith("#"):  # a sentence that goes on in the next comment line loses its comma
+            return line.lstrip("# ").strip().rstrip(",;:")
     return ""
 
 

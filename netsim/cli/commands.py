@@ -1,4 +1,4 @@
-"""What each ``netsim`` sub-command does: validate, run, batch, sweep, report, list.
+"""What each ``netsim`` sub-command does: validate, run, batch, sweep, report, list, scenarios, completion.
 
 Each ``_cmd_<name>(args) -> exit code`` imports the heavy modules it needs inside, so ``netsim --help`` stays fast.
 """
@@ -52,6 +52,13 @@ def _overrides(items: Sequence[str]) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------------------------- commands
+def _scenario_file(argument: str) -> str:
+    """A FILE argument: the file as given, or the shipped scenario a bare name stands for (``dc_servo_can``)."""
+    from netsim.shipped import resolve
+
+    return resolve(argument)
+
+
 def _is_sweep(file: str) -> bool:
     from netsim.sweep.check import is_sweep_file
 
@@ -63,7 +70,15 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
     overrides = _overrides(args.overrides)
     n_errors = 0
-    for file in args.files:
+    from netsim.errors import ConfigError
+
+    for given in args.files:
+        try:
+            file = _scenario_file(given)
+        except ConfigError as exc:  # a bare name that is neither a file nor a shipped scenario: one problem
+            print(str(exc))
+            n_errors += 1
+            continue
         if _is_sweep(file):
             from netsim.sweep.check import check_sweep
 
@@ -76,7 +91,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         if not errors:
             warn = len(problems)
             note = f" ({warn} warning{'s' if warn != 1 else ''})" if warn else ""
-            print(f"{file}: valid{note}")
+            print(f"{given}: valid{note}")
     if n_errors:  # the count is printed, not returned: 2 is a usage error and 130 is Ctrl-C (issue 27)
         total = " in total" if len(args.files) > 1 else ""
         print(f"{n_errors} problem{'s' if n_errors != 1 else ''}{total}", file=sys.stderr)
@@ -87,6 +102,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 def _cmd_run(args: argparse.Namespace) -> int:
     from netsim.scenario import ScenarioError, load_scenario
 
+    args.file = _scenario_file(args.file)
     if _is_sweep(args.file):
         from netsim.errors import ConfigError
 
@@ -141,6 +157,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from netsim.scenario import ScenarioError, load_scenario
 
+    args.file = _scenario_file(args.file)
     if _is_sweep(args.file):
         from netsim.errors import ConfigError
 
@@ -300,8 +317,11 @@ def _expand_batch(paths: Sequence[str]) -> list[Path]:
             out += found
         elif p.exists():
             out.append(p)
-        else:
-            raise ConfigError(f"file not found: {item}")
+        else:  # a shipped scenario's name (a bare name that is none: a one-line error naming the closest)
+            found_file = Path(_scenario_file(item))
+            if not found_file.exists():
+                raise ConfigError(f"file not found: {item}")
+            out.append(found_file)
     return out
 
 
@@ -329,6 +349,11 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.dask_dashboard and not args.dask_local:
         raise ConfigError("--dask-dashboard needs --dask-local (a scheduler you start has its own: "
                           "`dask scheduler --dashboard-address ADDR`)")
+    if (args.scheduler or args.dask_local) and not _dask_installed():
+        option = "--scheduler" if args.scheduler else "--dask-local"
+        raise ConfigError(f"{option} needs Dask's distributed scheduler, which is not installed: "
+                          "pip install 'netsim[dask]' (or leave the option out to run in local processes)")
+    args.file = _scenario_file(args.file)
     if not Path(args.file).exists():
         raise ConfigError(f"file not found: {args.file}")
     from netsim.figure_style import plot_format
@@ -354,6 +379,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     elif counts.not_ok:
         _err(f"{counts.describe('sweep run')} (see summary.csv)")
     return counts.exit_code(result.interrupted)
+
+
+def _dask_installed() -> bool:
+    """Whether the optional ``[dask]`` extra (dask.distributed) is installed, without importing it."""
+    import importlib.util
+
+    return importlib.util.find_spec("distributed") is not None
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
@@ -463,4 +495,29 @@ def _cmd_schema(args: argparse.Namespace) -> int:
     from netsim.cli.docs import json_schema
 
     sys.stdout.write(json.dumps(json_schema(), indent=2, sort_keys=True) + "\n")
+    return EXIT_OK
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    """``netsim scenarios``: each shipped scenario and sweep with its one-line summary (or ``--path``: the folder)."""
+    from netsim import shipped
+
+    if args.path:
+        print(shipped.folder())
+        return EXIT_OK
+    items = shipped.catalogue()
+    width = max((len(item.name) for item in items), default=0)
+    for item in items:
+        kind = "sweep   " if item.is_sweep else "scenario"
+        print(f"{item.name:<{width}}  {kind}  {item.summary}".rstrip())
+    return EXIT_OK
+
+
+def _cmd_completion(args: argparse.Namespace) -> int:
+    """``netsim completion bash|zsh``: a completion script written by shtab from the command's own parser."""
+    import shtab
+
+    from netsim.cli.parser import build_parser
+
+    sys.stdout.write(shtab.complete(build_parser(), shell=args.shell))
     return EXIT_OK

@@ -8,10 +8,12 @@ from netsim.cli.commands import (
     LIST_KINDS,
     _cmd_analyze,
     _cmd_batch,
+    _cmd_completion,
     _cmd_docs,
     _cmd_list,
     _cmd_report,
     _cmd_run,
+    _cmd_scenarios,
     _cmd_schema,
     _cmd_sweep,
     _cmd_validate,
@@ -21,6 +23,8 @@ __all__ = ["build_parser"]
 
 _MAIN_EPILOG = """\
 examples:
+  netsim scenarios                                       the shipped scenarios, one line each
+  netsim run dc_servo_can                                run a shipped scenario by name
   netsim run scenarios/dc_servo_can.yaml                 run one scenario, write reports/<name>/<run-id>/
   netsim run scenarios/dc_servo_can.yaml --plot --seed 3 --set networks.can.bitrate="1 Mbit/s"
   netsim validate scenarios/*.yaml                       check files; exit 1 and the count on problems
@@ -31,12 +35,17 @@ examples:
   netsim list programs                                   registered task programs, one per line
   netsim docs > scenario-reference.md                    every scenario key and plugin parameter
   netsim schema > netsim.schema.json                     JSON Schema for editor completion
+  netsim completion bash > ~/.local/share/bash-completion/completions/netsim
+
+FILE is a scenario file, or the name of a shipped scenario (netsim scenarios lists them); a file of that name
+in the working folder comes first.
 
 exit codes: 0 ok, 1 a run failed, 2 invalid scenario or usage; validate: 1 on problems (count printed).
 """
 
 _RUN_EPILOG = """\
 examples:
+  netsim run dc_servo_can                                 a shipped scenario, by name
   netsim run scenarios/dc_servo_ideal.yaml
   netsim run scenarios/dc_servo_can.yaml --out /tmp/can --seed 7 --plot
   netsim run scenarios/three_servos_dm.yaml --plot-window "0.2 s:0.3 s"
@@ -103,8 +112,23 @@ Finished points are kept and skipped when the sweep is run again (use --overwrit
 _REPORT_EPILOG = """\
 examples:
   netsim report reports/hdd_gpi              tables/figures of a sweep or run folder
-  netsim report hdd --out reports/hdd        a registered case-study report (see: netsim list reports)
+  netsim report hdd                          a registered case-study report (see: netsim list reports),
+                                             written to ./reports/hdd/ (its runs under ./reports/hdd/runs/)
   netsim report reports/hdd_gpi --no-plots
+"""
+
+_SCENARIOS_EPILOG = """\
+examples:
+  netsim scenarios                           name and one-line summary of each shipped scenario and sweep
+  netsim run dc_servo_can                    run one by name
+  cp "$(netsim scenarios --path)/dc_servo_can.yaml" my_servo.yaml     start your own from a copy
+"""
+
+_COMPLETION_EPILOG = """\
+examples:
+  netsim completion bash > ~/.local/share/bash-completion/completions/netsim
+  netsim completion zsh > ~/.zfunc/_netsim        (with fpath+=(~/.zfunc) before compinit in ~/.zshrc)
+  eval "$(netsim completion bash)"                this shell only
 """
 
 _LIST_EPILOG = """\
@@ -170,7 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("run", parents=[common, trust], help="run one scenario and write its run folder",
                        epilog=_RUN_EPILOG,
                        formatter_class=_Formatter, description="Validate and run one scenario.")
-    p.add_argument("file", metavar="FILE", help="scenario YAML file")
+    _file(p.add_argument("file", metavar="FILE", help="scenario YAML file, or a shipped scenario's name"))
     p.add_argument("--out", metavar="DIR", help="run folder (default: reports/<scenario>/<run-id>/)")
     p.add_argument("--seed", type=int, metavar="N", help="override the scenario seed")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
@@ -187,7 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog=_ANALYZE_EPILOG, formatter_class=_Formatter,
                        description="Run one scenario and compare its response times, CAN latencies and loop "
                                    "costs with what analysis predicts.")
-    p.add_argument("file", metavar="FILE", help="scenario YAML file")
+    _file(p.add_argument("file", metavar="FILE", help="scenario YAML file, or a shipped scenario's name"))
     p.add_argument("--out", metavar="DIR", help="run folder (default: reports/<scenario>/<run-id>/)")
     p.add_argument("--seed", type=int, metavar="N", help="override the scenario seed")
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
@@ -197,7 +221,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("batch", parents=[common, trust], help="run many scenarios in parallel, write summary.csv",
                        epilog=_BATCH_EPILOG,
                        formatter_class=_Formatter, description="Run many scenarios (parallel processes).")
-    p.add_argument("paths", nargs="+", metavar="FILE|DIR", help="scenario files or folders of them")
+    _file(p.add_argument("paths", nargs="+", metavar="FILE|DIR",
+                         help="scenario files or folders of them (or shipped scenarios' names)"))
     p.add_argument("--out", metavar="DIR", help="output folder (default: reports/batch-<time>/)")
     p.add_argument("--workers", type=_positive_int, metavar="N", help="parallel processes (default: all cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -206,7 +231,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("sweep", parents=[common, trust], help="run a parameter sweep (locally or on a dask cluster)",
                        epilog=_SWEEP_EPILOG,
                        formatter_class=_Formatter, description="Run a sweep file: factors over scenario fields.")
-    p.add_argument("file", metavar="FILE", help="sweep YAML file")
+    _file(p.add_argument("file", metavar="FILE", help="sweep YAML file, or a shipped sweep's name"))
     p.add_argument("--out", metavar="DIR", help="output folder (default: reports/<sweep>/)")
     p.add_argument("--workers", type=_positive_int, metavar="N", help="parallel processes (default: all cores)")
     p.add_argument("--scheduler", metavar="ADDR", help="dask scheduler address, e.g. tcp://host:8786")
@@ -223,7 +248,8 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog=_REPORT_EPILOG, formatter_class=_Formatter,
                        description="Build report tables (CSV) and figures.")
     p.add_argument("target", metavar="DIR|NAME", help="a run or sweep folder, or a registered report name")
-    p.add_argument("--out", metavar="DIR", help="where to write (default: next to the input)")
+    p.add_argument("--out", metavar="DIR",
+                   help="where to write (default: DIR/report/ for a folder, ./reports/NAME/ for a case study)")
     p.add_argument("--no-plots", action="store_true", help="tables only")
     p.add_argument("--plot-format", choices=("png", "pdf", "svg"), default="png",
                    help="file format of the figures (default: png)")
@@ -232,7 +258,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate", parents=[common, trust], help="check scenario files; exit 1 on problems",
                        epilog=_VALIDATE_EPILOG, formatter_class=_Formatter,
                        description="Check scenario files completely without running them.")
-    p.add_argument("files", nargs="+", metavar="FILE", help="scenario YAML files")
+    _file(p.add_argument("files", nargs="+", metavar="FILE", help="scenario YAML files, or shipped scenarios' names"))
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
                    help="apply an override before checking (repeatable)")
     p.set_defaults(func=_cmd_validate)
@@ -240,7 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("design", parents=[common, trust], help="print the state_feedback designs without running",
                        epilog=_DESIGN_EPILOG, formatter_class=_Formatter,
                        description="Print each state_feedback task's gains, eigenvalues and delay margin.")
-    p.add_argument("file", metavar="FILE", help="scenario YAML file")
+    _file(p.add_argument("file", metavar="FILE", help="scenario YAML file, or a shipped scenario's name"))
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="PATH=VALUE",
                    help="apply an override first (repeatable)")
     p.add_argument("--json", action="store_true", help="print design.json's text instead of the table")
@@ -264,12 +290,40 @@ def build_parser() -> argparse.ArgumentParser:
                        epilog=_SCHEMA_EPILOG, formatter_class=_Formatter,
                        description="Print a JSON Schema (draft 2020-12) that accepts a scenario or a sweep file.")
     p.set_defaults(func=_cmd_schema)
+
+    p = sub.add_parser("scenarios", parents=[common], help="list the shipped scenarios and sweeps, one line each",
+                       epilog=_SCENARIOS_EPILOG, formatter_class=_Formatter,
+                       description="List the scenarios and sweeps that come with netsim (run them by name).")
+    p.add_argument("--path", action="store_true", help="print the folder that holds them instead")
+    p.set_defaults(func=_cmd_scenarios)
+
+    p = sub.add_parser("completion", parents=[common], help="print a shell completion script (bash or zsh)",
+                       epilog=_COMPLETION_EPILOG, formatter_class=_Formatter,
+                       description="Print a completion script for the netsim command (sub-commands, options, "
+                                   "choices and file names).")
+    p.add_argument("shell", choices=_SHELLS, help="the shell: " + " or ".join(_SHELLS))
+    p.set_defaults(func=_cmd_completion)
     return parser
+
+
+#: Shells ``netsim completion`` writes a script for.
+_SHELLS = ("bash", "zsh")
+
+#: shtab's file-name completion, spelled out so that building the parser does not import shtab (shtab.FILE).
+_FILE_COMPLETION = {"bash": "_shtab_compgen_files", "zsh": "_files", "tcsh": "f"}
+
+
+def _file(action: argparse.Action) -> argparse.Action:
+    """Mark a FILE argument for shell completion by file name (read by ``netsim completion``)."""
+    action.complete = _FILE_COMPLETION  # type: ignore[attr-defined]
+    return action
 
 
 def _cmd_design(args: argparse.Namespace) -> int:
     from netsim.cli.design import cmd_design  # imported when the command runs (netsim --help stays fast)
+    from netsim.shipped import resolve
 
+    args.file = resolve(args.file)  # a shipped scenario's name, as for run
     return cmd_design(args)
 
 
