@@ -23,7 +23,6 @@ import logging
 import math
 import os
 import re
-import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -155,20 +154,19 @@ class Quotes:
 
 # ------------------------------------------------------------------------------------------------ runs
 def log_progress(logger: logging.Logger | str, label: str, every: float = 0.1) -> Progress:
-    """A :data:`Progress` that logs ``"<label>: <what>: done/total runs (s)"`` at INFO every ``every`` of the runs."""
+    """A :data:`Progress` that logs ``"<label>: <what>: done/total runs"`` at INFO every ``every`` of the runs."""
     lg = logging.getLogger(logger) if isinstance(logger, str) else logger
-    t0 = time.perf_counter()
 
     def progress(done: int, total: int, what: str) -> None:
         step = max(1, int(total * every))
         if done == total or done % step == 0:
-            lg.info("%s: %s: %d/%d runs (%.0f s)", label, what, done, total, time.perf_counter() - t0)
+            lg.info("%s: %s: %d/%d runs", label, what, done, total)
 
     return progress
 
 
 def run_all(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = None, progress: Progress | None = None,
-            what: str = "runs", chunksize: int = 1) -> list[R]:
+            what: str = "runs", chunksize: int = 1, each: Callable[[int, R], None] | None = None) -> list[R]:
     """``[fn(item) for item in items]``, on one process pool.
 
     Parameters
@@ -183,6 +181,9 @@ def run_all(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = N
         Called as ``progress(done, len(items), what)`` after each result.
     chunksize
         Items sent to a worker at a time.
+    each
+        Called as ``each(index, result)`` as each result comes (before ``progress``): to keep it at once, in a
+        cache, so that a run stopped half-way keeps what it made.
     """
     n = len(items)
     workers = workers or max(1, min(n, os.cpu_count() or 1))
@@ -196,6 +197,8 @@ def run_all(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = N
         results = pool.map(fn, items, chunksize=max(1, chunksize))
     try:
         for r in results:
+            if each is not None:
+                each(len(out), r)
             out.append(r)
             if progress is not None:
                 progress(len(out), n, what)

@@ -76,6 +76,12 @@ def test_run_all_keeps_the_order_and_reports_progress():
     assert seen[-1] == (7, 7, "sq") and [d for d, _, _ in seen] == list(range(1, 8))
 
 
+def test_run_all_hands_each_result_over_as_it_comes():
+    got = []
+    run_all(_square, [3, 4], workers=1, each=lambda i, r: got.append((i, r)))
+    assert got == [(0, 9), (1, 16)]
+
+
 def test_run_all_with_one_worker_runs_in_this_process():
     assert run_all(_pid, [1, 2], workers=1) == [os.getpid()] * 2
     assert set(run_all(_pid, [1, 2, 3, 4], workers=2)) - {os.getpid()}  # a pool: other processes

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from netsim.casestudy import fmt
 from netsim.lazy_import import lazy_module
 
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
@@ -64,11 +65,6 @@ PAPER_R = 3.0
 PAPER_EVENTS_AT_5 = 1.7
 #: The controllers the paper reports unstable at wc = 80 (section VII-B); the others it leaves stable there.
 PAPER_UNSTABLE_80 = ("basic_event", "position_prediction")
-
-
-def fmt(x: float | None, nd: int = 3) -> str:
-    """``x`` with ``nd`` significant digits (``nan`` for a missing value)."""
-    return "nan" if x is None or not math.isfinite(float(x)) else f"{float(x):.{nd}g}"
 
 
 def pool_sigma(df: pd.DataFrame, by: Sequence[str] = ("vref",)) -> pd.DataFrame:

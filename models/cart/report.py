@@ -8,9 +8,11 @@ or with ``engine="numpy"`` through the plain numpy loop :func:`netsim.models.car
 the numbers for each of the paper's claims. ``instability.csv`` holds the wc = 80 runs of every controller over
 :data:`SEEDS_INSTABILITY` (the instability verdict counts its oscillating runs per controller).
 
-Run cache (:mod:`netsim.models.cart.cache`): each point's row is kept in ``<out>/runs/points_<hash>.pkl`` (not in
-git), keyed by the point and the engine; ``<hash>`` covers the cart's numeric code, ``scenarios/cart.yaml``
-and the run durations, so a change there runs everything again. Delete the folder to force fresh runs.
+Run cache (:class:`netsim.casestudy.RunCache`, :func:`run_cache`): each point's row is kept in
+``<out>/runs/<code>/<engine>-<scenario hash>.json`` (not in git): the scenario hash of the point's run (the
+scenario, its overrides and seed) names the row, ``<code>`` is a fingerprint of the cart's numeric modules
+(:data:`NUMERIC_MODULES`), so a change there runs everything again. Only runs that ended ``ok`` are kept.
+Delete the folder to force fresh runs.
 """
 
 from __future__ import annotations
@@ -19,16 +21,14 @@ import logging
 import math
 import os
 import time
-from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from netsim.models.cart.cache import PointCache, code_hash
+from netsim.casestudy import Progress, RunCache, code_fingerprint, fmt as _fmt, run_all, scenario_key
+from netsim.casestudy import log_progress as _progress_logger
 from netsim.models.cart.claims import claims as make_claims
-from netsim.models.cart.claims import fmt as _fmt
 from netsim.models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool_sigma, pooling_difference
 from netsim.models.cart.metrics import STOP_WINDOW
 from netsim.lazy_import import lazy_module
@@ -38,13 +38,11 @@ from netsim.shipped import scenario_path
 pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["cart_report", "run_point", "fig2_points", "quant_points", "sensitivity_points", "instability_points",
-           "FRICTIONS", "SEEDS_INSTABILITY", "run_cache"]
+           "FRICTIONS", "SEEDS_INSTABILITY", "run_cache", "NUMERIC_MODULES"]
 
 log = logging.getLogger(__name__)
-#: Progress messages of the report (the CLI shows this logger at INFO level).
-progress_log = logging.getLogger("netsim.progress.cart")
-
-Progress = Callable[[int, int, str], None]
+#: The default progress of the report: one INFO line on ``netsim.progress.cart`` every ~10 % of the runs.
+log_progress = _progress_logger("netsim.progress.cart", "cart report")
 
 _ROOT = Path(__file__).resolve().parents[2]
 SCENARIO = scenario_path("cart")
@@ -97,9 +95,34 @@ def instability_points(seeds: tuple[int, ...] = SEEDS_INSTABILITY) -> list[dict[
     return [dict(controller=c, wc=80, q=6, vref=0.8, seed=s, friction="inband") for c in CONTROLLERS for s in seeds]
 
 
-def run_cache(folder: Path | None) -> PointCache:
-    """The run cache of the report's points in ``folder`` (``None``: none), keyed by this code's hash."""
-    return PointCache(folder, code_hash(SCENARIO, f"{DURATION_FIG2}/{DURATION_QUANT}/{CONTROL_DELAY_NS}"))
+#: The cart modules whose code decides a run's numbers (the run cache's code fingerprint).
+NUMERIC_MODULES = ("controllers.py", "dynamics.py", "encoding.py", "estimators.py", "friction.py", "jmap.py",
+                   "metrics.py", "plant.py", "programs.py", "sim.py", "tuning.py")
+
+
+def run_cache(folder: Path | None) -> RunCache:
+    """The run cache of the report's points in ``folder`` (``None``: none), for this code
+    (:data:`NUMERIC_MODULES` and the numpy engine's control delay)."""
+    here = Path(__file__).parent
+    return RunCache(folder, code_fingerprint([here / n for n in NUMERIC_MODULES], str(CONTROL_DELAY_NS)))
+
+
+def _overrides(point: dict[str, Any]) -> dict[str, Any]:
+    """The scenario overrides of a point (its seed is the run's seed)."""
+    duration = DURATION_FIG2 if point["vref"] >= 0.6 else DURATION_QUANT
+    label = point.get("friction", "inband")
+    if label not in FRICTIONS:
+        raise ValueError(f"unknown friction label '{label}'; use one of {', '.join(FRICTIONS)}")
+    ov = {f"{CTRL}.controller": point["controller"], f"{CTRL}.wc": point["wc"], f"{CTRL}.vref": point["vref"],
+          f"{ISR}.q": point["q"], "duration": f"{duration} s"}
+    if FRICTIONS[label]:
+        ov["plant.params.friction"] = dict(FRICTIONS[label])
+    return ov
+
+
+def cache_key(point: dict[str, Any], engine: str) -> str:
+    """A point's run-cache key: the engine and the scenario hash of its run."""
+    return f"{engine}-{scenario_key(SCENARIO, _overrides(point), point['seed'])}"
 
 
 def run_point(point: dict[str, Any], engine: str = "netsim") -> dict[str, Any]:
@@ -112,12 +135,7 @@ def run_point(point: dict[str, Any], engine: str = "netsim") -> dict[str, Any]:
 
 
 def _run_point(point: dict[str, Any], engine: str) -> dict[str, Any]:
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    duration = DURATION_FIG2 if point["vref"] >= 0.6 else DURATION_QUANT
-    label = point.get("friction", "inband")
-    if label not in FRICTIONS:
-        raise ValueError(f"unknown friction label '{label}'; use one of {', '.join(FRICTIONS)}")
-    friction = FRICTIONS[label]
+    ov = _overrides(point)
     if engine == "numpy":
         from netsim.models.cart.controllers import make_controller
         from netsim.models.cart.encoding import Quantizer
@@ -125,8 +143,9 @@ def _run_point(point: dict[str, Any], engine: str) -> dict[str, Any]:
         from netsim.models.cart.metrics import cart_metrics
         from netsim.models.cart.sim import simulate
 
+        duration = DURATION_FIG2 if point["vref"] >= 0.6 else DURATION_QUANT
         ctrl = make_controller(point["controller"], point["wc"], Quantizer.from_bits(point["q"], rounding="floor"))
-        fp = FrictionParams.model_validate(friction or {})
+        fp = FrictionParams.model_validate(ov.get("plant.params.friction", {}))
         run = simulate(ctrl, Friction.draw(fp, seed=point["seed"]), vref=point["vref"], q=point["q"],
                        duration=duration, tail=duration, delay_ns=CONTROL_DELAY_NS, rounding="floor")
         m = cart_metrics(run.t, run.p, run.v, run.u, point["vref"], v_hat=run.v_hat, edge_times=run.edge_times,
@@ -134,50 +153,38 @@ def _run_point(point: dict[str, Any], engine: str) -> dict[str, Any]:
         return {**point, **m, "status": "ok"}
     from netsim.runner import run
 
-    ov = {f"{CTRL}.controller": point["controller"], f"{CTRL}.wc": point["wc"], f"{CTRL}.vref": point["vref"],
-          f"{ISR}.q": point["q"], "duration": f"{duration} s"}
-    if friction:
-        ov["plant.params.friction"] = dict(friction)
     res = run(str(SCENARIO), write=False, seed=point["seed"], overrides=ov)
     m = {k[5:]: float(v) for k, v in res.metrics.items() if k.startswith("cart.")}
     m["cpu_utilization"] = float(res.metrics.get("cpu.cart.utilization", math.nan))
     return {**point, **m, "status": res.status}
 
 
-def log_progress(done: int, total: int, what: str) -> None:
-    """The default progress callback: one INFO line on ``netsim.progress.cart`` every ~10 % of the runs."""
-    step = max(1, total // 10)
-    if done == total or done % step == 0:
-        progress_log.info("cart report: %s: %d/%d runs", what, done, total)
+def _run_pair(args: tuple[dict[str, Any], str]) -> dict[str, Any]:
+    return run_point(*args)
 
 
 def _run_all(points: list[dict[str, Any]], engine: str, workers: int | None, progress: Progress | None = None,
-             what: str = "runs", cache: PointCache | None = None) -> pd.DataFrame:
-    """Run ``points`` (those not in ``cache``); one row per point, in the order of ``points``."""
-    found = {i: cache.get(p, engine) for i, p in enumerate(points)} if cache is not None else {}
-    todo = [i for i in range(len(points)) if found.get(i) is None]
-    rows: dict[int, dict[str, Any]] = {i: r for i, r in found.items() if r is not None}
-    if cache is not None:
-        cache.reused += len(rows)
-    workers = workers or max(1, min(len(todo), os.cpu_count() or 1))
-    if workers <= 1 or not todo:
-        it = (run_point(points[i], engine) for i in todo)
-        pool = None
-    else:
-        pool = ProcessPoolExecutor(max_workers=workers)
-        it = pool.map(run_point, [points[i] for i in todo], [engine] * len(todo), chunksize=2)
-    try:
-        for i, row in zip(todo, it):
+             what: str = "runs", cache: RunCache | None = None) -> pd.DataFrame:
+    """Run ``points`` (those not in ``cache``) on one pool; one row per point, in the order of ``points``."""
+    keys = [cache_key(p, engine) for p in points] if cache is not None and cache.folder else []
+    rows: dict[int, dict[str, Any]] = {}
+    for i, key in enumerate(keys):
+        row = cache.get(key) if cache is not None else None
+        if row is not None:
             rows[i] = row
-            if cache is not None and row.get("status") == "ok":  # a failed run is run again next time
-                cache.put(points[i], engine, row)
-            if progress is not None:
-                progress(len(rows), len(points), what)
-    finally:
-        if pool is not None:
-            pool.shutdown()
-        if cache is not None and todo:
-            cache.save()
+    todo = [i for i in range(len(points)) if i not in rows]
+
+    def keep(j: int, row: dict[str, Any]) -> None:
+        rows[todo[j]] = row
+        if keys and row.get("status") == "ok":  # a failed run is run again next time
+            cache.put(keys[todo[j]], row)
+
+    def report(done: int, total: int, label: str) -> None:
+        if progress is not None:
+            progress(len(points) - total + done, len(points), label)
+
+    run_all(_run_pair, [(points[i], engine) for i in todo], workers=workers, progress=report, what=what,
+            chunksize=2, each=keep)
     if progress is not None and not todo and points:
         progress(len(points), len(points), what)
     return pd.DataFrame([rows[i] for i in range(len(points))])

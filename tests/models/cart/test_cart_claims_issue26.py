@@ -9,8 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from netsim.models.cart.claims import OSC_THRESHOLD, claims, ev_ranking, fmt, pool_sigma
-from netsim.models.cart.cache import PointCache, code_hash
-from netsim.models.cart.report import CONTROLLERS, _run_all, instability_points
+from netsim.models.cart.report import CONTROLLERS, _run_all, cache_key, instability_points, run_cache
 
 REPORT = Path(__file__).resolve().parents[3] / "reports" / "cart"
 WCS = (5, 10, 20, 40, 80)
@@ -137,27 +136,26 @@ def test_committed_report_words_the_friction_as_tuned_to_the_fig1_caption():
 
 def test_run_cache_reuses_rows_of_the_same_points_and_code(tmp_path):
     pts = instability_points((1, 2))[:3]
-    cache = PointCache(tmp_path, "c0de")
+    cache = run_cache(tmp_path)
     for i, p in enumerate(pts):
-        cache.put(p, "netsim", {**p, "Ev": float(i), "cpu_s": 0.0, "status": "ok"})
-    cache.save()
-    again = PointCache(tmp_path, "c0de")
+        cache.put(cache_key(p, "netsim"), {**p, "Ev": float(i), "cpu_s": 0.0, "status": "ok"})
+    again = run_cache(tmp_path)
     # every point cached: nothing runs (run_point would take seconds), rows in the order of the points
     df = _run_all(pts, "netsim", 1, cache=again)
     assert df.Ev.tolist() == [0.0, 1.0, 2.0] and again.reused == 3
-    assert again.get(pts[0], "numpy") is None  # another engine is another key
-    assert again.path == tmp_path / "points_c0de.pkl"
-    assert PointCache(tmp_path, "other").get(pts[0], "netsim") is None  # other code: nothing reused
-    assert PointCache(None, "c0de").get(pts[0], "netsim") is None
+    assert again.get(cache_key(pts[0], "numpy")) is None  # another engine is another key
+    assert run_cache(None).get(cache_key(pts[0], "netsim")) is None
 
 
-def test_code_hash_changes_with_the_scenario_and_the_extra_key(tmp_path):
-    a, b = tmp_path / "a.yaml", tmp_path / "b.yaml"
-    a.write_text("duration: 1 s\n")
-    b.write_text("duration: 2 s\n")
-    assert code_hash(a) == code_hash(a) and len(code_hash(a)) == 12
-    assert code_hash(a) != code_hash(b)
-    assert code_hash(a, "4.0") != code_hash(a, "3.2")
+def test_cache_key_is_the_scenario_hash_of_the_points_run():
+    from netsim.models.cart.report import SCENARIO, _overrides
+    from netsim.scenario import load_scenario, scenario_hash
+
+    p = instability_points((2,))[0]
+    # the hash the runner writes into meta.json for this run: its overrides and seed applied to cart.yaml
+    want = scenario_hash(load_scenario(SCENARIO, overrides={**_overrides(p), "seed": 2}))
+    assert cache_key(p, "netsim") == f"netsim-{want}"
+    assert cache_key({**p, "wc": 40}, "netsim") != cache_key(p, "netsim")
 
 
 def test_run_cache_keeps_only_runs_that_ended_ok(tmp_path, monkeypatch):
@@ -169,8 +167,8 @@ def test_run_cache_keeps_only_runs_that_ended_ok(tmp_path, monkeypatch):
         return {**point, "Ev": 1.0, "cpu_s": 0.0, "status": "ok" if point is pts[0] else "error"}
 
     monkeypatch.setattr(rep, "run_point", fake_run_point)
-    cache = PointCache(tmp_path, "c0de")
+    cache = run_cache(tmp_path)
     df = _run_all(pts, "netsim", 1, cache=cache)
     assert df.status.tolist() == ["ok", "error"]
-    again = PointCache(tmp_path, "c0de")
-    assert again.get(pts[0], "netsim") is not None and again.get(pts[1], "netsim") is None
+    again = run_cache(tmp_path)
+    assert again.get(cache_key(pts[0], "netsim")) is not None and again.get(cache_key(pts[1], "netsim")) is None
