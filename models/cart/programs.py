@@ -95,11 +95,11 @@ class CartEncoderIsr:
     def _register_load(ctx: Any, base: Any) -> None:
         """The ISR's runs at every tick as a periodic load of ``latency + execution`` (exact mode)."""
         ex = ctx.execution
-        if ex is not None and ex.kind != "constant":
+        if ex is not None and ex.const is None:
             raise BuildError(f"handler '{ctx.task}': isr_load needs a constant execution time (got {ex!r}); give "
                              "a constant, or use mode: polling with a timer trigger, or isr_load: false")
         latency = int(getattr(ctx.spec, "latency", 0) or 0)
-        per_tick = latency + (0 if ex is None else int(ex.upper_bound))
+        per_tick = latency + (0 if ex is None else int(ex.const))
         if per_tick <= 0:
             return  # an ISR that takes no time: nothing to account
         if per_tick >= base.tick_ns:

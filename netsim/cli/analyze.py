@@ -43,7 +43,6 @@ from netsim.cli.analyze_table import COLUMNS, NS
 from netsim.cli.analyze_table import jobs_of as _jobs_of
 from netsim.cli.analyze_table import ms as _ms
 from netsim.cli.analyze_table import row as _row
-from netsim.scenario.schema_task import upper_bound_ns
 
 __all__ = ["COLUMNS", "analyze_run"]
 
@@ -52,21 +51,11 @@ def _wcet_ns(task: Any) -> int | None:
     if getattr(task, "wcet", None) is not None:
         base = int(task.wcet)
     else:
-        ex = task.execution
-        if ex is None:
-            base = 0
-        elif isinstance(ex, int):
-            base = int(ex)
-        elif getattr(ex, "dist", "") == "constant":
-            base = int(ex.value)
-        elif getattr(ex, "dist", "") == "uniform":
-            base = int(ex.high)
-        elif getattr(ex, "dist", "") == "empirical":
-            base = int(max(ex.values))
-        elif getattr(ex, "dist", "") == "normal" and getattr(ex, "max", None) is not None:
-            base = int(ex.max)
-        else:
+        ex = task.execution_time()
+        bound = 0 if ex is None else ex.upper_bound()
+        if bound is None:
             return None
+        base = int(bound)
     after = task.params.get("after_send") if getattr(task, "program", "") == "sampler" else None
     if after:
         from netsim.timebase import parse_time
@@ -133,7 +122,7 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
             if t.release_kind == "sporadic" and t.min_interarrival:
                 period = int(t.min_interarrival)
                 notes[t.name] = f"sporadic: T = min_interarrival ({_ms(period * NS):g} ms)"
-            jitter = upper_bound_ns(t.release_jitter)
+            jitter = 0 if t.release_jitter is None else t.release_jitter.upper_bound()
             if jitter is None:
                 skipped.append((t.name, "release jitter unbounded (exponential, or normal without max): no bound"))
                 continue

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from netsim.errors import LivelockError, SimulationError
 from netsim.kernel.events import NORMAL, schedule_call
+from netsim.distributions import Constant
 from netsim.kernel.exectime import ExecTime
 from netsim.kernel.job import Job
 from netsim.kernel.requests import EXECUTE, Op, Request
@@ -121,7 +122,7 @@ class Interpreter:
             if op == _EXECUTE:  # inline: one per CPU segment, the hottest request
                 d = req.a
                 if type(d) is not int:
-                    d = d.const if type(d) is ExecTime and d.const is not None else self._duration(job, d)
+                    d = d.value if type(d) is Constant else self._duration(job, d)
                 elif d < 0:
                     raise SimulationError(f"node '{self.name}', task '{job.task_name}': execute({d}) is negative")
                 if d:

@@ -313,18 +313,6 @@ def _recording_write(recorder: Any, name: str, write: Callable[[int, Any], None]
     return recorded_write
 
 
-def _exec_time(spec: Any, path: str) -> Any:
-    raw = spec.execution_spec()
-    if raw is None:
-        return None
-    from netsim.kernel import ExecTime
-
-    try:
-        return ExecTime.from_spec(raw)
-    except ConfigError as exc:
-        raise BuildError(exc.message, path=f"{path}.execution") from None
-
-
 def _program(spec: Any, ctx: Any, path: str) -> Any:
     cls = spec.plugin()
     params = spec.validated_params()
@@ -352,7 +340,7 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
 
     def body(spec: Any, kernel: Any, node_name: str, path: str, period: int | None) -> Any:
         ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=spec.name,
-                             execution=_exec_time(spec, path), signals=signals, scenario=scenario,
+                             execution=spec.execution_time(), signals=signals, scenario=scenario,
                              period=period, spec=spec)
         made = _program(spec, ctx, path)
         programs[f"{node_name}.{spec.name}"] = made

@@ -40,7 +40,7 @@ Public classes and their fields (times in ns)
     release ("periodic" | "aperiodic" | "sporadic" | "on_message:<net>"; default periodic when a period is given),
     preemptible, wcet_handler, deadline_handler, release_jitter, min_interarrival, extra_interarrival,
     abort_on_miss``; properties ``release_kind``, ``release_network``;
-    method ``execution_spec()``. A program that sends on ``params.network`` names the receiver in
+    method ``execution_time()``. A program that sends on ``params.network`` names the receiver in
     ``params.to``: a node, or ``all`` to broadcast to every other node on that network (netsim's programs
     refuse a missing ``to``; it used to broadcast silently).
 ``HandlerSpec``
@@ -48,9 +48,9 @@ Public classes and their fields (times in ns)
 ``HandlerTrigger``
     exactly one of ``timer: TimerTrigger(period, start)``, ``on_message: str``,
     ``external: ExternalTrigger(min_interarrival)``; property ``kind``.
-``ConstantExec`` / ``UniformExec`` / ``NormalExec`` / ``EmpiricalExec``
-    execution-time distributions (``dist`` = constant | uniform | normal | empirical); an execution time
-    is either an ``int`` (constant ns) or one of these.
+``Execution``
+    an execution time: an ``int`` (constant ns) or a member of :mod:`netsim.distributions` (``dist`` =
+    constant | uniform | normal | exponential | shifted_gamma | empirical).
 ``NetworkSpec``
     ``type, nodes`` and ``params`` (the other keys of the YAML mapping; ``validated_params()`` includes
     ``nodes``).
@@ -94,7 +94,8 @@ from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema_integrator import IntegratorSpec
 from netsim.scenario.schema_sync import SyncSpec
 from netsim.scenario.schema_verdict import VerdictSpec
-from netsim.scenario.schema_task import SetPeriodRule, TimeDistribution, kernel_fields, without_unused_arrivals
+from netsim.scenario.schema_task import SetPeriodRule, TimeDistribution, without_unused_arrivals
+from netsim.distributions import DISTS, MEMBERS as DIST_MEMBERS, Distribution, dist_tag
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
 from netsim.kernel.task import TaskSpec as KernelTaskSpec
 from netsim.units import Duration, QuietDefaultsModel, StrictModel, Time
@@ -106,10 +107,6 @@ __all__ = [
     "IO_TYPES",
     "SpecModel",
     "PluginSpec",
-    "ConstantExec",
-    "UniformExec",
-    "NormalExec",
-    "EmpiricalExec",
     "Execution",
     "AdcChannel",
     "DacChannel",
@@ -134,7 +131,7 @@ __all__ = [
 NAME_PATTERN = r"^[A-Za-z0-9_-]+$"
 #: Prefix of the internal tags of discriminated unions (dropped from error paths).
 TAG_MARK = "§"
-EXEC_DISTS = ("constant", "uniform", "normal", "empirical")
+EXEC_DISTS = DISTS
 IO_TYPES = ("adc", "dac", "encoder")
 
 Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN)]
@@ -290,95 +287,35 @@ def _validate_params(plugin: Any, raw: dict[str, Any]) -> Any:
 
 
 # --------------------------------------------------------------------------------------------- execution
-class ConstantExec(SpecModel):
-    """A constant execution time: ``{dist: constant, value: 0.5 ms}`` (same as writing ``0.5 ms``)."""
-
-    dist: Literal["constant"]
-    value: Time
-
-
-class UniformExec(SpecModel):
-    """Uniformly distributed execution time in ``[low, high]``."""
-
-    dist: Literal["uniform"]
-    low: Time
-    high: Time
-
-    @model_validator(mode="after")
-    def _order(self) -> UniformExec:
-        if self.low > self.high:
-            raise ValueError("low must not exceed high")
-        return self
-
-
-class NormalExec(SpecModel):
-    """Normally distributed execution time, clipped to ``[min, max]``."""
-
-    dist: Literal["normal"]
-    mean: Time
-    std: Time
-    min: Time = 0
-    max: Time | None = None
-
-    @model_validator(mode="after")
-    def _order(self) -> NormalExec:
-        if self.max is not None and self.max < self.min:
-            raise ValueError("max must not be below min")
-        return self
-
-
-class EmpiricalExec(SpecModel):
-    """Execution times drawn (uniformly, with replacement) from measured ``values``."""
-
-    dist: Literal["empirical"]
-    values: list[Time] = Field(min_length=1)
-
-
 def _exec_tag(value: Any) -> str | None:
-    if isinstance(value, dict):
-        dist = value.get("dist")
-        return f"{TAG_MARK}{dist}" if dist in EXEC_DISTS else None
-    if isinstance(value, SpecModel):
-        return f"{TAG_MARK}{getattr(value, 'dist', None)}"
     if isinstance(value, (str, int, float)) and not isinstance(value, bool):
         return f"{TAG_MARK}const"
-    return None
+    return dist_tag(value)
 
 
-#: An execution time: constant ns (from ``"0.5 ms"``) or a distribution model.
+#: An execution time: constant ns (from ``"0.5 ms"``; dumped as the time it is) or a member of netsim's one family
+#: of random times (:mod:`netsim.distributions`).
 Execution = Annotated[
-    Union[
-        Annotated[Time, Tag(f"{TAG_MARK}const")],
-        Annotated[ConstantExec, Tag(f"{TAG_MARK}constant")],
-        Annotated[UniformExec, Tag(f"{TAG_MARK}uniform")],
-        Annotated[NormalExec, Tag(f"{TAG_MARK}normal")],
-        Annotated[EmpiricalExec, Tag(f"{TAG_MARK}empirical")],
-    ],
+    Union[(Annotated[Time, Tag(f"{TAG_MARK}const")], *DIST_MEMBERS)],  # type: ignore[valid-type]
     Discriminator(_exec_tag, custom_error_type="execution_spec", custom_error_message="bad execution time"),
 ]
 
 
-def _exec_spec(execution: Any) -> Any:
-    """The execution time in the text form ``ExecTime.from_spec`` reads (``"0.5 ms"`` or a dict)."""
-    from netsim.timebase import format_time
-
-    if execution is None:
-        return None
-    if isinstance(execution, int):
-        return format_time(execution)
-    return execution.model_dump(mode="json")
+def _exec_time(execution: Any) -> Distribution | None:
+    """The execution time as the distribution the programs draw from (a constant for a bare time), or None."""
+    if execution is None or isinstance(execution, Distribution):
+        return execution
+    return Distribution.constant(execution)
 
 
 # --------------------------------------------------------------------------------------------- io
-#: An io channel's optional ``unit`` (text, e.g. ``rad``, ``V``): the unit of its value, on figure axes.
-ChannelUnit = Annotated[str | None, Field(min_length=1, max_length=40)]
-
-
 class _Channel(SpecModel, QuietDefaultsModel):
-    """An io channel: its ``unit`` is left out of the resolved scenario while unset, so a scenario without units
-    resolves (and hashes) as before."""
+    """An io channel: ``unit`` (optional text, e.g. ``rad``, ``V``) names its value's unit for figure axes; left
+    out of the resolved scenario while unset, so a scenario without units resolves (and hashes) as before."""
 
     _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"unit": None}
+
+    unit: str | None = Field(default=None, min_length=1, max_length=40)
 
 
 class AdcChannel(_Channel):
@@ -389,7 +326,6 @@ class AdcChannel(_Channel):
     noise_std: float = Field(default=0.0, ge=0)
     quant_step: float | None = Field(default=None, gt=0)
     saturation: Range | None = None
-    unit: ChannelUnit = None
 
 
 class DacChannel(_Channel):
@@ -399,7 +335,6 @@ class DacChannel(_Channel):
     input: PlantPort = 0
     saturation: Range | None = None
     resolution: float | None = Field(default=None, gt=0)
-    unit: ChannelUnit = None
 
 
 class EncoderChannel(_Channel):
@@ -410,7 +345,6 @@ class EncoderChannel(_Channel):
     step: float = Field(gt=0)
     tick: Duration
     mode: Literal["exact", "polling"] = "exact"
-    unit: ChannelUnit = None
 
 
 def _io_tag(value: Any) -> str | None:
@@ -579,7 +513,7 @@ class TaskSpec(PluginSpec):
             fields["period"] = None
         if self.release_kind != "sporadic":
             fields["min_interarrival"] = None
-        return KernelTaskSpec(**kernel_fields(fields))
+        return KernelTaskSpec(**fields)
 
     def plugin_name(self) -> str:
         return self.program
@@ -595,9 +529,9 @@ class TaskSpec(PluginSpec):
         kind, _, net = str(self.release).partition(":")
         return net if kind == "on_message" else None
 
-    def execution_spec(self) -> Any:
-        """``execution`` in the form ``ExecTime.from_spec`` reads (``"0.5 ms"`` or a dict), or None."""
-        return _exec_spec(self.execution)
+    def execution_time(self) -> Distribution | None:
+        """``execution`` as the distribution the task's program draws from (None when not given)."""
+        return _exec_time(self.execution)
 
 
 class TimerTrigger(SpecModel):
@@ -686,9 +620,9 @@ class HandlerSpec(PluginSpec):
         """The kernel's description of this handler (unchecked: ``Kernel.add_handler`` checks it)."""
         return KernelHandlerSpec(**{name: getattr(self, name) for name in _KHANDLER_FIELDS})
 
-    def execution_spec(self) -> Any:
-        """``execution`` in the form ``ExecTime.from_spec`` reads, or None."""
-        return _exec_spec(self.execution)
+    def execution_time(self) -> Distribution | None:
+        """``execution`` as the distribution the handler's program draws from (None when not given)."""
+        return _exec_time(self.execution)
 
 
 class NodeSpec(SpecModel):

@@ -9,7 +9,8 @@ import pytest
 
 from netsim import registry
 from netsim.scenario import check_scenario, load_scenario
-from netsim.scenario.schema import HandlerSpec, TaskSpec, UniformExec
+from netsim.distributions import Constant, Uniform
+from netsim.scenario.schema import HandlerSpec, TaskSpec
 from netsim.timebase import MS, US
 
 
@@ -24,7 +25,7 @@ def test_times_are_integer_nanoseconds_and_defaults_are_filled(base):
     assert sample.release == "periodic" and sample.release_kind == "periodic" and sample.release_network is None
     ctl = sc.nodes["controller"].tasks[0]
     assert ctl.release_kind == "on_message" and ctl.release_network == "bus" and ctl.period is None
-    assert isinstance(ctl.execution, UniformExec) and (ctl.execution.low, ctl.execution.high) == (400 * US, 600 * US)
+    assert isinstance(ctl.execution, Uniform) and (ctl.execution.low, ctl.execution.high) == (400 * US, 600 * US)
     assert sample.execution == 500 * US
     assert sc.duration == 1_000_000_000
 
@@ -36,11 +37,13 @@ def test_task_released_aperiodic_has_no_deadline(base):
     assert task.release == "aperiodic" and task.deadline is None
 
 
-def test_execution_spec_is_the_text_form_exectime_reads(base):
+def test_execution_time_is_the_validated_distribution_itself(base):
     sc = load_scenario(base())
-    assert sc.nodes["sensor"].tasks[0].execution_spec() == "500 us"
-    assert sc.nodes["controller"].tasks[0].execution_spec() == {"dist": "uniform", "low": "400 us", "high": "600 us"}
-    assert sc.nodes["actuator"].handlers[0].execution_spec() == "20 us"
+    assert sc.nodes["sensor"].tasks[0].execution_time() == Constant(value="500 us")  # a bare time: a constant
+    controller = sc.nodes["controller"].tasks[0]
+    assert controller.execution_time() is controller.execution  # no second parse of the YAML form
+    assert (controller.execution.low, controller.execution.high) == (400 * US, 600 * US)
+    assert sc.nodes["actuator"].handlers[0].execution_time() == Constant(value="20 us")
 
 
 @pytest.mark.parametrize(
@@ -49,7 +52,7 @@ def test_execution_spec_is_the_text_form_exectime_reads(base):
         ({"dist": "unifrom", "low": 1}, "nodes.sensor.tasks[0].execution.dist",
          "unknown distribution 'unifrom'; did you mean 'uniform'?"),
         ({"low": "1 ms"}, "nodes.sensor.tasks[0].execution",
-         "missing required key 'dist' (one of constant, uniform, normal, empirical)"),
+         "missing required key 'dist' (one of constant, uniform, normal, exponential, shifted_gamma, empirical)"),
         ({"dist": "uniform", "low": "2 ms", "high": "1 ms"}, "nodes.sensor.tasks[0].execution",
          "low must not exceed high"),
         ({"dist": "normal", "mean": "1 ms", "std": "0.1 ms", "bound": 1}, "nodes.sensor.tasks[0].execution.bound",

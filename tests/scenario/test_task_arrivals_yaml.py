@@ -15,7 +15,8 @@ from netsim.metrics.runtime import _task_metrics
 from netsim.results.files import JOB_TYPES, read_table
 from netsim.results.tables import JOB_COLUMNS
 from netsim.scenario import check_scenario, load_scenario
-from netsim.scenario.schema_task import ExponentialTime, UniformTime
+from netsim.distributions import Exponential as ExponentialTime
+from netsim.distributions import Uniform as UniformTime
 from netsim.timebase import MS
 
 
@@ -42,7 +43,7 @@ def test_the_fields_are_read_with_units_and_defaults():
     assert a.release_kind == "sporadic" and a.min_interarrival == 7 * MS and a.deadline == 7 * MS
     assert isinstance(a.extra_interarrival, ExponentialTime) and a.extra_interarrival.mean == 3 * MS
     spec = a.kernel_spec()
-    assert spec.min_interarrival == 7 * MS and spec.extra_interarrival.kind == "exponential"
+    assert spec.min_interarrival == 7 * MS and spec.extra_interarrival.dist == "exponential"
     assert load_scenario(_raw(period="10 ms", release_jitter="1 ms")).nodes["cpu"].tasks[0].kernel_spec() \
         .release_jitter.const == MS  # a time is a constant jitter
 
