@@ -37,7 +37,7 @@ import time
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Executor, Future, wait
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator, Mapping
+from typing import TYPE_CHECKING, Any, Iterator, Mapping
 
 from netsim.errors import ConfigError
 from netsim.results.folder import SUMMARY_NAME, SWEEP_MARKER, SweepFolder, read_summary
@@ -46,6 +46,9 @@ from netsim.sweep.points import (PointFn, default_point_fn, metrics_point_fn, po
                                  verified_record, write_manifest)
 from netsim.sweep.spec import Point, Sweep, load_sweep
 from netsim.sweep.summary import write_summary
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 __all__ = ["SweepResult", "run_sweep", "ChunkPlanner", "SWEEP_MARKER"]
 
@@ -67,7 +70,7 @@ class SweepResult:
     out_dir
         The sweep's output folder.
     summary
-        ``summary.csv`` as a DataFrame.
+        ``summary.csv`` as a DataFrame (:func:`netsim.results.folder.read_summary`).
     n_runs, n_ok, n_failed, n_pending
         Runs in the sweep; finished ok; failed (error recorded); not run (interrupted).
     n_executed, n_resumed
@@ -84,7 +87,7 @@ class SweepResult:
 
     name: str
     out_dir: Path
-    summary: Any
+    summary: pd.DataFrame
     n_runs: int
     n_ok: int
     n_failed: int
@@ -101,6 +104,11 @@ class SweepResult:
     def summary_path(self) -> Path:
         """``<out_dir>/summary.csv``."""
         return self.out_dir / SUMMARY_NAME
+
+    @property
+    def folder(self) -> SweepFolder:
+        """The sweep folder, to read its runs' folders (:meth:`netsim.results.folder.SweepFolder.runs`)."""
+        return SweepFolder.open(self.out_dir)
 
     def describe(self) -> str:
         """One paragraph for the terminal: counts, where the summary is, and the optimum."""

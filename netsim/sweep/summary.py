@@ -7,6 +7,9 @@ processes and machines); a metric a run did not produce is an empty cell; non-sc
 written as compact JSON. ``status`` is the run's own (``ok``, ``diverged at t = ...``, ``unstable at t = ...``,
 ``error``, ``pending``: :mod:`netsim.status`); ``error`` is the one-line form of the run's error or of why it is
 not ok (:func:`one_line`: one row is one line of the file); the full text is in the run's ``point.json``.
+
+This module writes the file; :func:`netsim.results.folder.read_summary` is the one place that reads it back
+(:class:`netsim.results.folder.SweepFolder`).
 """
 
 from __future__ import annotations
@@ -16,13 +19,17 @@ import io
 import math
 import os
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Mapping, Sequence
 
 from netsim.sweep.spec import canonical_json
 
+if TYPE_CHECKING:
+    import pandas as pd
+
 __all__ = ["format_value", "one_line", "require_results", "summary_text", "write_summary", "TRAILING_COLUMNS"]
 
-#: Columns after the metrics.
+#: Columns after the metrics (the reader keeps ``status``, ``error`` and ``folder`` as text:
+#: :data:`netsim.results.folder.SUMMARY_TEXT_COLUMNS`).
 TRAILING_COLUMNS = ("status", "seed", "error", "folder")
 
 
@@ -85,7 +92,7 @@ def write_summary(path: Path, factors: Sequence[str], rows: Iterable[Mapping[str
     return path
 
 
-def require_results(summary: Any, name: str) -> Any:
+def require_results(summary: pd.DataFrame, name: str) -> pd.DataFrame:
     """``summary`` (a sweep's summary table) when every run gave a result: ``ok``, ``diverged`` or ``unstable``.
 
     A report that counts a diverged or unstable run as a lost loop must not count a run that gave no result
