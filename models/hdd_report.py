@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from netsim.casestudy import Quotes, fmt
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
@@ -205,27 +206,8 @@ LABEL_PATTERNS = (
 )
 
 
-class Quoted:
-    """The numbers the prose quotes: ``key -> (value, text, source)``."""
-
-    def __init__(self) -> None:
-        self.rows: dict[str, tuple[Any, str, str]] = {}
-
-    def add(self, key: str, value: Any, fmt: str = ".3g", source: str = "") -> None:
-        if isinstance(value, str):
-            text = value
-        elif fmt == "d":
-            text = str(int(round(float(value))))
-        else:
-            text = format(float(value), fmt)
-        self.rows[key] = (value, text, source)
-
-    def texts(self) -> dict[str, str]:
-        return {k: t for k, (_v, t, _s) in self.rows.items()}
-
-    def frame(self) -> pd.DataFrame:
-        return pd.DataFrame([(k, v if not isinstance(v, str) else np.nan, t, s) for k, (v, t, s) in self.rows.items()],
-                            columns=["key", "value", "text", "source"])
+#: The quoted numbers of the prose (``key, value, text, source``; a value without a format prints ``.3g``).
+Quoted = Quotes
 
 
 def render(key: str, texts: dict[str, str]) -> str:
@@ -289,7 +271,7 @@ def _run_gpi(workers: int | None, sweep: str = "hdd_gpi_sweep", folder: str = "g
 
     res = run_sweep(shipped_scenarios() / f"{sweep}.yaml", out=Path("reports") / "hdd" / "runs" / folder,
                     workers=workers, progress=False)
-    summ = pd.read_csv(Path(res.out_dir) / "summary.csv")
+    summ = res.summary
     keep = [c for c in ("sigma_s", "sigma_c", "et.GPI", "et.Uc", "et.Ua", "et.NE", "et.Nsc", "et.Nca", "et.N_max",
                         "et.played_past_packet", "et.u_gap_max", "status") if c in summ.columns]
     return summ[keep], {"wall_s": res.wall_time_s, "workers": workers, "executed": res.n_executed,
@@ -509,10 +491,9 @@ def _reading(r: Any) -> str:
     return v if isinstance(v, str) else ""
 
 
-def _fmt(v) -> str:
-    if isinstance(v, (float, np.floating)):
-        return "" if np.isnan(v) else f"{v:.3g}"
-    return str(v)
+def _fmt(v: Any) -> str:
+    """A table cell: a float with 3 significant digits (empty when NaN), anything else as it prints."""
+    return fmt(v, missing="") if isinstance(v, (float, np.floating)) else str(v)
 
 
 def _md_table(df: pd.DataFrame, cols: list[str]) -> list[str]:
