@@ -1,7 +1,8 @@
 """CSV tables (and figures) from a run folder, a batch folder or a sweep folder: ``netsim report DIR``.
 
-:func:`report` reads the run folders (``metrics.csv``, ``jobs.csv``, ``messages.csv``, ``meta.json``) and
-returns, and writes as CSV into ``out`` (default ``<DIR>/report/``):
+:func:`report` reads the run folders (``metrics.csv``, ``jobs.csv``, ``messages.csv``, ``meta.json``) through
+:mod:`netsim.results.folder` (an incomplete run folder, or a sweep point changed since the sweep wrote it, is
+refused in one line) and returns, and writes as CSV into ``out`` (default ``<DIR>/report/``):
 
 ``utilization``
     One row per case (run, batch entry or sweep run): ``case`` (sweep runs: ``index``, ``replicate`` and
@@ -51,7 +52,7 @@ import pandas as pd
 from netsim.errors import ConfigError
 from netsim.lazy_import import callable_module as _callable_module
 from netsim.metrics.runtime import job_outcome_counts
-from netsim.results.folder import RunFolder, SweepFolder, run_folders_in
+from netsim.results.folder import SWEEP_MARKER, RunFolder, SweepFolder, run_folders_in
 
 __all__ = [
     "report",
@@ -116,7 +117,7 @@ def find_runs(folder: Path) -> tuple[str, list[Case]]:
 
 def _find(folder: Path) -> tuple[str, list[Case], SweepFolder | None]:
     """:func:`find_runs`, and the sweep folder when ``folder`` holds a sweep."""
-    if SweepFolder.holds_sweep(folder):
+    if (folder / SWEEP_MARKER).is_file():  # a sweep folder; without summary.csv it is refused: resume the sweep
         sweep = SweepFolder.open(folder)
         sweep.verify()
         runs: list[Case] = [(r.folder.path.name, r.folder, {"index": r.index, "replicate": r.replicate, **r.values})

@@ -19,6 +19,7 @@ import yaml
 from netsim.errors import ConfigError
 from netsim.results import RunResult
 from netsim.results.folder import FolderRefused, RunFolder, SweepFolder, read_summary
+from netsim.sweep.run import SweepResult
 
 REPO = Path(__file__).resolve().parents[2]
 PID = "nodes.computer.tasks[0].params"
@@ -40,15 +41,19 @@ def real_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[RunResult, Path]
 
 
 @pytest.fixture(scope="module")
-def real_sweep(tmp_path_factory: pytest.TempPathFactory) -> Path:
+def swept(tmp_path_factory: pytest.TempPathFactory) -> SweepResult:
     from netsim.sweep import run_sweep
 
     folder = tmp_path_factory.mktemp("sweep")
     (folder / "base.yaml").write_text(yaml.safe_dump(_base(), sort_keys=False))
     (folder / "s.yaml").write_text(f"sweep: reader\nbase: base.yaml\nseed: 5\n"
                                    f"factors:\n  K: {{paths: ['{PID}.K'], values: [0.5, 2.0]}}\n")
-    run_sweep(folder / "s.yaml", out=folder / "out", workers=1, progress=False)
-    return folder / "out"
+    return run_sweep(folder / "s.yaml", out=folder / "out", workers=1, progress=False)
+
+
+@pytest.fixture(scope="module")
+def real_sweep(swept: SweepResult) -> Path:
+    return swept.out_dir
 
 
 # ---------------------------------------------------------------------------------------------- run folders
@@ -144,6 +149,11 @@ def test_a_sweep_point_changed_after_the_sweep_is_refused(real_sweep: Path, tmp_
         RunFolder.open(point)
 
 
+def test_a_sweep_result_reads_its_folder_through_the_reader(swept: SweepResult) -> None:
+    pd.testing.assert_frame_equal(swept.summary, swept.folder.summary())
+    assert [r.folder.path for r in swept.folder.runs()] == [swept.out_dir / f for f in swept.summary["folder"]]
+
+
 def test_a_folder_that_is_no_sweep_or_an_unfinished_one_is_refused(real_sweep: Path, tmp_path: Path) -> None:
     (tmp_path / "none").mkdir()
     with pytest.raises(FolderRefused, match="is not a sweep folder"):
@@ -166,3 +176,12 @@ def test_summary_metric_columns_holding_nan_are_numbers_and_empty_text_is_empty(
     assert frame["y.ISE"].dtype == np.float64 and math.isnan(frame["y.ISE"][0]) and frame["y.ISE"][1] == 0.25
     assert list(frame["error"]) == ["", "ValueError: x"] and list(frame["law"]) == ["pid", "lqr"]
     assert list(frame["index"]) == [0, 1] and frame["index"].dtype == np.int64
+
+
+def test_report_on_a_sweep_without_its_summary_says_to_resume(real_sweep: Path, tmp_path: Path) -> None:
+    from netsim.report import report
+
+    path = _copy(real_sweep, tmp_path / "cut")
+    (path / "summary.csv").unlink()  # the sweep was killed before it wrote summary.csv
+    with pytest.raises(ConfigError, match="has no summary.csv .*it resumes"):  # was: 'is not a run folder'
+        report(path, out=tmp_path / "r", plots=False)
