@@ -34,12 +34,13 @@ import logging
 import math
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from netsim.casestudy import Quotes, fmt as _fmt, log_progress, run_all as _run_pool
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
@@ -202,25 +203,9 @@ def timing_cases() -> list[dict[str, Any]]:
 
 
 def run_all(cases: list[dict[str, Any]], workers: int | None = None) -> pd.DataFrame:
-    """Run the cases on a process pool (``workers``: default one per CPU) and return one row per run."""
-    workers = workers or os.cpu_count() or 1
-    rows = []
-    t0 = time.perf_counter()
-    step = max(1, len(cases) // 10)
-
-    def done(i: int) -> None:
-        if (i + 1) % step == 0 or i + 1 == len(cases):
-            log.info("pendulum: %d of %d runs (%.0f s)", i + 1, len(cases), time.perf_counter() - t0)
-
-    if workers == 1:
-        for i, c in enumerate(cases):
-            rows.append(run_case(c))
-            done(i)
-    else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            for i, row in enumerate(pool.map(run_case, cases)):
-                rows.append(row)
-                done(i)
+    """Run the cases on one process pool (``workers``: default one per CPU) and return one row per run."""
+    rows = _run_pool(run_case, cases, workers=workers or os.cpu_count() or 1,
+                     progress=log_progress(log, "pendulum"), what="single runs")
     return pd.DataFrame(rows)
 
 
@@ -472,14 +457,18 @@ def render(key: str, values: dict[str, str]) -> str:
 
 
 def fmt(x: float, digits: int = 3) -> str:
-    """A number with ``digits`` significant digits (plain notation where reasonable)."""
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return str(x)
-    if x == 0:
-        return "0"
-    if abs(x) >= 1e-3 and abs(x) < 1e5:
-        return f"{x:.{digits}g}"
-    return f"{x:.{digits - 1}e}"
+    """A number with ``digits`` significant digits (exponent notation outside 1e-3 to 1e5)."""
+    return _fmt(x, digits, sci=True)
+
+
+def _quoter() -> tuple[Quotes, Callable[..., None]]:
+    """A :class:`~netsim.casestudy.Quotes` and its ``add(key, value, source, text=None)`` (values as floats)."""
+    q = Quotes(sci=True)
+
+    def add(key: str, value: float, source: str, text: str | None = None) -> None:
+        q.add(key, float(value), source=source, text=text)
+
+    return q, add
 
 
 def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.DataFrame,
@@ -490,10 +479,7 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     from netsim.control import KalmanFilter, LuenbergerObserver
 
     d = designs()
-    q: list[tuple[str, float, str, str]] = []
-
-    def add(key: str, value: float, source: str, text: str | None = None) -> None:
-        q.append((key, float(value), text if text is not None else fmt(float(value)), source))
+    q, add = _quoter()
 
     ev = np.linalg.eigvals(d.lin.A)
     add("unstable_pole", float(np.max(ev.real)), "model: eig(A)")
@@ -534,14 +520,14 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     add("n_seeds", len(SEEDS), "report: SEEDS", str(len(SEEDS)))
     lq = table[table.controller == "lqr"].set_index("estimator")["lqg_cost_per_step"]
     best = str(lq.idxmin())
-    q.append(("best_lqg", 0.0, best, "table: argmin lqg_cost_per_step (lqr)"))
+    add("best_lqg", 0.0, "table: argmin lqg_cost_per_step (lqr)", best)
     add("best_lqg_val", lq.min(), "table")
     add("kal_lqg", lq["kalman"], "table:kalman/lqr")
     add("lu_lqg", lq["luenberger"], "table:luenberger/lqr")
     add("fd_lqg", lq["fd_raw"], "table:fd_raw/lqr")
     lq1 = table[table.controller == "lqr"].set_index("estimator")["lqg_cost_after_1s"]
     best1 = str(lq1.idxmin())
-    q.append(("best_lqg1", 0.0, best1, "table: argmin lqg_cost_after_1s (lqr)"))
+    add("best_lqg1", 0.0, "table: argmin lqg_cost_after_1s (lqr)", best1)
     add("best_lqg1_val", lq1.min(), "table")
     add("kal_lqg1", lq1["kalman"], "table:kalman/lqr")
     add("lu_lqg1", lq1["luenberger"], "table:luenberger/lqr")
@@ -562,9 +548,9 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
         add(f"dn_{tag}_ok", dt.loc[e, "noise_stable_up_to_ms"], f"delay:{e} (pendulum_delay_sweep)")
         add(f"dn_{tag}_fail", dt.loc[e, "noise_fails_at_ms"], f"delay:{e} (pendulum_delay_sweep)")
     inside = (dl.noise_stable_up_to_ms <= dl.lqg_margin_ms) & (dl.lqg_margin_ms < dl.noise_fails_at_ms)
-    q.append(("dn_bracket", float(inside.sum()), "each prediction lies in its bracket" if inside.all() else
-              f"the prediction lies in its bracket for {int(inside.sum())} of {len(dl)} estimators",
-              "delay: noise_stable_up_to_ms <= lqg_margin_ms < noise_fails_at_ms"))
+    add("dn_bracket", float(inside.sum()), "delay: noise_stable_up_to_ms <= lqg_margin_ms < noise_fails_at_ms",
+        "each prediction lies in its bracket" if inside.all() else
+        f"the prediction lies in its bracket for {int(inside.sum())} of {len(dl)} estimators")
     from netsim.models.pendulum.report_sweeps import CI_LEVEL
 
     add("ci_pct", 100 * CI_LEVEL, "report_sweeps: CI_LEVEL", f"{100 * CI_LEVEL:g}")
@@ -586,7 +572,7 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     add("dc_inside", pts.analytic_inside_ci.sum(), "delay_cost: analytic_inside_ci", str(int(pts.analytic_inside_ci.sum())))
     worst = pts.loc[pts.rel_diff.abs().idxmax()]
     add("dc_max_rel", 100 * abs(worst.rel_diff), "delay_cost: max |rel_diff|", f"{100 * abs(worst.rel_diff):.2g}")
-    q.append(("dc_max_rel_where", 0.0, f"{worst.estimator} at {fmt(worst.total_delay_ms)} ms", "delay_cost: argmax |rel_diff|"))
+    add("dc_max_rel_where", 0.0, "delay_cost: argmax |rel_diff|", f"{worst.estimator} at {fmt(worst.total_delay_ms)} ms")
     # the orderings the study rests on, with their measured margins
     hsi = hs.set_index("estimator")
     add("ord_noise_lp_lu", hsi.loc["fd_lowpass", "alpha_dot_sim"] / hsi.loc["luenberger", "alpha_dot_sim"], "hold_still")
@@ -601,13 +587,13 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     add("ord_lqg1_margin", others.lqg_cost_after_1s_min.min() / lqr_t.loc[best1, "lqg_cost_after_1s_max"],
         "table: lqg_cost_after_1s_min (next) / lqg_cost_after_1s_max (lowest)")
     ana = lqr_t["lqg_cost_analytic"].sort_values()
-    q.append(("best_ana", 0.0, str(ana.index[0]), "table: argmin lqg_cost_analytic (lqr)"))
+    add("best_ana", 0.0, "table: argmin lqg_cost_analytic (lqr)", str(ana.index[0]))
     add("best_ana_val", ana.iloc[0], "table")
     add("ord_ana_margin", ana.iloc[1] / ana.iloc[0], "table: second lowest / lowest lqg_cost_analytic")
     for tag, e in (("kal", "kalman"), ("lu", "luenberger"), ("fd", "fd_raw")):
         add(f"{tag}_ana", lqr_t.loc[e, "lqg_cost_analytic"], f"table:{e}/lqr lqg_cost_analytic")
     st0 = d0c.sort_values("sim_cost")
-    q.append(("best_stat", 0.0, str(st0.index[0]), f"delay_cost: argmin sim_cost at {dmin} ms"))
+    add("best_stat", 0.0, f"delay_cost: argmin sim_cost at {dmin} ms", str(st0.index[0]))
     add("ord_stat_margin", st0.sim_ci_low.iloc[1] / st0.sim_ci_high.iloc[0], "delay_cost: next ci_low / lowest ci_high")
     cl_lqr1 = runs[(runs.kind == "closed_loop") & (runs.seed == 1)].set_index("estimator")
     for tag, e in (("kal", "kalman"), ("lu", "luenberger")):
@@ -653,8 +639,8 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
                          ("rho", "error_radius"), ("tau", "error_tau_ms"), ("cost", "lqg_cost_per_step"),
                          ("cost1", "lqg_cost_after_1s")):
             add(f"sw_{tag}_{key}", g[col].mean(), f"tuning: Qn/Rn = {ratio:g}, mean over its grid points")
-    q.append(("sw_best_cost", 0.0, str(k.loc[k.lqg_cost_per_step.idxmin(), "setting"]), "tuning: argmin lqg_cost_per_step"))
-    q.append(("sw_best_cost1", 0.0, str(k.loc[k.lqg_cost_after_1s.idxmin(), "setting"]), "tuning: argmin lqg_cost_after_1s"))
+    add("sw_best_cost", 0.0, "tuning: argmin lqg_cost_per_step", str(k.loc[k.lqg_cost_per_step.idxmin(), "setting"]))
+    add("sw_best_cost1", 0.0, "tuning: argmin lqg_cost_after_1s", str(k.loc[k.lqg_cost_after_1s.idxmin(), "setting"]))
     ps = sw[sw.sweep == "poles"]
     for tag, row in (("pf", ps.loc[ps.error_radius.idxmin()]), ("ps", ps.loc[ps.error_radius.idxmax()])):
         for key, col in (("noise", "alpha_dot_noise_lyap"), ("u", "u_std"), ("conv", "est_converged_s"),
@@ -665,7 +651,7 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     for tag, e in (("kal", "kalman"), ("lu", "luenberger"), ("fd", "fd_lowpass")):
         add(f"q_{tag}", qz.loc[e, "u_std"], f"quantised:{e}")
         add(f"q_{tag}_ref", qr.loc[e, "u_std"], f"closed_loop:{e} lqr seed 1")
-    return pd.DataFrame(q, columns=["key", "value", "text", "source"])
+    return q.frame()
 
 
 def _ms(text: str) -> float:
@@ -736,10 +722,7 @@ def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame)
     ``delay_cost.csv`` (the raw FD row)."""
     from netsim.models.pendulum.report_sweeps import noise_delay_margins
 
-    q: list[tuple[str, float, str, str]] = []
-
-    def add(key: str, value: float, source: str, text: str | None = None) -> None:
-        q.append((key, float(value), text if text is not None else fmt(float(value)), source))
+    q, add = _quoter()
 
     m = margins.set_index(["estimator", "estimation"])
     for tag, e in (("kal", "kalman"), ("lu", "luenberger")):
@@ -754,7 +737,7 @@ def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame)
                 add(f"da_{tag}_{name}_fail", r.fails_at_ms, src)
             else:
                 phrase = f"every run balanced at every delay run, up to {fmt(r.largest_delay_ms)} ms"
-            q.append((f"da_{tag}_{name}", 0.0, phrase, src))
+            add(f"da_{tag}_{name}", 0.0, src, phrase)
     add("da_seeds", da[da.estimation == "input_delay"].seed_count.max(), "delay_aware: seed_count")
     add("da_fd_ok", noise_delay_margins(dc)["fd_raw"][0], "delay_cost: fd_raw (noise_delay_margins)")
     from netsim.models.pendulum.analysis import law_delay_margin
@@ -769,7 +752,7 @@ def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame)
     for how, name in (("unaware", "unaware"), ("input_delay", "aware")):
         add(f"da_kal_cost_{name}", float(k[(k.estimation == how) & (k.total_delay_ms == at)].sim_cost.iloc[0]),
             f"delay_aware:kalman {how} {at} ms")
-    return pd.DataFrame(q, columns=["key", "value", "text", "source"])
+    return q.frame()
 
 
 DELAY_AWARE_COLUMNS = ["estimator", "estimation", "total_delay_ms", "seed_count", "stable_runs", "sim_cost"]
