@@ -112,9 +112,10 @@ def catalogue() -> list[ShippedScenario]:
 def resolve(argument: str) -> str:
     """A command's scenario argument: a file as given, or the shipped scenario a bare name stands for.
 
-    An existing file (or anything that is written as a path: with a folder or a ``.yaml``/``.yml`` suffix) is
-    returned unchanged, so a file of that name in the working folder wins over a shipped scenario. A bare name
-    (``dc_servo_can``) is looked up among the shipped scenarios.
+    An existing file, or anything written with a folder (``scenarios/x.yaml``), is returned unchanged, so a file
+    of that name in the working folder wins over a shipped scenario. A bare name (``dc_servo_can``, or
+    ``dc_servo_can.yaml`` where no such file is) is looked up among the shipped scenarios; a missing
+    ``other.yaml`` is returned unchanged, for the loader's "file not found".
 
     Raises
     ------
@@ -122,8 +123,11 @@ def resolve(argument: str) -> str:
         A bare name that is neither a file nor a shipped scenario, in one line with the closest name.
     """
     text = str(argument)
-    if Path(text).exists() or "/" in text or "\\" in text or text.endswith((".yaml", ".yml")):
+    if Path(text).exists() or "/" in text or "\\" in text:
         return text
+    if text.endswith((".yaml", ".yml")):
+        candidate = folder() / text
+        return str(candidate) if candidate.is_file() else text
     try:
         return str(scenario_path(text))
     except ConfigError:

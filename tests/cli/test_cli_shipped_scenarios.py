@@ -57,7 +57,9 @@ def test_a_file_in_the_working_folder_comes_before_a_shipped_scenario_of_the_sam
     (tmp_path / "dc_servo_can").write_text("name: mine\n")
     assert shipped.resolve("dc_servo_can") == "dc_servo_can"
     assert Path(shipped.resolve("dc_servo_ideal")).samefile(CHECKOUT_SCENARIOS / "dc_servo_ideal.yaml")
-    assert shipped.resolve("missing.yaml") == "missing.yaml"  # written as a file: left to 'file not found'
+    assert shipped.resolve("missing.yaml") == "missing.yaml"  # no such file, none shipped: left to 'file not found'
+    assert Path(shipped.resolve("dc_servo_ideal.yaml")).samefile(CHECKOUT_SCENARIOS / "dc_servo_ideal.yaml")
+    assert shipped.resolve("dc_servo_can") == "dc_servo_can"  # still the working folder's file
 
 
 def test_scenarios_lists_every_shipped_file_with_its_kind_and_summary(capsys):
