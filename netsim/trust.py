@@ -6,9 +6,12 @@ user said so, in one of these ways (the first that gives an answer wins):
 1. the caller's own choice: ``--allow-plugins`` on the command line (``run``, ``validate``, ``batch``,
    ``sweep``), ``allow_plugins=True`` in :func:`netsim.run` / :func:`netsim.load_scenario`
    (``allow_plugins=False`` refuses even when the settings below allow);
-2. the environment variable ``NETSIM_ALLOW_PLUGINS`` (``1``/``true``/``yes`` allow, ``0``/``false``/``no``
+2. in a worker process the sweep did not start (a Dask worker of a remote scheduler, issue 31), the choice of the
+   user who submitted the task, which travels with it (:func:`task_permission`, set by
+   :class:`netsim.sweep.executor.DaskExecutor`): the worker's own environment and config are not the user's;
+3. the environment variable ``NETSIM_ALLOW_PLUGINS`` (``1``/``true``/``yes`` allow, ``0``/``false``/``no``
    refuse); ``--allow-plugins`` sets it for the worker processes of a batch or a sweep;
-3. the per-user file ``$XDG_CONFIG_HOME/netsim/config.toml`` (default ``~/.config/netsim/config.toml``) with
+4. the per-user file ``$XDG_CONFIG_HOME/netsim/config.toml`` (default ``~/.config/netsim/config.toml``) with
    ``allow_plugins = true``.
 
 Otherwise plugin files are refused: validation reports "this scenario loads code from <file>; rerun with
@@ -17,11 +20,14 @@ Otherwise plugin files are refused: validation reports "this scenario loads code
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import logging
 import os
 from pathlib import Path
+from typing import Iterator
 
-__all__ = ["ENV_VAR", "config_path", "plugins_allowed"]
+__all__ = ["ENV_VAR", "config_path", "plugins_allowed", "task_permission"]
 
 #: Environment variable that allows (or refuses) plugin files.
 ENV_VAR = "NETSIM_ALLOW_PLUGINS"
@@ -29,6 +35,8 @@ ENV_VAR = "NETSIM_ALLOW_PLUGINS"
 _log = logging.getLogger(__name__)
 _YES = {"1", "true", "yes", "on"}
 _NO = {"0", "false", "no", "off", ""}
+#: The permission a submitted task carries (None: none carried; this process's own settings apply).
+_TASK: contextvars.ContextVar[bool | None] = contextvars.ContextVar("netsim_task_plugins", default=None)
 
 
 def config_path() -> Path:
@@ -57,9 +65,13 @@ def _from_config() -> bool:
 
 
 def plugins_allowed(explicit: bool | None = None) -> bool:
-    """True when plugin files may run: ``explicit`` if given, else the environment, else the user's config."""
+    """True when plugin files may run: ``explicit`` if given, else the permission the running task carries
+    (:func:`task_permission`), else the environment, else the user's config."""
     if explicit is not None:
         return bool(explicit)
+    carried = _TASK.get()
+    if carried is not None:
+        return carried
     env = os.environ.get(ENV_VAR)
     if env is not None:
         text = env.strip().lower()
@@ -69,3 +81,14 @@ def plugins_allowed(explicit: bool | None = None) -> bool:
             _log.warning("ignoring %s=%r: use 1 or 0", ENV_VAR, env)
         return False
     return _from_config()
+
+
+@contextlib.contextmanager
+def task_permission(allowed: bool) -> Iterator[None]:
+    """Within the block (this thread or task only), plugin files may run exactly when ``allowed``: the decision of
+    the user who submitted the work, carried to a worker process whose environment and config are someone else's."""
+    token = _TASK.set(bool(allowed))
+    try:
+        yield
+    finally:
+        _TASK.reset(token)

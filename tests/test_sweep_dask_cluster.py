@@ -341,3 +341,148 @@ def test_ctrl_c_while_the_local_dask_cluster_starts_is_clean(serial, tmp_path: P
     assert "Traceback" not in stderr and "Fatal Python error" not in stderr, stderr
     assert "run the same command again to resume" in stderr
     assert (out / "summary.csv").exists()
+
+
+# ------------------------------------------------------------------ issue 31 fault 3: worker, then scheduler, restart
+FAULTS: list[tuple[str, int, str]] = []  # the note's table: fault, tries, what was lost
+RESTART_TRIES = 2
+
+
+def _ok_records(out: Path) -> dict[str, tuple[int, int]]:
+    """(inode, mtime in ns) of each finished point's ``point.json`` (ok, and its folder as its manifest says), by
+    folder; a point run again gets new ones. Read from the folders, not summary.csv: a run the surviving worker
+    finished after the scheduler died (and after the summary was written) is finished too."""
+    from netsim.sweep.points import verified_record
+
+    found = {}
+    for record in _finished(out):
+        rec = verified_record(record.parent)
+        if rec is not None and rec.get("status") == "ok":
+            st = record.stat()
+            found[f"points/{record.parent.name}"] = (st.st_ino, st.st_mtime_ns)
+    return found
+
+
+def test_worker_then_scheduler_killed_then_both_restarted_loses_nothing(serial, tmp_path: Path) -> None:
+    """Issue 31 fault 3 on real processes: a worker SIGKILLed after the first finished point, then the scheduler
+    after the next; the sweep ends in one line; the whole cluster is started again (new address) and the same
+    command is rerun on it. Every point finished before the faults is kept (its point.json neither rewritten nor
+    run again: same inode and mtime, and 'N resumed'), and summary.csv equals the serial run's byte for byte."""
+    path, expected = serial
+    kept_total = 0
+    for attempt in range(RESTART_TRIES):
+        out = tmp_path / f"out{attempt}"
+        first = Cluster(tmp_path / f"cluster{attempt}a")
+        first.folder.mkdir()
+        try:
+            first.start()
+            proc = _sweep_cli([str(path), "--out", str(out), "--scheduler", first.address])
+            try:
+                _wait_for("the first finished run", lambda: bool(_finished(out)), proc=proc)
+                _kill_group(first.workers[0])
+                n_before = len(_finished(out))
+                _wait_for("a run finished after the worker was killed",
+                          lambda: len(_finished(out)) > n_before + attempt, proc=proc)
+                assert first.scheduler is not None
+                _kill_group(first.scheduler)
+                stdout, stderr = proc.communicate(timeout=WAIT_S)  # a hang (waiting on the dead scheduler) fails
+            finally:
+                _kill_group(proc)
+        finally:
+            first.close()  # the surviving worker too: "restart both"
+        assert _all_ended([p.pid for p in first.procs])
+        assert proc.returncode == 1, (proc.returncode, stderr)
+        lines = [line for line in stderr.splitlines() if line.strip()]
+        assert len(lines) == 1 and "went away mid-sweep" in lines[0] and "rerun the same command" in lines[0], stderr
+        kept = _ok_records(out)
+        assert 0 < len(kept) < N_POINTS, kept  # the faults came mid-sweep
+        in_summary = {f for f, st in _statuses(out / "summary.csv").items() if st == "ok"}
+        assert in_summary <= set(kept) and set(_statuses(out / "summary.csv").values()) <= {"ok", "pending"}
+
+        second = Cluster(tmp_path / f"cluster{attempt}b")
+        second.folder.mkdir()
+        try:
+            second.start()
+            rerun = _sweep_cli([str(path), "--out", str(out), "--scheduler", second.address])
+            try:
+                stdout, stderr = rerun.communicate(timeout=WAIT_S)
+            finally:
+                _kill_group(rerun)
+        finally:
+            second.close()
+        assert rerun.returncode == 0, stderr
+        assert f"({len(kept)} resumed, {N_POINTS - len(kept)} executed" in stdout + stderr, stdout + stderr
+        now = _ok_records(out)
+        assert {f: now[f] for f in kept} == kept  # finished points: not run again, not rewritten
+        assert (out / "summary.csv").read_bytes() == expected
+        kept_total += len(kept)
+    FAULTS.append(("Dask: worker then scheduler SIGKILLed mid-sweep, cluster restarted", RESTART_TRIES,
+                   f"nothing ({kept_total} finished points kept, none rerun)"))
+
+
+# --------------------------------------------------------------- issue 31 fault 3: --allow-plugins on remote workers
+def _write_plugin_sweep(folder: Path) -> Path:
+    """A 2-point sweep of examples/plugins/tank_loop.yaml (three plugin files), 20 s simulated."""
+    for name in ("tank_plant.py", "pi_antiwindup.py", "slotted_bus.py"):
+        shutil.copy(REPO / "examples" / "plugins" / name, folder / name)
+    base = yaml.safe_load((REPO / "examples" / "plugins" / "tank_loop.yaml").read_text())
+    base["duration"] = "20 s"
+    (folder / "base.yaml").write_text(yaml.safe_dump(base, sort_keys=False))
+    path = folder / "sweep.yaml"
+    path.write_text("sweep: plugins_remote\nbase: base.yaml\nseed: 3\nfactors:\n  K:\n"
+                    "    paths: [nodes.controller.tasks[0].params.K]\n    values: [1.0, 2.0]\n")
+    return path
+
+
+@pytest.fixture()
+def untrusting_cluster(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Cluster]:
+    """A cluster whose workers were started with no permission of their own: NETSIM_ALLOW_PLUGINS unset, an empty
+    config folder, and a working directory that is not the sweep's."""
+    monkeypatch.delenv("NETSIM_ALLOW_PLUGINS", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "no-config"))
+    folder = tmp_path / "cluster"
+    folder.mkdir()
+    c = Cluster(folder)
+    try:
+        yield c.start()
+    finally:
+        c.close()
+    assert _all_ended([p.pid for p in c.procs]), "a cluster process outlived the test"
+
+
+def test_remote_workers_honour_allow_plugins_as_a_local_run_does(untrusting_cluster: Cluster, tmp_path: Path,
+                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """Before: every point failed on the remote workers (plugin files looked up in the worker's own working
+    directory, then refused: the worker's environment did not carry the user's --allow-plugins)."""
+    sweeps = tmp_path / "sweeps"
+    sweeps.mkdir()
+    path = _write_plugin_sweep(sweeps)
+    monkeypatch.setenv("NETSIM_ALLOW_PLUGINS", "1")  # the serial reference, as `--allow-plugins --workers 1`
+    reference = run_sweep(path, out=tmp_path / "serial", workers=1, progress=False)
+    monkeypatch.delenv("NETSIM_ALLOW_PLUGINS")
+    assert reference.n_ok == 2, reference.summary
+
+    def sweep(*extra: str) -> subprocess.CompletedProcess[str]:
+        env = {k: v for k, v in os.environ.items() if k != "NETSIM_ALLOW_PLUGINS"}
+        return subprocess.run([str(BIN / "netsim"), "sweep", "sweep.yaml", *extra, "--scheduler",
+                               untrusting_cluster.address, "--no-progress"], cwd=sweeps, env=env,
+                              capture_output=True, text=True, timeout=WAIT_S)
+
+    refused = sweep("--out", str(tmp_path / "refused"))  # no permission: refused before anything runs
+    assert refused.returncode == 2 and "--allow-plugins" in refused.stderr and "Traceback" not in refused.stderr
+    assert not (tmp_path / "refused" / "points").exists() or not any((tmp_path / "refused" / "points").iterdir())
+
+    allowed = sweep("--out", str(tmp_path / "remote"), "--allow-plugins")
+    assert allowed.returncode == 0, allowed.stdout + allowed.stderr
+    assert (tmp_path / "remote" / "summary.csv").read_bytes() == reference.summary_path.read_bytes()
+    FAULTS.append(("Dask: plugin scenario on workers started without permission", 1,
+                   "nothing (refused without --allow-plugins, run with it)"))
+
+
+def test_zz_print_the_dask_fault_table() -> None:
+    """The note's rows for fault 3 (shown with -s); every fault recorded above lost nothing."""
+    if not FAULTS:
+        pytest.skip("no fault test ran before this one")
+    for fault, tries, lost in FAULTS:
+        print(f"\n{fault} | {tries} | {lost}")
+    assert all(tries >= 1 and lost.startswith("nothing") for _, tries, lost in FAULTS), FAULTS

@@ -6,6 +6,10 @@ Every backend is a :class:`concurrent.futures.Executor`: a :class:`SerialExecuto
 (:func:`~netsim.sweep.points.run_chunk`), so tiny runs do not pay the per-task overhead of a cluster one by one.
 What a worker does with a chunk (run each point, write its ``point.json``) is in :mod:`netsim.sweep.points`.
 
+Plugin files: the user's permission (``--allow-plugins``, :mod:`netsim.trust`) is decided in the sweep's process
+and travels with every Dask task (:func:`with_plugin_permission`), so a worker of a remote scheduler, started
+by someone else with another environment, runs a scenario's plugin files exactly when a local run would.
+
 Faults on a Dask cluster: a worker that dies mid-point has its tasks rescheduled on the others by the
 scheduler (the points are pure: the same point gives the same record); a scheduler that goes away ends
 the sweep (:class:`SchedulerLost`, raised by :func:`netsim.sweep.run_sweep` after ``summary.csv`` is
@@ -39,6 +43,7 @@ __all__ = [
     "dask_setup",
     "open_executor",
     "scheduler_lost",
+    "with_plugin_permission",
 ]
 
 log = logging.getLogger(__name__)
@@ -74,8 +79,13 @@ class DaskExecutor(Executor):
     """
 
     def __init__(self, client: Any) -> None:
+        from netsim.trust import plugins_allowed
+
         self.client = client
         self._inner = client.get_executor(pure=False)
+        #: Whether the user allows plugin files (``--allow-plugins``, their environment or config), decided here:
+        #: a worker process of a remote scheduler was started by someone else, with another environment.
+        self.plugins_allowed = plugins_allowed()
 
     def scheduler_lost(self) -> bool:
         """True once the client lost its scheduler (reconnecting, or closed after failing to)."""
@@ -84,7 +94,16 @@ class DaskExecutor(Executor):
     def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future:  # noqa: D102
         if self.scheduler_lost():
             raise SchedulerLost("the Dask scheduler went away")
-        return self._inner.submit(fn, *args, **kwargs)
+        return self._inner.submit(with_plugin_permission, self.plugins_allowed, fn, *args, **kwargs)
+
+
+def with_plugin_permission(allowed: bool, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)`` in a worker, with plugin files allowed exactly when the submitting user allowed them
+    (:func:`netsim.trust.task_permission`), whatever the worker's own environment or config say."""
+    from netsim.trust import task_permission
+
+    with task_permission(allowed):
+        return fn(*args, **kwargs)
 
 
 def scheduler_lost(executor: Executor) -> bool:

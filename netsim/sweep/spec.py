@@ -458,8 +458,10 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
         raw = _read_yaml(base_path)
         if not isinstance(raw, dict):
             raise ConfigError(f"{where}: base scenario '{base_path}' is not a mapping")
-        if isinstance(raw.get("plugins"), list):  # plugin files are named relative to the base scenario file
-            raw["plugins"] = [str(base_path.parent / p) if isinstance(p, str) else p for p in raw["plugins"]]
+        if isinstance(raw.get("plugins"), list):  # plugin files are named relative to the base scenario file;
+            # absolute: a worker elsewhere (a Dask worker's own working directory) finds them too (hashes unchanged)
+            raw["plugins"] = [str((base_path.parent / p).absolute()) if isinstance(p, str) else p
+                              for p in raw["plugins"]]
     else:
         raw = base
     _check_paths(spec, raw, where)
