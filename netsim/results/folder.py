@@ -6,7 +6,8 @@ A *run folder* (``netsim run``, one entry of ``netsim batch``, one point of ``ne
 ``metrics.csv``, and, unless the run kept only its metrics, ``scenario.yaml``, ``signals.csv``, ``jobs.csv`` /
 ``messages.csv`` (or their ``*_summary.csv``) and ``schedule.csv``. A sweep point also holds ``point.json``
 (the worker's record) and ``manifest.json`` (the sha256 of every other file, written last): a point folder that
-no longer matches its manifest was changed after the sweep wrote it, and is not trusted.
+no longer matches its manifest was changed after the sweep wrote it, and is not trusted
+(:mod:`netsim.results.manifest`).
 
 A *sweep folder* holds ``sweep.json`` (which sweep, its factors and spec), ``points/<index>-<key>/`` (one run
 folder per run) and ``summary.csv`` (one row per run, written by :mod:`netsim.sweep.summary`), read here and
@@ -28,10 +29,7 @@ Examples
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -40,6 +38,8 @@ import numpy as np
 import pandas as pd
 
 from netsim.errors import ConfigError
+from netsim.results.manifest import (MANIFEST_NAME, RECORD_NAME, json_object, manifest_digests, read_record,
+                                     tampered_reason, verified_record)
 
 __all__ = [
     "RunFolder",
@@ -71,10 +71,6 @@ METRICS_NAME = "metrics.csv"
 SUMMARY_NAME = "summary.csv"
 #: The file that marks a folder as holding a sweep.
 SWEEP_MARKER = "sweep.json"
-#: The per-point record written by the sweep worker when a point finishes (ok or error).
-RECORD_NAME = "point.json"
-#: Written last in a sweep point folder: ``{"files": {relative path: sha256}}`` of every other file in it.
-MANIFEST_NAME = "manifest.json"
 #: The files a run writes besides ``meta.json``: any of them without ``meta.json`` marks an incomplete folder.
 _RUN_FILES = ("scenario.yaml", METRICS_NAME, "jobs.csv", "signals.csv", "messages.csv")
 #: Text columns of ``summary.csv`` (:data:`netsim.sweep.summary.TRAILING_COLUMNS` but ``seed``): empty is ``""``.
@@ -84,89 +80,6 @@ SUMMARY_TEXT_COLUMNS = ("status", "error", "folder")
 class FolderRefused(ConfigError):
     """A folder that cannot be read as a run or sweep folder: missing, incomplete, changed since it was written,
     or not one at all. The message is one line and says what to do."""
-
-
-# --------------------------------------------------------------------------------------------- small readers
-def _json_object(path: Path) -> dict[str, Any] | None:
-    """The JSON object in ``path``; None when it is missing, unreadable, not JSON or not an object."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):  # missing or torn: the caller treats the folder as incomplete
-        return None
-    return data if isinstance(data, dict) else None
-
-
-def read_record(folder: Path) -> dict[str, Any] | None:
-    """The ``point.json`` of a sweep point folder, or None when it is missing or unreadable."""
-    return _json_object(Path(folder) / RECORD_NAME)
-
-
-def _digest(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def _listing(folder: Path) -> dict[str, Path] | None:
-    """Every file below ``folder`` by relative path (the manifest aside); None when ``folder`` is a symlink or
-    holds one, or anything that is neither a file nor a folder."""
-    if folder.is_symlink() or not folder.is_dir():
-        return None
-    files: dict[str, Path] = {}
-    for root, dirs, names in os.walk(folder, followlinks=False):
-        for name in [*dirs, *names]:
-            path = Path(root) / name
-            if path.is_symlink() or not (path.is_dir() or path.is_file()):
-                return None
-        for name in names:
-            path = Path(root) / name
-            rel = path.relative_to(folder).as_posix()
-            if rel != MANIFEST_NAME:
-                files[rel] = path
-    return files
-
-
-def manifest_digests(folder: Path) -> dict[str, str]:
-    """The sha256 of every file of a point folder by relative path, as ``manifest.json`` records them (empty
-    when the folder is a symlink or holds one)."""
-    listing = _listing(Path(folder)) or {}
-    return {rel: _digest(path) for rel, path in sorted(listing.items())}
-
-
-def tampered_reason(folder: Path) -> str | None:
-    """Why a point folder does not match its ``manifest.json`` (a few words), or None when it matches.
-
-    A folder is trusted when it is a real folder (no symlink in it or as it) holding exactly the files its
-    manifest lists, with the same sha256 each.
-    """
-    listing = _listing(Path(folder))
-    if listing is None:
-        return "it is, or holds, a symlink or a special file"
-    manifest = _json_object(Path(folder) / MANIFEST_NAME)
-    files = manifest.get("files") if manifest is not None else None
-    if not isinstance(files, dict):
-        return f"no readable {MANIFEST_NAME} (the sweep stopped before the point finished)"
-    extra, missing = sorted(set(listing) - set(files)), sorted(set(files) - set(listing))
-    if extra or missing:
-        return f"{(extra or missing)[0]} was {'added' if extra else 'removed'} after the sweep wrote it"
-    for rel, path in listing.items():
-        try:
-            if _digest(path) != files[rel]:
-                return f"{rel} was changed after the sweep wrote it"
-        except OSError:  # a file gone while its digest is taken: not verified, the point is rerun
-            return f"{rel} could not be read"
-    return None
-
-
-def verified_record(folder: Path) -> dict[str, Any] | None:
-    """The point's ``point.json`` if the folder is exactly what its manifest says (same files, same sha256, no
-    symlink); None otherwise (a point stopped before it finished, or a folder changed since)."""
-    listing = _listing(Path(folder))
-    if listing is None or RECORD_NAME not in listing:
-        return None
-    return read_record(folder) if tampered_reason(folder) is None else None
 
 
 # --------------------------------------------------------------------------------------------- run folders
@@ -235,7 +148,7 @@ class RunFolder:
                     f"netsim run {folder / 'scenario.yaml'} --out NEW_FOLDER")
             raise FolderRefused(f"'{folder}' is not a run folder (no meta.json); give the folder that `netsim run` "
                                 "wrote")
-        if _json_object(folder / META_NAME) is None:
+        if json_object(folder / META_NAME) is None:
             raise FolderRefused(f"'{folder / META_NAME}' is not a readable JSON object (damaged); run the scenario "
                                 "again into a new folder")
         if (folder / MANIFEST_NAME).exists() or (folder / RECORD_NAME).exists():
@@ -268,7 +181,7 @@ class RunFolder:
         """``meta.json`` (seed, scenario name and hash, versions, wall time, ``status``, ``error``); ``{}`` when
         it is missing or unreadable."""
         if self._meta is None:
-            self._meta = _json_object(self.path / META_NAME) or {}
+            self._meta = json_object(self.path / META_NAME) or {}
         return self._meta
 
     @property
@@ -460,7 +373,7 @@ class SweepFolder:
     @staticmethod
     def read_info(path: str | Path) -> dict[str, Any] | None:
         """``sweep.json`` of the folder at ``path``, None when it is missing or unreadable."""
-        return _json_object(Path(path) / SWEEP_MARKER)
+        return json_object(Path(path) / SWEEP_MARKER)
 
     @classmethod
     def open(cls, path: str | Path) -> SweepFolder:
@@ -476,7 +389,7 @@ class SweepFolder:
         if not (folder / SWEEP_MARKER).is_file():
             raise FolderRefused(f"'{folder}' is not a sweep folder (no {SWEEP_MARKER}); give the folder that "
                                 "`netsim sweep` wrote")
-        info = _json_object(folder / SWEEP_MARKER)
+        info = json_object(folder / SWEEP_MARKER)
         if info is None:
             raise FolderRefused(f"'{folder / SWEEP_MARKER}' is not a readable JSON object (damaged); run the sweep "
                                 "again with --overwrite")
