@@ -1,6 +1,7 @@
-"""Run figures a paper author would accept (issue 21): units on every axis, panels by declared signal kind, one
-colour per loop, a diverged run clipped with a marker, the Gantt window a parameter, drops on media without a
-bit rate."""
+"""Run figures a paper author would accept (issues 21 and 27): units on every axis, panels by declared signal kind
+and unit, one colour per loop with references set apart, a zoom on the first transient, a diverged run clipped
+with a marker, a Gantt window chosen by pixel density with releases, deadlines, zero-length jobs and a row of
+deadline misses, network instants of zero-delay links and drops on media without a bit rate."""
 
 from __future__ import annotations
 
@@ -33,14 +34,16 @@ def test_panels_follow_the_declared_io_role_not_the_name():
     signals = pd.DataFrame({"time_s": t, "ref": 1.0, "u_meas": t, "drive": 1.0 - t, "x_hat": t / 2})
     fig = responses_figure(signals, scenario)
     assert len(fig.axes) == 3
-    assert set(_lines(fig.axes[0])) == {"ref", "u_meas"}
+    assert set(_lines(fig.axes[0])) == {"ref", "$u_{meas}$"}
     assert set(_lines(fig.axes[1])) == {"drive"}
-    assert set(_lines(fig.axes[2])) == {"x_hat"}  # not declared: its own panel
+    assert set(_lines(fig.axes[2])) == {"$\\hat{x}$"}  # not declared: its own panel
     for ax in fig.axes:
-        assert "[" in ax.get_ylabel() and "]" in ax.get_ylabel()  # a unit on every value axis
-    assert fig.axes[-1].get_xlabel() == "time [s]"
+        assert "(" in ax.get_ylabel() and ")" in ax.get_ylabel()  # a unit (or that none was declared) on every axis
+    assert fig.axes[-1].get_xlabel() == "time (s)"
     lines = _lines(fig.axes[0])
-    assert _same_colour(lines["ref"], lines["u_meas"]) and lines["ref"].get_linestyle() == "--"
+    # the reference is dashed and in another colour than its output (issue 27: r and y were one colour)
+    assert not _same_colour(lines["ref"], lines["$u_{meas}$"]) and lines["ref"].get_linestyle() == "--"
+    assert lines["$u_{meas}$"].get_linestyle() == "-"
 
 
 def test_three_loops_get_three_colours_and_their_shared_reference_is_black():
@@ -50,7 +53,7 @@ def test_three_loops_get_three_colours_and_their_shared_reference_is_black():
     for i in (1, 2, 3):
         assert _same_colour(out[f"y{i}"], act[f"u{i}"])  # y1 with u1: declared by task pid{i}'s channels
     assert len({mcolors.to_hex(out[f"y{i}"].get_color()) for i in (1, 2, 3)}) == 3
-    assert mcolors.to_hex(out["r"].get_color()) == "#000000"
+    assert mcolors.to_hex(out["$r$"].get_color()) == "#000000"
 
 
 def test_a_diverged_run_is_clipped_with_a_marker_not_flattened():
@@ -71,17 +74,27 @@ def test_a_diverged_run_is_clipped_with_a_marker_not_flattened():
     assert ok.get_ylim()[1] > 5.0  # an ok run is never clipped
 
 
-def test_gantt_window_is_a_parameter_and_short_runs_show_everything():
+def test_gantt_window_is_a_parameter_and_misses_sit_on_their_own_row():
     result = netsim.run(ROOT / "scenarios" / "three_servos_dm.yaml", overrides={"duration": "0.3 s"})
-    whole = result.plot_schedule()
+    whole = result.plot_schedule(window=0.3)
     assert whole.axes[0].get_xlim() == pytest.approx((0.0, 0.3))
-    assert whole.axes[0].get_xlabel() == "time [s]" and whole.axes[0].get_ylabel() == "node.task"
+    assert whole.axes[0].get_xlabel() == "time (s)" and whole.axes[0].get_ylabel() == "node.task"
     part = result.plot_schedule(window=(0.05, 0.1)).axes[0]
     assert part.get_xlim() == pytest.approx((0.05, 0.1))
     missed = result.jobs[result.jobs["outcome"].isin(["missed", "killed"])
                          & result.jobs["deadline_s"].between(0.05, 0.1)]
-    drawn = [ln for ln in part.get_lines() if ln.get_marker() == "v"]
+    drawn = [ln for ln in part.get_lines() if ln.get_marker() == "x"]
     assert len(missed) > 0 and sum(len(ln.get_xdata()) for ln in drawn) == len(missed)
+    # the misses have a row of their own below the three tasks, named on the axis
+    rows = [t.get_text() for t in part.get_yticklabels()]
+    assert rows[:3] == ["cpu.pid1", "cpu.pid2", "cpu.pid3"] and rows[3].startswith("deadline misses")
+    assert {float(y) for ln in drawn for y in ln.get_ydata()} == {3.0}
+    # every release and deadline in the window is marked (up triangles, down triangles)
+    jobs = result.jobs
+    ups = sum(len(ln.get_xdata()) for ln in part.get_lines() if ln.get_marker() == "^")
+    downs = sum(len(ln.get_xdata()) for ln in part.get_lines() if ln.get_marker() == "v")
+    assert ups == int(jobs["release_s"].between(0.05, 0.1).sum())
+    assert downs == int(jobs["deadline_s"].between(0.05, 0.1).sum())
 
 
 def test_long_runs_default_to_the_first_max_bars_intervals():
@@ -108,7 +121,7 @@ def test_a_lossy_link_without_a_bit_rate_shows_its_delays_and_every_drop():
     assert crosses == int(msgs["dropped"].sum()) > 10  # 20 % of ~100 copies
     bars = sum(len(c.get_paths()) for c in ax.collections)
     assert bars == int((~msgs["dropped"]).sum())  # one delay bar per delivered copy
-    assert ax.get_xlabel() == "time [s]" and ax.get_ylabel() == "network: sender"
+    assert ax.get_xlabel() == "time (s)" and ax.get_ylabel() == "network: sender"
 
 
 def test_response_time_bars_go_on_a_log_axis_when_they_span_decades():
