@@ -30,7 +30,8 @@ Run folder layout (see :meth:`RunResult.to_csv`): ``scenario.yaml``, ``signals.c
 ``messages.csv``, ``schedule.csv``, ``metrics.csv`` (``metric,value``), ``meta.json``. CSVs use a fixed float format and a
 stable column order, so the same scenario and seed give byte-identical files. A scenario's ``output: {jobs:
 summary}`` (``messages: summary``) writes ``jobs_summary.csv`` (``messages_summary.csv``) instead of the rows;
-``off`` writes neither (:mod:`netsim.results.traces`).
+``off`` writes neither (:mod:`netsim.results.traces`). Run and sweep folders are read back in one place,
+:mod:`netsim.results.folder` (:class:`RunFolder`, :class:`SweepFolder`); :meth:`RunResult.read` reads through it.
 
 Why this module is long: :class:`RunResult` is the public result class, and about half of the module is its
 methods' numpydoc docstrings (typed parameters, returns and a runnable example each, issue 27); the code the
