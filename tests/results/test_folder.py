@@ -185,3 +185,19 @@ def test_report_on_a_sweep_without_its_summary_says_to_resume(real_sweep: Path, 
     (path / "summary.csv").unlink()  # the sweep was killed before it wrote summary.csv
     with pytest.raises(ConfigError, match="has no summary.csv .*it resumes"):  # was: 'is not a run folder'
         report(path, out=tmp_path / "r", plots=False)
+
+
+def test_a_batch_folder_skips_an_incomplete_run_with_a_warning(real_run: tuple[RunResult, Path], tmp_path: Path,
+                                                               caplog: pytest.LogCaptureFixture) -> None:
+    from netsim.report import find_runs
+    from netsim.results.folder import run_folders_in
+
+    batch = tmp_path / "batch"
+    _copy(real_run[1], batch / "b_done")
+    (_copy(real_run[1], batch / "a_killed") / "meta.json").unlink()
+    with caplog.at_level("WARNING", logger="netsim.results.folder"):
+        found = run_folders_in(batch)
+    assert [r.path.name for r in found] == ["b_done"]
+    assert "skipping incomplete run folder" in caplog.text and "a_killed" in caplog.text
+    kind, runs = find_runs(batch)
+    assert kind == "batch" and [(case, run.path) for case, run, _ in runs] == [("b_done", batch / "b_done")]
