@@ -17,9 +17,10 @@ import math
 import re
 from typing import Any
 
-__all__ = ["Quotes", "LABEL_PATTERNS", "strip_labels", "fill", "OPEN", "CLOSE"]
+from netsim.casestudy import Quotes as _Quotes
+from netsim.casestudy import fill, fmt
 
-OPEN, SEP, CLOSE = "\u2983", "\u2982", "\u2984"
+__all__ = ["Quotes", "LABEL_PATTERNS", "strip_labels", "fill"]
 
 #: Digits that are names, not quantities: equation, figure, section and sample numbers, setting names, state
 #: indices, file names, the 95 % band's definition (1.96 sigma), units with exponents, the radio standard.
@@ -43,40 +44,33 @@ def strip_labels(text: str) -> str:
     return s
 
 
-def fill(template: str, texts: dict[str, str]) -> str:
-    """The template with each ``{key}`` replaced by its quoted text."""
-    return re.sub(r"\{([A-Za-z0-9_.]+)\}", lambda m: texts[m.group(1)], template)
-
-
-class Quotes:
-    """Quoted numbers of one README (module docstring).
+class Quotes(_Quotes):
+    """Quoted numbers of one README, marked inline (:meth:`netsim.casestudy.Quotes.mark`; module docstring).
 
     Each quote gets the key ``<section>.<name>`` (``name`` given, or a running number); the returned string
     holds the formatted text between markers, which :meth:`render` and :meth:`template` resolve.
     """
 
+    render = staticmethod(_Quotes.unmark)
+
     def __init__(self) -> None:
-        self.rows: list[dict[str, Any]] = []
+        super().__init__(missing="n/a")
         self.section = "s0"
         self._n = 0
-        self._keys: set[str] = set()
 
     def _add(self, value: Any, text: str, key: str | None) -> str:
         self._n += 1
         k = f"{self.section}.{key if key else f'n{self._n}'}"
-        if k in self._keys:
+        if k in self.rows:
             k = f"{k}_{self._n}"
-        self._keys.add(k)
         v = float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else value
-        self.rows.append({"key": k, "value": v, "text": text})
-        return f"{OPEN}{k}{SEP}{text}{CLOSE}"
+        return self.mark(k, v, text)
 
     def f(self, x: Any, nd: int = 3, key: str | None = None) -> str:
         """``x`` with ``nd`` significant digits (``n/a`` for None or NaN)."""
         if x is None or (isinstance(x, float) and math.isnan(x)):
             return "n/a"
-        x = float(x)
-        return self._add(x, "0" if x == 0 else f"{x:.{nd}g}", key)
+        return self._add(float(x), fmt(x, nd), key)
 
     def pct(self, x: float, key: str | None = None) -> str:
         """``x`` as a percentage with one decimal (``n/a`` for NaN)."""
@@ -91,13 +85,3 @@ class Quotes:
     def g(self, x: Any, key: str | None = None) -> str:
         """``x`` in its shortest form (``:g``)."""
         return self._add(float(x), f"{float(x):g}", key)
-
-    @staticmethod
-    def render(marked: str) -> str:
-        """The README: every marked quote replaced by its text."""
-        return re.sub(f"{OPEN}[^{SEP}]*{SEP}([^{CLOSE}]*){CLOSE}", r"\1", marked)
-
-    @staticmethod
-    def template(marked: str) -> str:
-        """The template: every marked quote replaced by ``{key}``."""
-        return re.sub(f"{OPEN}([^{SEP}]*){SEP}[^{CLOSE}]*{CLOSE}", r"{\1}", marked)

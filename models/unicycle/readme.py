@@ -299,5 +299,5 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
     text = Quotes.render(marked)
     (out / "README.md").write_text(text, encoding="utf-8")
     (out / "template.md").write_text(Quotes.template(marked), encoding="utf-8")
-    pd.DataFrame(q.rows, columns=["key", "value", "text"]).to_csv(out / "quoted.csv", index=False)
+    q.frame(source=False).to_csv(out / "quoted.csv", index=False)
     return text

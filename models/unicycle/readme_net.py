@@ -250,11 +250,11 @@ def _region(lines: list[str], marks: tuple[str, str], legacy: tuple[str, str]) -
     return i, j + 1 if j < len(lines) and lines[j] == "" else j
 
 
-def splice_radio_mc(out: Path, marked: list[str], quotes: list[dict[str, Any]], table: Any) -> None:
+def splice_radio_mc(out: Path, marked: list[str], quotes: Any, table: Any) -> None:
     """Write the radio Monte-Carlo section into an existing report folder ``out`` and leave the rest alone.
 
     ``marked`` are the section's lines with quote markers (:func:`radio_mc_section`), ``quotes`` the
-    :class:`Quotes` rows, ``table`` its ``table.csv`` rows. In ``README.md`` and ``template.md`` the section
+    :class:`Quotes` frame (``key, value, text``), ``table`` its ``table.csv`` rows. In ``README.md`` and ``template.md`` the section
     (between :data:`RADIO_MC_MARK`, or where it stood before the markers) is replaced; the keys the old template
     lines held leave ``quoted.csv`` and the new quotes take the place of the first of them; in ``table.csv`` the
     radio Monte-Carlo rows (experiment ``5 radio``, setting ending in ``runs``) are replaced in place.

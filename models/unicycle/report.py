@@ -10,7 +10,6 @@ call resumes them).
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import pickle
@@ -20,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from netsim.casestudy import code_fingerprint, fmt
 from netsim.models.unicycle import studies as S
 from netsim.models.unicycle.design import PHASES
 from netsim.lazy_import import lazy_module
@@ -34,14 +34,6 @@ _ROOT = Path(__file__).resolve().parents[2]
 _SCEN = shipped_scenarios()
 
 
-def _f(x: float, nd: int = 3) -> str:
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return "n/a"
-    if x == 0:
-        return "0"
-    return f"{x:.{nd}g}"
-
-
 class _Table:
     def __init__(self) -> None:
         self.rows: list[dict[str, Any]] = []
@@ -50,7 +42,8 @@ class _Table:
         from netsim.models.unicycle.quoting import Quotes
 
         self.rows.append({"experiment": experiment, "setting": setting, "quantity": quantity,
-                          "ours": Quotes.render(ours) if isinstance(ours, str) else _f(float(ours), 4), "source": source,
+                          "ours": Quotes.render(ours) if isinstance(ours, str) else fmt(float(ours), 4, missing="n/a"),
+                          "source": source,
                           "reason": reason})
         return ours
 
@@ -200,7 +193,7 @@ def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
         (out / name).write_text("\n".join(lines))
     quoted = pd.read_csv(out / "quoted.csv", keep_default_na=False, dtype={"text": str})
     quoted = pd.concat([quoted[~quoted["key"].astype(str).str.startswith("s5da.")],
-                        pd.DataFrame(q.rows, columns=["key", "value", "text"])], ignore_index=True)
+                        q.frame(source=False)], ignore_index=True)
     quoted.to_csv(out / "quoted.csv", index=False)
     table = pd.read_csv(out / "table.csv", keep_default_na=False)
     table = pd.concat([table[table["experiment"] != "5 delay-aware"], T.frame()], ignore_index=True)
@@ -223,16 +216,14 @@ def unicycle_radio_mc_report(out_dir: Path | None = None, plots: bool = True, *,
     q, T = Quotes(), _Table()
     q.section = "s5"  # the section's keys are fixed names (s5.radio_runs, s5.rm_*), the same as in the full report
     marked = radio_mc_section(q, T, {"radio_mc": _sweep("unicycle_radio_mc", out, workers)})
-    splice_radio_mc(out, marked, q.rows, T.frame())
+    splice_radio_mc(out, marked, q.frame(source=False), T.frame())
     return {"table": T.frame()}
 
 
 def _code_hash() -> str:
-    """Hash of the study's numeric code: a cached Monte-Carlo result is reused only for the same code."""
-    h = hashlib.sha256()
-    for name in ("model.py", "design.py", "reference.py", "studies.py", "metrics.py"):
-        h.update((Path(__file__).parent / name).read_bytes())
-    return h.hexdigest()[:12]
+    """Fingerprint of the study's numeric code: a cached Monte-Carlo result is reused only for the same code."""
+    here = Path(__file__).parent
+    return code_fingerprint(here / n for n in ("model.py", "design.py", "reference.py", "studies.py", "metrics.py"))
 
 
 def _monte_carlo(facts: dict[str, Any], runs: int, workers: int | None, t: np.ndarray) -> dict[str, list[dict]]:

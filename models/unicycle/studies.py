@@ -10,11 +10,11 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from concurrent.futures import ProcessPoolExecutor
 from typing import Any, Callable
 
 import numpy as np
 
+from netsim.casestudy import run_all
 from netsim.models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, Trajectory, cart_frame_error, error_model, lqr_gain
 from netsim.models.unicycle.metrics import run_measures
 from netsim.models.unicycle.model import (
@@ -46,20 +46,11 @@ def _one(args: tuple[int, dict[str, Any]]) -> dict[str, Any]:
 
 def mc_runs(n: int, seed0: int = 0, workers: int | None = None, keep: bool = True,
             progress: Callable[[int, int, str], None] | None = None, what: str = "", **kw: Any) -> list[dict]:
-    """``n`` runs of :func:`~netsim.models.unicycle.reference.simulate` with seeds ``seed0 .. seed0 + n - 1``."""
-    jobs = [(seed0 + i, kw) for i in range(n)]
+    """``n`` runs of :func:`~netsim.models.unicycle.reference.simulate` with seeds ``seed0 .. seed0 + n - 1``, on
+    one process pool (:func:`netsim.casestudy.run_all`; ``workers`` default: up to 4, one per CPU)."""
     workers = workers or min(os.cpu_count() or 1, 4)
-    out: list[dict] = []
-    if workers == 1:
-        it = map(_one, jobs)
-        for r in it:
-            out.append(r)
-    else:
-        with ProcessPoolExecutor(workers) as ex:
-            for r in ex.map(_one, jobs, chunksize=max(1, n // (4 * workers))):
-                out.append(r)
-                if progress is not None and len(out) % 50 == 0:
-                    progress(len(out), n, what)
+    out = run_all(_one, [(seed0 + i, kw) for i in range(n)], workers=workers, progress=progress, what=what,
+                  chunksize=max(1, n // (4 * workers)))
     if not keep:
         for r in out:
             r.pop("xhat")

@@ -56,7 +56,7 @@ def _section(df: pd.DataFrame) -> tuple[Quotes, _Table, list[str]]:
 
 def test_radio_section_quotes_erased_attempts_and_lost_messages_separately() -> None:
     q, T, lines = _section(_sweep())
-    v = {r["key"]: r["value"] for r in q.rows}
+    v = {k: value for k, (value, _text, _source) in q.rows.items()}
     # attempts erased = mean(lost_attempts / attempts) = mean(0.28, 0.30, 0.32) = 0.30; messages lost = mean of
     # loss_rate = mean(0.01, 0.02, 0.03) = 0.02 (Bernoulli); bursts: mean(0.25, 0.30, 0.35), mean(0.06, 0.08, 0.10)
     assert v["s5.rm_25hz_bern_erased"] == pytest.approx(0.30)
@@ -119,7 +119,7 @@ def _legacy_report(folder: Path) -> None:
 def test_splice_replaces_only_the_radio_section_its_keys_and_rows(tmp_path: Path) -> None:
     _legacy_report(tmp_path)
     q, T, lines = _section(_sweep())
-    splice_radio_mc(tmp_path, lines, q.rows, T.frame())
+    splice_radio_mc(tmp_path, lines, q.frame(source=False), T.frame())
     readme, template = (tmp_path / "README.md").read_text(), (tmp_path / "template.md").read_text()
     quoted = pd.read_csv(tmp_path / "quoted.csv", dtype=str, keep_default_na=False)
     assert fill(template, dict(zip(quoted["key"], quoted["text"]))) == readme
@@ -138,5 +138,5 @@ def test_splice_replaces_only_the_radio_section_its_keys_and_rows(tmp_path: Path
     # a second splice finds the markers and writes the same files
     before = {n: (tmp_path / n).read_text() for n in ("README.md", "template.md", "quoted.csv", "table.csv")}
     q2, T2, lines2 = _section(_sweep())
-    splice_radio_mc(tmp_path, lines2, q2.rows, T2.frame())
+    splice_radio_mc(tmp_path, lines2, q2.frame(source=False), T2.frame())
     assert {n: (tmp_path / n).read_text() for n in before} == before

@@ -51,7 +51,7 @@ def test_quotes_render_and_template_are_inverse():
     q = Quotes()
     marked = f"a {q.f(0.123456)} b {q.pct(0.5, 'half')} c {q.i(3)}"
     assert Quotes.render(marked) == "a 0.123 b 50.0 % c 3"
-    texts = {r["key"]: r["text"] for r in q.rows}
+    texts = q.texts()
     assert fill(Quotes.template(marked), texts) == Quotes.render(marked)
     assert "s0.half" in texts
 
