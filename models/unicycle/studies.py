@@ -202,14 +202,14 @@ def wall_distances() -> tuple[float, float]:
 def net_qr_study(summary: Any, folder: Any, t: np.ndarray) -> dict[str, dict[str, float]]:
     """:func:`qr_study` per ``setting`` of a netsim Q/R sweep, from each run's ``signals.csv`` (truth ``x, y,
     theta`` and ``xhat[i]`` on the filter's 10 ms grid) and its coverage metrics."""
-    import pandas as pd
+    from netsim.results.folder import RunFolder
 
     out: dict[str, dict[str, float]] = {}
     cols = ["time_s", "x", "y", "theta", "xhat[0]", "xhat[1]", "xhat[2]"]
     for setting, d in summary.groupby("setting", sort=False):
         runs = []
         for _, row in d.iterrows():
-            sig = pd.read_csv(Path(folder) / row["folder"] / "signals.csv", usecols=cols)
+            sig = RunFolder(Path(folder) / row["folder"]).signals(cols)
             k = np.rint(sig["time_s"].to_numpy() / (t[1] - t[0])).astype(int)
             keep = (k >= 0) & (k < len(t))
             truth = np.full((len(t), 3), np.nan)
