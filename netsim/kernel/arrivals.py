@@ -35,7 +35,6 @@ Semantics
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
 from heapq import heapify, heappush
 from typing import TYPE_CHECKING, Any
@@ -216,7 +215,7 @@ class Arrivals:
 
     # ================================================================= helpers
     def _replace_spec(self, task: Task, **changes: Any) -> None:
-        spec = dataclasses.replace(task.spec, **changes)
+        spec = task.spec.replaced(**changes)
         try:
             self.policy.check(self.name, spec)
         except BuildError as exc:  # a policy refuses at build time; here it is a run-time error

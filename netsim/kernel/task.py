@@ -2,8 +2,9 @@
 
 Following SimSo, the frozen :class:`TaskSpec`/:class:`HandlerSpec` (what the user asked for, validated at
 build time) is kept apart from the mutable :class:`Task`/:class:`Handler` (job queue, counters). They are
-the only definition of a task's and a handler's scheduling fields: the scenario schema parses its YAML
-entries into them (:meth:`netsim.scenario.schema.TaskSpec.kernel_spec`).
+the only definition of a task's and a handler's scheduling fields: a scenario's task entry *is* a
+:class:`TaskSpec` (:class:`netsim.scenario.schema.TaskSpec` adds the program), validated once from YAML;
+handler entries are read into :class:`HandlerSpec` (:meth:`netsim.scenario.schema.HandlerSpec.kernel_spec`).
 
 This module imports nothing of the kernel's run time, so the scenario schema can use it cheaply.
 """
@@ -14,15 +15,20 @@ import difflib
 import functools
 import inspect
 import numbers
+import re
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import Annotated, Any, Literal, Union
 
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, model_validator
+
+from netsim.distributions import Distribution, DistributionSpec
 from netsim.errors import BuildError
 from netsim.timebase import format_time
+from netsim.units import Duration, Time
 
-__all__ = ["SET_PERIOD_RULES", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
+__all__ = ["RELEASE_KINDS", "SET_PERIOD_RULES", "SetPeriodRule", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
 
 
 def did_you_mean(name: str, known: Iterable[str]) -> str:
@@ -98,47 +104,78 @@ def check_time(node: str, task: str, field: str, value: Any, *, positive: bool =
 
 #: The rules of :attr:`TaskSpec.set_period`: ``next_release`` (TrueTime 1.5) and ``keep_armed`` (TrueTime 2.0).
 SET_PERIOD_RULES = ("next_release", "keep_armed")
+SetPeriodRule = Literal["next_release", "keep_armed"]
 
 
-@dataclass(frozen=True)
-class TaskSpec:
+#: The release kinds a task's ``release`` names (``on_message:<network>`` carries the network).
+RELEASE_KINDS = ("periodic", "aperiodic", "sporadic", "on_message")
+
+_ON_MESSAGE = re.compile(r"^on_message:([A-Za-z0-9_-]+)$")
+
+
+def _release(value: Any) -> Any:
+    """``release``: ``periodic``, ``aperiodic``, ``sporadic`` or ``on_message:<network>`` (spaces dropped)."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        text = value.strip().replace(" ", "")
+        if text in ("periodic", "aperiodic", "sporadic") or _ON_MESSAGE.match(text):
+            return text
+    raise ValueError(f"release must be 'periodic', 'aperiodic', 'sporadic' or 'on_message:<network>', got {value!r}")
+
+
+_YAML: Any = object()  # the mark of a TaskSpec built from keywords only (validated)
+
+#: A handler reference of a task: a handler's name or, from Python, a callable ``fn(job)``.
+HandlerRef = Union[str, Callable[[Any], Any], None]
+
+
+class TaskSpec(BaseModel):
     """The static description of a task (times in ns): what the user asked for, apart from the run-time
-    :class:`Task`. The one definition of a task's scheduling fields and their defaults; a scenario's task
-    entry (:class:`netsim.scenario.schema.TaskSpec`) only parses its YAML form into this.
+    :class:`Task`. The one definition of a task's scheduling fields, their units and defaults: a scenario's
+    task entry (:class:`netsim.scenario.schema.TaskSpec`) is this model with its program added, validated once
+    from YAML (``period: 10 ms`` is read by the ``Duration`` type), and the kernel takes it as it is.
 
-    Build one with keywords and let :meth:`checked` (run by ``Kernel.add_task``) validate it and fill the
-    defaults that depend on other fields.
+    From Python, build one with the name and keywords in integer ns (``TaskSpec("ctl", period=10_000_000)``):
+    nothing is parsed, and :meth:`checked` (run by ``Kernel.add_task``) validates it and fills the defaults
+    that depend on other fields.
 
     Attributes
     ----------
     name
         Task name, unique on its node.
     period
-        Release period (``None``: aperiodic, released by ``create_job``, messages or handlers).
+        Release period (``None``: not periodic).
     offset
-        First release of a periodic task.
+        First release of a periodic or sporadic task.
     deadline
-        Relative deadline (``None``: the period; no deadline for an aperiodic task without one).
+        Relative deadline (``None``: the period, or the ``min_interarrival`` of a sporadic task; no deadline
+        for an aperiodic task without one).
     priority
         Explicit priority (lower = more urgent); needed by ``fp``.
     wcet
         Execution budget per job; exceeding it fires the task's ``wcet_handler``.
+    release
+        ``periodic`` (the default with a period), ``sporadic`` (the default with ``min_interarrival`` and no
+        period), ``aperiodic`` (released by program code; the default otherwise) or ``on_message:<network>``
+        (released by the node's messages on that network). A task that is not periodic has no period; one
+        that is not sporadic has no ``min_interarrival`` (:meth:`checked` refuses them).
     preemptible
         ``False``: once started, only interrupt handlers can take the CPU from the job.
     wcet_handler, deadline_handler
         A handler name (invoked with the overrunning job as data) or a callable ``fn(job)`` run at the
         overrun instant (``None``: the overrun is only logged).
     release_jitter
-        Release jitter of a periodic or sporadic task: each job arrives a draw of this distribution after
-        its nominal release (an :class:`~netsim.kernel.exectime.ExecTime`, or an integer of ns for a
-        constant delay), drawn from the task's stream ``kernel.<node>.release.<task>``. ``job.release``, the
-        absolute deadline and the record's ``response`` are measured from the nominal release; the record's
-        ``arrival`` is the actual arrival.
+        Release jitter of a periodic or sporadic task: each job arrives a draw of this distribution
+        (:mod:`netsim.distributions`, or an integer of ns for a constant delay) after its nominal release,
+        drawn from the task's stream ``kernel.<node>.release.<task>``. ``job.release``, the absolute deadline
+        and the record's ``response`` are measured from the nominal release; the record's ``arrival`` is the
+        actual arrival.
     min_interarrival
         A **sporadic** task (no ``period``): the kernel releases it by itself, successive arrivals at least
         this far apart (the first at ``offset``); the deadline defaults to it.
     extra_interarrival
-        A sporadic task's random gap added to ``min_interarrival`` at each arrival (an ``ExecTime``, e.g.
+        A sporadic task's random gap added to ``min_interarrival`` at each arrival (a distribution, e.g.
         ``ExecTime.exponential(mean)``; ``None``: arrivals exactly ``min_interarrival`` apart).
     abort_on_miss
         Kill a job that has not finished at its absolute deadline (after its ``deadline_handler``): its
@@ -150,42 +187,112 @@ class TaskSpec:
         (:mod:`netsim.kernel.arrivals`).
     """
 
+    model_config = ConfigDict(extra="forbid", frozen=True, arbitrary_types_allowed=True)
+
     name: str
-    period: int | None = None
-    offset: int = 0
-    deadline: int | None = None
+    period: Duration | None = None
+    offset: Time = 0
+    deadline: Duration | None = None
     priority: int | float | None = None
-    wcet: int | None = None
+    wcet: Duration | None = None
+    release: Annotated[str | None, BeforeValidator(_release)] = None
     preemptible: bool = True
-    wcet_handler: str | Callable[[Any], Any] | None = None
-    deadline_handler: str | Callable[[Any], Any] | None = None
-    release_jitter: Any = None
-    min_interarrival: int | None = None
-    extra_interarrival: Any = None
+    wcet_handler: HandlerRef = None
+    deadline_handler: HandlerRef = None
+    release_jitter: DistributionSpec | None = None
+    min_interarrival: Duration | None = None
+    extra_interarrival: DistributionSpec | None = None
     abort_on_miss: bool = False
-    set_period: str = "next_release"
+    set_period: SetPeriodRule = Field("next_release", description=(
+        "a period changed at run time: next_release (TrueTime 1.5) moves the armed release to one new period "
+        "after the last; keep_armed (TrueTime 2.0) keeps it"))
+
+    _checked: Any = PrivateAttr(default=None)
+
+    def __init__(self, name: Any = _YAML, /, **fields: Any) -> None:
+        if name is _YAML:  # keywords only: validated as YAML is (also how pydantic itself calls this)
+            super().__init__(**fields)
+            return
+        unknown = sorted(set(fields) - set(type(self).model_fields))
+        if unknown:
+            raise TypeError(f"TaskSpec() got an unexpected keyword argument '{unknown[0]}'")
+        made = type(self).model_construct(name=name, **fields)  # Python: integer ns, checked by checked()
+        for attr in ("__dict__", "__pydantic_fields_set__", "__pydantic_extra__", "__pydantic_private__"):
+            object.__setattr__(self, attr, getattr(made, attr))
+
+    @model_validator(mode="after")
+    def _defaults(self) -> TaskSpec:
+        """From YAML: ``release`` from the fields given, and the deadline from the period (or the gap)."""
+        if self.release is None:
+            object.__setattr__(self, "release", "periodic" if self.period is not None else
+                               "sporadic" if self.min_interarrival is not None else "aperiodic")
+        if self.deadline is None:
+            object.__setattr__(self, "deadline", self.period if self.period is not None else self.min_interarrival)
+        return self
+
+    @property
+    def release_kind(self) -> str:
+        """``"periodic"``, ``"aperiodic"``, ``"sporadic"`` or ``"on_message"`` (from the fields when unset)."""
+        if self.release is None:
+            return ("periodic" if self.period is not None else
+                    "sporadic" if self.min_interarrival is not None else "aperiodic")
+        return str(self.release).split(":", 1)[0]
+
+    @property
+    def release_network(self) -> str | None:
+        """The network whose messages release this task (``release: on_message:<net>``), else None."""
+        kind, _, net = str(self.release).partition(":")
+        return net if kind == "on_message" else None
 
     @property
     def self_released(self) -> bool:
         """True for a task the kernel releases by itself: periodic (``period``) or sporadic."""
         return self.period is not None or self.min_interarrival is not None
 
+    def replaced(self, **changes: Any) -> TaskSpec:
+        """A copy of this (checked) description with ``changes`` (run-time parameters, integer ns)."""
+        spec = self.model_copy(update=changes)
+        spec._checked = None
+        return spec
+
     def checked(self, node: str) -> TaskSpec:
         """This description validated for node ``node``, with ``deadline`` defaulting to the period.
 
         Every check depends on the description only, so ``netsim validate`` runs this same method on a
-        scenario's tasks before anything is built (then the scheduling policy's ``check``).
+        scenario's tasks before anything is built (then the scheduling policy's ``check``). The result is kept:
+        the dry run of ``netsim validate`` and the build of a run check a scenario's task once.
 
         Raises
         ------
         BuildError
             From :func:`task_error` (with ``node``, ``task`` and ``field`` attributes).
         """
+        done = self._checked
+        if done is not None and done[0] == node:
+            return done[1]
+        result = self._check(node)
+        self._checked = (node, result)
+        return result
+
+    def _check(self, node: str) -> TaskSpec:
         name = self.name
+        release = self.release_kind
         period_ns = check_time(node, name, "period", self.period, positive=True, allow_none=True)
+        if release == "periodic" and self.release is not None and period_ns is None:
+            raise task_error(node, name, "period", "a periodic task needs a period; add e.g. 'period: 10 ms', or "
+                             "set 'release: aperiodic' or 'release: on_message:<network>'")
+        if release != "periodic" and period_ns is not None:
+            raise task_error(node, name, "period", f"only periodic tasks have a period (this one is released "
+                             f"'{self.release}'); remove 'period' or set 'release: periodic'")
         offset_ns = check_time(node, name, "offset", self.offset)
         assert offset_ns is not None
         mia_ns = check_time(node, name, "min_interarrival", self.min_interarrival, positive=True, allow_none=True)
+        if release == "sporadic" and mia_ns is None:
+            raise task_error(node, name, "min_interarrival", "a sporadic task needs a minimum inter-arrival time; "
+                             "add e.g. 'min_interarrival: 10 ms'")
+        if self.release is not None and release != "sporadic" and mia_ns is not None:
+            raise task_error(node, name, "min_interarrival", f"only sporadic tasks have a minimum inter-arrival "
+                             f"time (this one is released '{self.release}'); remove it or set 'release: sporadic'")
         if mia_ns is not None and period_ns is not None:
             raise task_error(node, name, "min_interarrival", "is for sporadic tasks, which have no period; drop "
                              "'period' (a sporadic task) or 'min_interarrival' (a periodic task)")
@@ -222,27 +329,25 @@ class TaskSpec:
                              "'wcet: 2 ms' (the execution budget per job)")
         if self.deadline_handler is not None and deadline_ns is None:
             raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
-        return TaskSpec(name, period_ns, offset_ns, deadline_ns, priority, wcet_ns, bool(self.preemptible),
-                        self.wcet_handler, self.deadline_handler, jitter, mia_ns, extra, self.abort_on_miss,
-                        self.set_period)
+        return TaskSpec.model_construct(
+            name=name, period=period_ns, offset=offset_ns, deadline=deadline_ns, priority=priority, wcet=wcet_ns,
+            release=self.release, preemptible=bool(self.preemptible), wcet_handler=self.wcet_handler,
+            deadline_handler=self.deadline_handler, release_jitter=jitter, min_interarrival=mia_ns,
+            extra_interarrival=extra, abort_on_miss=self.abort_on_miss, set_period=self.set_period)
 
 
 def _distribution(node: str, task: str, field: str, value: Any) -> Any:
-    """A distribution field of a task as an :class:`~netsim.kernel.exectime.ExecTime` (an int: constant ns)."""
+    """A distribution field of a task as a :class:`~netsim.distributions.Distribution` (an int: constant ns)."""
     if value is None:
         return None
-    from netsim.kernel.exectime import (
-        ExecTime,  # the run time (numpy) only for tasks that use the field
-    )
-
-    if isinstance(value, ExecTime):
+    if isinstance(value, Distribution):
         return value
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise task_error(node, task, field, f"must be an ExecTime distribution or an integer number of ns, got "
+        raise task_error(node, task, field, f"must be a distribution (netsim.distributions) or an integer number of ns, got "
                          f"{value!r}")
     if value < 0:
         raise task_error(node, task, field, f"must not be negative, got {format_time(int(value))}")
-    return ExecTime.constant(int(value))
+    return Distribution.constant(int(value))
 
 
 @dataclass(frozen=True)

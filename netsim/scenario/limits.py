@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any, Callable, Final, Iterator
+from typing import Any, Callable, Final, Iterator, Mapping
 
 from netsim.scenario.memory import memory_problem
 from netsim.scenario.paths import PathPart, format_path
@@ -191,11 +191,14 @@ def _ns(value: Any) -> int | None:
         return None
 
 
-def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]]:
+def expected_events(raw: dict[str, Any], tasks: Mapping[tuple[str, int], Any] | None = None
+                    ) -> tuple[float, list[tuple[str, float]]]:
     """An estimate of the events a run of ``raw`` simulates, and its largest contributions.
 
     ``duration / period`` summed over periodic tasks, timer-triggered handlers, polling encoders' ``tick`` and
     the plant's ``record_grid``; networks, messages and program-internal timers add more, so this is a lower bound.
+    ``tasks`` maps ``(node, index)`` to a task's validated :class:`~netsim.scenario.schema.TaskSpec`
+    (:func:`netsim.scenario.validate.check_raw` passes them): its period is read there, not parsed again.
 
     Returns
     -------
@@ -209,8 +212,8 @@ def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]
         return 0.0, []
     parts: list[tuple[str, float]] = []
 
-    def add(path: list[PathPart], period: Any) -> None:
-        p = _ns(period)
+    def add(path: list[PathPart], period: Any, parsed: bool = False) -> None:
+        p = period if parsed else _ns(period)
         if p:
             parts.append((format_path(path), duration / p))
 
@@ -222,6 +225,13 @@ def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]
             add(["io", str(name), "tick"], _d(channel).get("tick"))  # exact mode accounts ticks in closed form
     for node_name, node in _d(raw.get("nodes")).items():
         for i, task in enumerate(_l(_d(node).get("tasks"))):
+            model = tasks.get((str(node_name), i)) if tasks is not None else None
+            if model is not None:  # validated: its times are integer ns already
+                if model.release_kind == "periodic":
+                    add(["nodes", str(node_name), "tasks", i, "period"], model.period, parsed=True)
+                elif model.release_kind == "sporadic":
+                    add(["nodes", str(node_name), "tasks", i, "min_interarrival"], model.min_interarrival, parsed=True)
+                continue
             task = _d(task)
             if task.get("release", "periodic") == "periodic":
                 add(["nodes", str(node_name), "tasks", i, "period"], task.get("period"))
@@ -235,8 +245,10 @@ def expected_events(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]
     return float(sum(c for _, c in parts)), parts
 
 
-def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[Problem]:
-    """Every limit ``raw`` breaks (see the module docstring); ``line_of`` adds lines to cross references."""
+def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None,
+                   tasks: Mapping[tuple[str, int], Any] | None = None) -> list[Problem]:
+    """Every limit ``raw`` breaks (see the module docstring); ``line_of`` adds lines to cross references;
+    ``tasks``: the validated tasks (:func:`expected_events`)."""
     problems: list[Problem] = []
     for key, value in raw.items():
         if key in SKIPPED:
@@ -255,7 +267,7 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None) -> list[P
                 problems.append(Problem(format_path(list(parts)), msg, supersedes=True))
     problems += _name_problems(raw)
     problems += _structure_problems(raw, line_of)
-    total, parts = expected_events(raw)
+    total, parts = expected_events(raw, tasks)
     if total > EVENTS_WARN:
         top = ", ".join(f"{path}: {count:.3g}" for path, count in parts[:3])
         problems.append(Problem("duration", f"this run simulates at least {total:.3g} events (duration / period "

@@ -221,7 +221,7 @@ def _validate(raw: dict[str, Any], line_of: Any) -> tuple[list[Problem], Scenari
         scenario = Scenario.model_validate(raw)
     except ValidationError as exc:
         problems += problems_from_validation_error(exc, model=Scenario)
-    more, validated = check_raw(raw, line_of)  # duplicate names quote the line of the first definition
+    more, validated = check_raw(raw, line_of, scenario)  # duplicate names quote the line of the first definition
     problems += more
     if scenario is None or any(p.severity == ERROR for p in problems):
         return problems, None

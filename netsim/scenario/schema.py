@@ -94,7 +94,7 @@ from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema_integrator import IntegratorSpec
 from netsim.scenario.schema_sync import SyncSpec
 from netsim.scenario.schema_verdict import VerdictSpec
-from netsim.scenario.schema_task import SetPeriodRule, TimeDistribution, without_unused_arrivals
+from netsim.scenario.schema_task import without_unused_arrivals
 from netsim.distributions import DISTS, MEMBERS as DIST_MEMBERS, Distribution, dist_tag
 from netsim.kernel.task import HandlerSpec as KernelHandlerSpec
 from netsim.kernel.task import TaskSpec as KernelTaskSpec
@@ -204,18 +204,6 @@ def _noise(value: Any) -> Any:
 
 ProcessNoise = Annotated[Any, BeforeValidator(_noise)]
 
-_RELEASE = re.compile(r"^on_message:([A-Za-z0-9_-]+)$")
-
-
-def _release(value: Any) -> str:
-    if isinstance(value, str):
-        text = value.strip().replace(" ", "")
-        if text in ("periodic", "aperiodic", "sporadic") or _RELEASE.match(text):
-            return text
-    raise ValueError(f"release must be 'periodic', 'aperiodic', 'sporadic' or 'on_message:<network>', got {value!r}")
-
-
-Release = Annotated[str, BeforeValidator(_release)]
 
 
 # --------------------------------------------------------------------------------------------- bases
@@ -438,19 +426,22 @@ class SignalSpec(PluginSpec):
 
 
 # --------------------------------------------------------------------------------------------- nodes
-#: The kernel's task description with every field at its default: the defaults of TaskSpec's scheduling fields.
-_KTASK = KernelTaskSpec("")
-_KTASK_FIELDS = tuple(f.name for f in dataclasses.fields(KernelTaskSpec))
 #: The kernel's handler description with every field at its default.
 _KHANDLER = KernelHandlerSpec("")
 _KHANDLER_FIELDS = tuple(f.name for f in dataclasses.fields(KernelHandlerSpec))
 
+#: The order of a task's keys in a resolved scenario (as written before the kernel's TaskSpec became the YAML task).
+_TASK_KEYS = ("name", "program", "params", "period", "offset", "deadline", "priority", "execution", "wcet", "release",
+              "preemptible", "wcet_handler", "deadline_handler", "release_jitter", "min_interarrival",
+              "extra_interarrival", "abort_on_miss", "set_period")
 
-class TaskSpec(PluginSpec):
-    """A task on a node: the program it runs, when it is released and how long it executes.
 
-    Every task needs ``name`` and ``program``. What else each kind of release requires (checked by
-    :mod:`netsim.scenario.validate`, each with its path):
+class TaskSpec(PluginSpec, KernelTaskSpec):
+    """A task on a node: the kernel's own description of a task (:class:`netsim.kernel.task.TaskSpec`: its
+    scheduling fields, their units, defaults and release rules) with the program it runs and its execution time.
+
+    Every task needs ``name`` and ``program``. What else each kind of release requires (the kernel's
+    :meth:`~netsim.kernel.task.TaskSpec.checked`, run by validate, each with its path):
 
     - ``release: periodic`` (the default when ``period`` is given): ``period`` is required; ``offset``,
       ``deadline`` (default: the period) are optional.
@@ -465,69 +456,28 @@ class TaskSpec(PluginSpec):
       (:mod:`netsim.scenario.schema_task`).
     - Under policy ``fp`` every task needs a ``priority``; a ``wcet_handler`` needs a ``wcet``.
 
-    The scheduling fields (``period`` ... ``deadline_handler``) are the kernel's static description of a task,
-    :class:`netsim.kernel.task.TaskSpec`, which defines them and their defaults; this model only reads them
-    from YAML (times with units) and :meth:`kernel_spec` hands them to the kernel.
+    The kernel takes this model as it is (``Kernel.add_task``): a ``period`` is read once, by its ``Duration``
+    type, and checked once per run.
     """
 
     plugin_kind: ClassVar[str] = "program"
     name: Name
     program: str = Field(min_length=1)
     params: dict[str, Any] = Field(default_factory=dict)
-    period: Duration | None = _KTASK.period
-    offset: Time = _KTASK.offset
-    deadline: Duration | None = _KTASK.deadline
-    priority: int | None = _KTASK.priority
     execution: Execution | None = None
-    wcet: Duration | None = _KTASK.wcet
-    release: Release | None = None
-    preemptible: bool = _KTASK.preemptible
-    wcet_handler: Name | None = _KTASK.wcet_handler  # type: ignore[assignment]
-    deadline_handler: Name | None = _KTASK.deadline_handler  # type: ignore[assignment]
-    release_jitter: TimeDistribution | None = None  # arrivals: netsim.scenario.schema_task
-    min_interarrival: Duration | None = _KTASK.min_interarrival
-    extra_interarrival: TimeDistribution | None = None
-    abort_on_miss: bool = _KTASK.abort_on_miss
-    set_period: SetPeriodRule = Field(_KTASK.set_period, description=(  # type: ignore[assignment]
-        "a period changed at run time: next_release (TrueTime 1.5) moves the armed release to one new period "
-        "after the last; keep_armed (TrueTime 2.0) keeps it"))
-
-    @model_validator(mode="after")
-    def _defaults(self) -> TaskSpec:
-        if self.release is None:
-            object.__setattr__(self, "release", "periodic" if self.period is not None else
-                               "sporadic" if self.min_interarrival is not None else "aperiodic")
-        if self.deadline is None:  # the kernel's default (TaskSpec.checked)
-            object.__setattr__(self, "deadline", self.period if self.period is not None else self.min_interarrival)
-        return self
+    priority: int | None = None  # type: ignore[assignment]  # YAML priorities are integers (Python may pass floats)
+    wcet_handler: Name | None = None  # type: ignore[assignment]  # YAML names a handler (Python may pass a callable)
+    deadline_handler: Name | None = None  # type: ignore[assignment]
 
     @model_serializer(mode="wrap")
     def _without_unused_arrivals(self, handler: Any) -> Any:
-        return without_unused_arrivals(handler(self))  # resolved scenarios that use none stay as they were
-
-    def kernel_spec(self) -> KernelTaskSpec:
-        """The kernel's description of this task (unchecked: ``Kernel.add_task`` checks it); a task released
-        by messages or by program code has no period."""
-        fields = {name: getattr(self, name) for name in _KTASK_FIELDS}
-        if self.release_kind != "periodic":
-            fields["period"] = None
-        if self.release_kind != "sporadic":
-            fields["min_interarrival"] = None
-        return KernelTaskSpec(**fields)
+        data = handler(self)
+        if isinstance(data, dict):
+            data = {key: data[key] for key in _TASK_KEYS if key in data}
+        return without_unused_arrivals(data)  # resolved scenarios that use none stay as they were
 
     def plugin_name(self) -> str:
         return self.program
-
-    @property
-    def release_kind(self) -> str:
-        """``"periodic"``, ``"aperiodic"``, ``"sporadic"`` or ``"on_message"``."""
-        return str(self.release).split(":", 1)[0]
-
-    @property
-    def release_network(self) -> str | None:
-        """The network whose messages release this task (``release: on_message:<net>``), else None."""
-        kind, _, net = str(self.release).partition(":")
-        return net if kind == "on_message" else None
 
     def execution_time(self) -> Distribution | None:
         """``execution`` as the distribution the task's program draws from (None when not given)."""

@@ -18,9 +18,11 @@ random stream ``kernel.<node>.release.<task>``.
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
 from netsim.distributions import DISTS, TAG_MARK, DistributionSpec
+from netsim.kernel.task import SetPeriodRule as KernelSetPeriodRule
+from netsim.kernel.task import TaskSpec as KernelTaskSpec
 
 __all__ = [
     "TIME_DISTS",
@@ -29,16 +31,16 @@ __all__ = [
     "without_unused_arrivals",
 ]
 
-#: The task fields of this module and their values when unused.
-ARRIVAL_DEFAULTS: dict[str, Any] = {"release_jitter": None, "min_interarrival": None, "extra_interarrival": None,
-                                    "abort_on_miss": False, "set_period": "next_release"}
+#: The task fields of this module, left out of a resolved task while at the kernel's default (which
+#: :class:`netsim.kernel.task.TaskSpec` defines).
+ARRIVAL_FIELDS = ("release_jitter", "min_interarrival", "extra_interarrival", "abort_on_miss", "set_period")
 
 #: What a period changed at run time (``kernel.set_period``, TrueTime's ``ttSetPeriod``; the feedback scheduler
 #: uses it) does to the release already scheduled. ``next_release`` (default, TrueTime 1.5): it moves to one new
 #: period after the last release (at once if that has passed). ``keep_armed`` (TrueTime 2.0): it stays, and the
 #: new period counts from it. Period 10 ms, releases at 0 and 10 ms, new period 4 ms set at 12 ms: next releases
 #: at 14, 18, 22 ms (next_release) or at 20, 24, 28 ms (keep_armed). :mod:`netsim.kernel.arrivals`.
-SetPeriodRule = Literal["next_release", "keep_armed"]
+SetPeriodRule = KernelSetPeriodRule
 
 
 #: The ``dist`` names a time distribution accepts (:data:`netsim.distributions.DISTS`).
@@ -57,7 +59,7 @@ def without_unused_arrivals(data: Any) -> Any:
     """A task's dumped data without the arrival fields left at their defaults (so a scenario that uses none
     of them dumps, and hashes, as before they existed)."""
     if isinstance(data, dict):
-        for key, default in ARRIVAL_DEFAULTS.items():
-            if key in data and data[key] == default:
+        for key in ARRIVAL_FIELDS:
+            if key in data and data[key] == KernelTaskSpec.model_fields[key].default:
                 del data[key]
     return data

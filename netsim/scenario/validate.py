@@ -122,8 +122,10 @@ def _names(x: Any) -> list[str]:
 class _Checker:
     """Collects problems and validated plugin parameters for one raw scenario."""
 
-    def __init__(self, raw: dict[str, Any]) -> None:
+    def __init__(self, raw: dict[str, Any], scenario: Any = None) -> None:
         self.raw = raw
+        self.scenario = scenario  # the validated Scenario (None when the schema refused something)
+        self.tasks: dict[tuple[str, int], Any] = {}  # (node, index) -> the task's validated TaskSpec
         self.problems: list[Problem] = []
         self.validated: dict[str, Any] = {}
         self.nodes = _names(raw.get("nodes"))
@@ -354,7 +356,7 @@ class _Checker:
                     continue
                 at: list[PathPart] = [*base, kind, i]
                 if kind == "tasks":
-                    self.task(name, node, item, at, handlers)
+                    self.task(name, node, item, at, handlers, self.task_model(name, i, item))
                 else:
                     self.handler(name, item, at)
                 program = self.lookup("program", item.get("program"), [*at, "program"])
@@ -381,76 +383,58 @@ class _Checker:
             self.error(at, "this PID controller runs in a task without a period, so it has no sampling period; "
                            "add 'h: 10 ms' (say) to params, or give the task a period")
 
-    def task(self, node_name: str, node: dict[str, Any], task: dict[str, Any], at: list[PathPart], handlers: list[Any]) -> None:
-        period = task.get("period")
-        release = task.get("release")
-        rel = release.strip().replace(" ", "") if isinstance(release, str) else None
-        if rel is None and release is None:
-            rel = ("periodic" if period is not None else "sporadic" if task.get("min_interarrival") is not None
-                   else "aperiodic")
-        self.sporadic(task, rel, at)
-        if rel == "periodic" and period is None:
-            self.error([*at, "period"], "a periodic task needs a period; add e.g. 'period: 10 ms', or set 'release: aperiodic' or 'release: on_message:<network>'")
-        if rel is not None and rel != "periodic" and period is not None:
-            self.error([*at, "period"], f"only periodic tasks have a period (this one is released '{rel}'); remove 'period' or set 'release: periodic'")
-        if rel is not None and rel.startswith("on_message:"):
-            net = rel.split(":", 1)[1]
+    def task_model(self, node_name: str, index: int, item: dict[str, Any]) -> Any:
+        """The validated :class:`~netsim.scenario.schema.TaskSpec` of a task entry: the scenario's own (read once
+        by the schema), or, when the schema refused something elsewhere, this entry validated alone so that its
+        checks still run (None when the entry itself is refused: the schema reports it)."""
+        if self.scenario is not None:
+            model = self.scenario.nodes[node_name].tasks[index]
+        else:
+            from netsim.scenario.schema import TaskSpec
+
+            try:
+                model = TaskSpec.model_validate(item)
+            except ValidationError:
+                model = None
+        if model is not None:
+            self.tasks[(node_name, index)] = model
+        return model
+
+    def task(self, node_name: str, node: dict[str, Any], task: dict[str, Any], at: list[PathPart],
+             handlers: list[Any], model: Any) -> None:
+        """A task's release rules, the kernel's and the policy's checks (on its validated model) and its
+        handler and network references."""
+        if model is not None and model.release_network is not None:
+            net = model.release_network
             if self.network_ref(node_name, net, [*at, "release"]):
                 self.one_receiver(node_name, net, at, [*at, "release"])
-        refused = self.kernel_checks(node_name, node, task, rel, at)
-        p_ns, d_ns = _time_or_none(period), _time_or_none(task.get("deadline"))
-        if p_ns is not None and d_ns is not None and p_ns > 0 and d_ns > p_ns and "deadline" not in refused:
-            self.warn([*at, "deadline"], f"deadline {format_time(d_ns)} is longer than the period {format_time(p_ns)}; "
-                                         "jobs may overlap (allowed)")
+        refused = self.kernel_checks(node_name, node, model, at)
+        if model is not None and model.period is not None and model.deadline is not None \
+                and model.deadline > model.period and "deadline" not in refused:
+            self.warn([*at, "deadline"], f"deadline {format_time(model.deadline)} is longer than the period "
+                                         f"{format_time(model.period)}; jobs may overlap (allowed)")
         for key in ("wcet_handler", "deadline_handler"):
             ref = task.get(key)
             if isinstance(ref, str) and ref not in handlers:
                 known = [h for h in handlers if isinstance(h, str)]
                 self.error([*at, key], f"node '{node_name}' has no handler '{ref}'{did_you_mean(ref, known, what='handlers')}")
 
-    def sporadic(self, task: dict[str, Any], rel: str | None, at: list[PathPart]) -> None:
-        """``release: sporadic`` goes with ``min_interarrival`` (and ``extra_interarrival`` with both)."""
-        if rel == "sporadic" and task.get("min_interarrival") is None:
-            self.error([*at, "min_interarrival"], "a sporadic task needs a minimum inter-arrival time; add e.g. "
-                                                  "'min_interarrival: 10 ms'")
-        if rel is not None and rel != "sporadic" and task.get("min_interarrival") is not None:
-            self.error([*at, "min_interarrival"], f"only sporadic tasks have a minimum inter-arrival time (this one "
-                                                  f"is released '{rel}'); remove it or set 'release: sporadic'")
+    def kernel_checks(self, node_name: str, node: dict[str, Any], model: Any, at: list[PathPart]) -> set[str]:
+        """The kernel's own checks of a task (:meth:`netsim.kernel.task.TaskSpec.checked`: release rules, times,
+        handlers), then the built-in policy's ``check``, exactly as ``build`` runs them; returns the fields they
+        refused.
 
-    def kernel_checks(self, node_name: str, node: dict[str, Any], task: dict[str, Any], rel: str | None,
-                      at: list[PathPart]) -> set[str]:
-        """The kernel's own checks of a task (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
-        ``check``), exactly as ``build`` runs them; returns the fields they refused.
-
-        Skipped for a task whose times the schema refuses (it reports those). Policies that are not built in
-        are not instantiated here (validating must not run a scenario's own code).
+        Skipped for a task the schema refuses (it reports that). Policies that are not built in are not
+        instantiated here (validating must not run a scenario's own code).
         """
         from netsim.errors import BuildError
-        from netsim.kernel.building import task_spec
 
-        times: dict[str, int | None] = {}
-        for key in ("period", "offset", "deadline", "wcet", "min_interarrival"):
-            value = task.get(key)
-            times[key] = _time_or_none(value)
-            if value is not None and (times[key] is None or (key != "offset" and times[key] <= 0)):
-                return set()  # the schema reports it
-        if rel is not None and rel != "periodic":
-            times["period"] = None
-        if rel != "sporadic":
-            times["min_interarrival"] = None
-        abort = task.get("abort_on_miss", False)
-        if not isinstance(abort, bool):
-            return set()  # the schema reports it
-        priority = task.get("priority")
-        if priority is not None and (isinstance(priority, bool) or not isinstance(priority, (int, float))):
+        if model is None:
             return set()
-        name = str(task.get("name"))
+        name = model.name
         policy_name = node.get("policy", "fp")
         try:
-            spec = task_spec(node_name, name, period=times["period"], offset=times["offset"] or 0,
-                             deadline=times["deadline"], priority=priority, wcet=times["wcet"],
-                             wcet_handler=task.get("wcet_handler"), deadline_handler=task.get("deadline_handler"),
-                             min_interarrival=times["min_interarrival"], abort_on_miss=abort)
+            spec = model.checked(node_name)
             if is_builtin_policy(policy_name):
                 find_policy(policy_name)().check(node_name, spec)
         except BuildError as exc:
@@ -794,7 +778,8 @@ def _ports(factory: Any, params: Any) -> tuple[list[Any] | None, list[Any] | Non
     return side("input_names", "n_inputs"), side("output_names", "n_outputs")
 
 
-def check_raw(raw: dict[str, Any], line_of: LineOf | None = None) -> tuple[list[Problem], dict[str, Any]]:
+def check_raw(raw: dict[str, Any], line_of: LineOf | None = None,
+              scenario: Any = None) -> tuple[list[Problem], dict[str, Any]]:
     """Plugin and cross-reference problems of a raw scenario, and the validated plugin parameters.
 
     Parameters
@@ -804,6 +789,9 @@ def check_raw(raw: dict[str, Any], line_of: LineOf | None = None) -> tuple[list[
     line_of
         ``line_of(path)``, the line of a YAML path: messages that point at a second place (the first definition
         of a duplicate name) then give its line.
+    scenario
+        The scenario the schema validated from ``raw`` (None when it refused something): the task checks read
+        its tasks' fields instead of parsing the raw times again.
 
     Returns
     -------
@@ -814,7 +802,7 @@ def check_raw(raw: dict[str, Any], line_of: LineOf | None = None) -> tuple[list[
         ``"signals.r"``, ``"nodes.n.tasks[0]"``, ``"nodes.n.handlers[0]"``, ``"networks.can"``,
         ``"metrics[0]"``.
     """
-    checker = _Checker(raw)
+    checker = _Checker(raw, scenario)
     checker.run()
-    checker.problems += limit_problems(raw, line_of)
+    checker.problems += limit_problems(raw, line_of, checker.tasks)
     return checker.problems, checker.validated

@@ -2,7 +2,7 @@
 
 :func:`wire_kernels` creates one kernel per node (its policy by name, resolved by
 :func:`netsim.kernel.policies.find_policy`), adds each task and handler from its kernel description
-(``TaskSpec.kernel_spec()``, ``HandlerSpec.kernel_spec()``) and creates the timers, external triggers and
+(a task entry is the kernel's ``TaskSpec``; ``HandlerSpec.kernel_spec()``) and creates the timers, external triggers and
 periodic loads; :func:`build_networks` creates the networks and attaches them; :func:`bind_receivers` binds
 message receptions. ``netsim validate`` runs the same functions with placeholder bodies
 (:mod:`netsim.scenario.static_build`), so it refuses what the kernel would refuse, at the same YAML path.
@@ -69,7 +69,7 @@ def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
             checked_call(kernel.add_handler, hpath, h.kernel_spec(), body(h, kernel, node_name, hpath, None))
         for i, t in enumerate(node.tasks):
             tpath = f"{npath}.tasks[{i}]"
-            checked_call(kernel.add_task, tpath, t.kernel_spec(), body(t, kernel, node_name, tpath, t.period))
+            checked_call(kernel.add_task, tpath, t, body(t, kernel, node_name, tpath, t.period))
             if t.release_network is not None:
                 bindings.append((node_name, t.release_network, t.name))
         # triggers after every handler exists
@@ -106,7 +106,7 @@ def bind_receivers(kernels: dict[str, Any], networks: dict[str, Any], bindings: 
 
 #: Task/handler fields a kernel error may name: the fields of the kernel's descriptions, keys of the scenario's
 #: task or handler.
-SPEC_FIELDS = frozenset(f.name for cls in (TaskSpec, HandlerSpec) for f in dataclasses.fields(cls))
+SPEC_FIELDS = frozenset([*TaskSpec.model_fields, *(f.name for f in dataclasses.fields(HandlerSpec))])
 
 
 def checked_call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:

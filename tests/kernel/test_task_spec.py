@@ -50,21 +50,38 @@ def test_add_task_and_add_handler_take_the_descriptions():
     assert [(r.release, r.response) for r in k.job_records] == [(0, 1 * MS), (5 * MS, None)]
 
 
-@pytest.mark.parametrize("model, kernel_cls", [(schema.TaskSpec, TaskSpec), (schema.HandlerSpec, HandlerSpec)])
-def test_the_yaml_models_read_exactly_the_kernel_fields_with_the_kernel_defaults(model, kernel_cls):
-    fields = model.model_fields
-    for f in dataclasses.fields(kernel_cls):
-        assert f.name in fields, f"{model.__name__} does not read the kernel field '{f.name}'"
+def test_the_yaml_task_is_the_kernel_task_spec():
+    # one description: the scenario's task entry is a kernel TaskSpec (no copy of its fields or defaults)
+    assert issubclass(schema.TaskSpec, TaskSpec)
+    for name, field in TaskSpec.model_fields.items():
+        assert name in schema.TaskSpec.model_fields
+        assert schema.TaskSpec.model_fields[name].default == field.default, name
+
+
+def test_the_yaml_handler_reads_exactly_the_kernel_fields_with_the_kernel_defaults():
+    fields = schema.HandlerSpec.model_fields
+    for f in dataclasses.fields(HandlerSpec):
+        assert f.name in fields, f"HandlerSpec does not read the kernel field '{f.name}'"
         if f.default is not dataclasses.MISSING:
             assert fields[f.name].default == f.default, f"default of '{f.name}' differs from the kernel's"
 
 
-def test_a_yaml_task_becomes_the_kernel_description():
+def _fields(spec):
+    return {name: getattr(spec, name) for name in TaskSpec.model_fields}
+
+
+def test_a_yaml_task_is_checked_by_the_kernel_as_it_is():
     task = schema.TaskSpec.model_validate({"name": "ctl", "program": "p", "period": "10 ms", "priority": 1,
                                            "wcet": "2 ms", "wcet_handler": "ovr"})
-    assert task.kernel_spec() == TaskSpec("ctl", period=10 * MS, deadline=10 * MS, priority=1, wcet=2 * MS,
-                                          wcet_handler="ovr")
+    assert _fields(task.checked("cpu")) == _fields(TaskSpec("ctl", period=10 * MS, deadline=10 * MS, priority=1,
+                                                             wcet=2 * MS, wcet_handler="ovr", release="periodic"))
     on_msg = schema.TaskSpec.model_validate({"name": "act", "program": "p", "release": "on_message:can"})
-    assert on_msg.kernel_spec() == TaskSpec("act")
+    assert on_msg.checked("cpu").period is None and on_msg.release_network == "can"
     isr = schema.HandlerSpec.model_validate({"name": "isr", "program": "p", "latency": "5 us", "priority": 2})
     assert isr.kernel_spec() == HandlerSpec("isr", priority=2, latency=5 * US)
+
+
+def test_checked_runs_once_per_node_for_one_description():
+    spec = TaskSpec("ctl", period=10 * MS, priority=2)
+    assert spec.checked("cpu") is spec.checked("cpu")  # validate's dry run and the build share it
+    assert spec.checked("other") is not spec.checked("cpu")

@@ -42,9 +42,9 @@ def test_the_fields_are_read_with_units_and_defaults():
     a = s.nodes["cpu"].tasks[0]
     assert a.release_kind == "sporadic" and a.min_interarrival == 7 * MS and a.deadline == 7 * MS
     assert isinstance(a.extra_interarrival, ExponentialTime) and a.extra_interarrival.mean == 3 * MS
-    spec = a.kernel_spec()
+    spec = a.checked("cpu")
     assert spec.min_interarrival == 7 * MS and spec.extra_interarrival.dist == "exponential"
-    assert load_scenario(_raw(period="10 ms", release_jitter="1 ms")).nodes["cpu"].tasks[0].kernel_spec() \
+    assert load_scenario(_raw(period="10 ms", release_jitter="1 ms")).nodes["cpu"].tasks[0].checked("cpu") \
         .release_jitter.const == MS  # a time is a constant jitter
 
 
