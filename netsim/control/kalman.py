@@ -207,6 +207,23 @@ class KalmanFilter:
         """Estimate at the current sample (posterior if a measurement was fused there, prior otherwise)."""
         return self.x
 
+    def dare_prior(self) -> np.ndarray:
+        """The steady-state prior covariance of this filter's ``(A, C, Q, R)`` (the filter DARE), solved once per
+        filter: the one the steady-state filter uses, the one the time-varying filter's covariance settles to.
+
+        Raises
+        ------
+        ConfigError
+            When the Riccati equation has no stabilising solution (:func:`steady_state_prior`).
+        """
+        if self.steady_state:
+            return self.M_ss  # type: ignore[no-any-return]
+        got = self.__dict__.get("_dare_prior")
+        if got is None:
+            got = steady_state_prior(self.A, self.C, self.Q, self.R)
+            self._dare_prior = got
+        return got  # type: ignore[no-any-return]
+
     @property
     def gain(self) -> np.ndarray:
         """The gain a correction at the current sample would use."""

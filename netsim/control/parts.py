@@ -24,11 +24,27 @@ program adds the YAML path (``nodes.<n>.tasks[i].params.law.Q``).
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Annotated, Any, ClassVar, Literal, Protocol, Union
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    PlainSerializer,
+    PlainValidator,
+    PrivateAttr,
+    Tag,
+    WithJsonSchema,
+    create_model,
+    model_serializer,
+    model_validator,
+)
+
+from netsim.control.pid import PIDParams
 
 from netsim.errors import ConfigError
 from netsim.registry import register
@@ -50,8 +66,90 @@ __all__ = [
     "SteadyStateKalmanPart",
 ]
 
-#: A weight or covariance: a number (times the identity), a list (the diagonal) or a matrix.
-Weight = Any
+# --------------------------------------------------------------------------------------------- typed values
+class MatrixValue:
+    """A matrix parameter as parsed from YAML, once: a number, a list or a list of rows of finite floats.
+
+    ``given`` is the value as written (what the resolved scenario shows), ``array`` the parsed float array
+    (0-D, 1-D or 2-D, read-only). ``np.asarray(value)`` gives ``array``, so the constructors of
+    :mod:`netsim.control` take it where they take a list; they make the one conversion to the matrix of the
+    model's size (:func:`~netsim.control.design_checks.check_weight`, ``as_matrix``), where ``n`` is known.
+    :data:`parses` counts the parses (the tests count them per run).
+    """
+
+    __slots__ = ("given", "array")
+    #: Parses made in this process (by :func:`_parse_matrix`).
+    parses: ClassVar[int] = 0
+
+    def __init__(self, given: Any, array: np.ndarray) -> None:
+        self.given = given
+        array.setflags(write=False)
+        self.array = array
+
+    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
+        return self.array if dtype is None else self.array.astype(dtype)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.given!r})"
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, MatrixValue) and self.given == other.given
+
+    def __hash__(self) -> int:
+        return hash(repr(self.given))
+
+
+class WeightValue(MatrixValue):
+    """A weight or covariance as parsed: a number (times the identity), a list (the diagonal) or a square matrix."""
+
+    __slots__ = ()
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _parse_matrix(value: Any, square: bool) -> np.ndarray:
+    MatrixValue.parses += 1
+    if isinstance(value, bool) or (isinstance(value, (list, tuple)) and any(isinstance(v, bool) for v in value)):
+        raise ValueError(f"expected numbers, got {str(value)[:60]!r}")
+    what = "a number (times the identity), a list (the diagonal) or a square matrix" if square else "a matrix"
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"must be {what} of numbers (a list of rows), got {str(value)[:60]!r}") from None
+    if arr.ndim > 2:
+        raise ValueError(f"must be {what} (at most two levels of lists), got an array of shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("contains NaN or infinite entries")
+    if square and arr.ndim == 2 and arr.shape[0] != arr.shape[1]:
+        raise ValueError(f"must be square (n x n), got {arr.shape[0]}x{arr.shape[1]}")
+    return arr
+
+
+def _weight(value: Any) -> WeightValue:
+    if isinstance(value, MatrixValue):
+        return WeightValue(value.given, value.array)
+    return WeightValue(_plain(value), _parse_matrix(value, square=True))
+
+
+def _matrix(value: Any) -> MatrixValue:
+    if isinstance(value, MatrixValue):
+        return value
+    return MatrixValue(_plain(value), _parse_matrix(value, square=False))
+
+
+_NUMBERS = {"type": "array", "items": {"type": "number"}}
+#: A weight or covariance: a number (times the identity), a list (the diagonal) or a square matrix (rows),
+#: parsed once into a :class:`WeightValue` (finite numbers, at most 2-D, square); its size and definiteness are
+#: checked where the model's size is known (:func:`~netsim.control.design_checks.check_weight`).
+Weight = Annotated[WeightValue, PlainValidator(_weight), PlainSerializer(lambda w: w.given),
+                   WithJsonSchema({"anyOf": [{"type": "number"}, _NUMBERS, {"type": "array", "items": _NUMBERS}]})]
+#: A gain or cross weight: a number, a list (one row) or a matrix of finite numbers, parsed once.
+Matrix = Annotated[MatrixValue, PlainValidator(_matrix), PlainSerializer(lambda m: m.given),
+                   WithJsonSchema({"anyOf": [{"type": "number"}, _NUMBERS, {"type": "array", "items": _NUMBERS}]})]
 
 
 @dataclass(frozen=True)
@@ -70,6 +168,8 @@ class Design:
         The plant's initial state when known (the MPC checks its feasibility), else ``None``.
     nonlinear
         The plant's own continuous model when it has one (a nonlinear plant), for the ``ekf`` estimator.
+    period_ns
+        The sampling period in integer nanoseconds (when the design comes from a task).
     """
 
     A: np.ndarray
@@ -79,6 +179,7 @@ class Design:
     Cr: np.ndarray | None = None
     x0: np.ndarray | None = None
     nonlinear: ContinuousModel | None = None
+    period_ns: int | None = None
 
 
 @dataclass(frozen=True)
@@ -135,6 +236,76 @@ class DirectState:
         self._prev_fused = self._fused = False
 
 
+# --------------------------------------------------------------------------------------------- part protocols
+class EstimatorPart(Protocol):
+    """What ``estimator: {type: NAME, ...}`` names: its parameters, its capabilities, and ``build``.
+
+    Capabilities are declared, never probed: the program and ``netsim validate`` read these attributes.
+
+    Attributes
+    ----------
+    Params
+        The pydantic model of its parameters (``netsim list estimator NAME``).
+    needs_nonlinear_model
+        Built on the plant's own continuous model (``design.nonlinear``), not only on ``(A, B, C)``.
+    input_delay
+        ``"any"``: built on the design's ``B``, so ``input_delay`` rebuilds it on ``B = [Gamma0 Gamma1]`` (any
+        delay); ``"whole_periods"``: predicted with ``u[k-d]`` (whole periods of delay only).
+    late_inputs
+        Can be built on ``B = I`` and re-predict past periods from inputs learned late (``applied_input``).
+    starts_from_measurement
+        ``x0_hat: first_measurement`` is possible (the estimate can start from the first measurement).
+    """
+
+    Params: ClassVar[type[BaseModel]]
+    needs_nonlinear_model: ClassVar[bool]
+    input_delay: ClassVar[Literal["any", "whole_periods"]]
+    late_inputs: ClassVar[bool]
+    starts_from_measurement: ClassVar[bool]
+
+    @classmethod
+    def build(cls, params: Any, design: Design, rng: np.random.Generator) -> Any:
+        """The runtime estimator (a :class:`~netsim.control.interface.StateEstimator`) on ``design``."""
+        ...
+
+
+class LawPart(Protocol):
+    """What ``law: {type: NAME, ...}`` names: its parameters, whether it is fed the state estimate, ``build``.
+
+    Attributes
+    ----------
+    Params
+        The pydantic model of its parameters (``netsim list controller NAME``).
+    fed_state
+        ``True``: ``u = law.step(x_hat, r)``; ``False``: the law is fed the first measured output (a PID).
+    """
+
+    Params: ClassVar[type[BaseModel]]
+    fed_state: ClassVar[bool]
+
+    @classmethod
+    def build(cls, params: Any, design: Design, rng: np.random.Generator) -> Any:
+        """The runtime law (a :class:`~netsim.control.interface.ControlLaw`) on ``design``."""
+        ...
+
+
+class EstimatorPartBase:
+    """Defaults of :class:`EstimatorPart`'s capabilities; a registered estimator subclasses it (or declares them)."""
+
+    Params: ClassVar[type[BaseModel]]
+    needs_nonlinear_model: ClassVar[bool] = False
+    input_delay: ClassVar[Literal["any", "whole_periods"]] = "any"
+    late_inputs: ClassVar[bool] = False
+    starts_from_measurement: ClassVar[bool] = False
+
+
+class LawPartBase:
+    """Defaults of :class:`LawPart`'s capabilities; a registered law subclasses it (or declares them)."""
+
+    Params: ClassVar[type[BaseModel]]
+    fed_state: ClassVar[bool] = True
+
+
 # --------------------------------------------------------------------------------------------- estimators
 class _KalmanParams(StrictModel):
     Q: Weight = Field(description="covariance of the process noise w[k] of the discrete model at the task period, "
@@ -144,7 +315,7 @@ class _KalmanParams(StrictModel):
                                   "definite, measured outputs' units squared)")
     x0: list[float] | None = Field(None, description="initial estimate x_hat[0|-1], the prior of the first sample "
                                                      "(n numbers, state units; default zeros)")
-    P0: Weight = Field(None, description="covariance of x0 (n x n; default identity; ignored by steady_state_kalman, "
+    P0: Weight | None = Field(None, description="covariance of x0 (n x n; default identity; ignored by steady_state_kalman, "
                                          "which starts from the DARE prior)")
     history: int = Field(20, ge=0, le=10_000,
                          description="samples back a delayed measurement is fused at its own sample time (re-filtered "
@@ -152,14 +323,16 @@ class _KalmanParams(StrictModel):
 
 
 @register("estimator", "kalman", "time-varying Kalman filter; delayed measurements fused at their sample time")
-class KalmanPart:
+class KalmanPart(EstimatorPartBase):
     """``estimator: {type: kalman, Q, R, x0, P0, history}``."""
 
     Params = _KalmanParams
-    steady_state = False
+    late_inputs = True
+    starts_from_measurement = True
+    steady_state: ClassVar[bool] = False
 
     @classmethod
-    def build(cls, params: _KalmanParams, design: Design) -> Any:
+    def build(cls, params: _KalmanParams, design: Design, rng: np.random.Generator) -> Any:
         from netsim.control.kalman import KalmanFilter
 
         return KalmanFilter(design.A, design.B, design.C, params.Q, params.R, x0=params.x0, P0=params.P0,
@@ -179,13 +352,16 @@ class _EKFParams(_KalmanParams):
 
 
 @register("estimator", "ekf", "extended Kalman filter on the plant's own nonlinear model (f, h), RK4 per period")
-class ModelEKFPart:
+class ModelEKFPart(EstimatorPartBase):
     """``estimator: {type: ekf, Q, R, x0, P0, substeps, history}``: needs a plant with its own model (f, h)."""
 
     Params = _EKFParams
+    needs_nonlinear_model = True
+    input_delay = "whole_periods"
+    starts_from_measurement = True
 
     @classmethod
-    def build(cls, params: _EKFParams, design: Design) -> Any:
+    def build(cls, params: _EKFParams, design: Design, rng: np.random.Generator) -> Any:
         from netsim.control.model_ekf import ModelEKF
 
         model = design.nonlinear
@@ -211,13 +387,14 @@ class _LuenbergerParams(StrictModel):
 
 
 @register("estimator", "luenberger", "Luenberger observer, gain by pole placement, predictor or current form")
-class LuenbergerPart:
+class LuenbergerPart(EstimatorPartBase):
     """``estimator: {type: luenberger, poles, form, x0}``."""
 
     Params = _LuenbergerParams
+    starts_from_measurement = True
 
     @classmethod
-    def build(cls, params: _LuenbergerParams, design: Design) -> Any:
+    def build(cls, params: _LuenbergerParams, design: Design, rng: np.random.Generator) -> Any:
         from netsim.control.luenberger import LuenbergerObserver
 
         try:
@@ -232,13 +409,14 @@ class _NoParams(StrictModel):
 
 
 @register("estimator", "none", "no estimator: every state is measured (x_hat = C^-1 y)")
-class NoEstimatorPart:
-    """``estimator: {type: none}``."""
+class NoEstimatorPart(EstimatorPartBase):
+    """``estimator: {type: none}`` (the measurement is the estimate: it starts from the first one)."""
 
     Params = _NoParams
+    starts_from_measurement = True
 
     @classmethod
-    def build(cls, params: _NoParams, design: Design) -> Any:
+    def build(cls, params: _NoParams, design: Design, rng: np.random.Generator) -> Any:
         return DirectState(design.A, design.B, design.C)
 
 
@@ -263,14 +441,14 @@ def _weighted(params: Any) -> Any:
 
 
 class _LQRParams(_Limits):
-    Q: Weight = Field(None, description=_Q_TEXT)
-    Qy: Weight = Field(None, description=_QY_TEXT)
+    Q: Weight | None = Field(None, description=_Q_TEXT)
+    Qy: Weight | None = Field(None, description=_QY_TEXT)
     R: Weight = Field(description="input weight (m x m, positive definite, per input unit squared)")
-    N: Any = Field(None, description="cross weight N of the cost term 2 x' N u (n x m; default zero)")
+    N: Matrix | None = Field(None, description="cross weight N of the cost term 2 x' N u (n x m; default zero)")
     integral: bool = Field(False, description="integral action: z[k+1] = z[k] + r[k] - Cr x_hat[k|k] (the estimate, "
                                               "not y), u = ... - Ki z; Ki from the LQR of the model augmented "
                                               "with z (needs a reference)")
-    Qi: Weight = Field(None, description="weight of the integrator states z (q x q, one per tracked output; default "
+    Qi: Weight | None = Field(None, description="weight of the integrator states z (q x q, one per tracked output; default "
                                          "identity)")
     feedforward: bool = Field(True, description="add the steady-state feed-forward of an output reference: "
                                                 "u = Nu r - K (x_hat - Nx r), with Cr Nx r = r at equilibrium")
@@ -279,14 +457,13 @@ class _LQRParams(_Limits):
 
 
 @register("controller", "lqr", "discrete LQR state feedback (python-control dlqr at build)")
-class LQRPart:
+class LQRPart(LawPartBase):
     """``law: {type: lqr, Q, R, N, integral, Qi, feedforward, u_min, u_max}``."""
 
     Params = _LQRParams
-    fed_state = True
 
     @classmethod
-    def build(cls, params: _LQRParams, design: Design) -> Any:
+    def build(cls, params: _LQRParams, design: Design, rng: np.random.Generator) -> Any:
         from netsim.control.lqr import LQR
 
         return LQR(design.A, design.B, params.Q, params.R, N=params.N, Cr=design.Cr, integral=params.integral,
@@ -295,9 +472,9 @@ class LQRPart:
 
 
 class _StateFeedbackParams(_Limits):
-    K: Any = Field(description="state gain (m x n): u = u_ff(r) - K x_hat[k|k] (negative feedback, the sign of "
+    K: Matrix = Field(description="state gain (m x n): u = u_ff(r) - K x_hat[k|k] (negative feedback, the sign of "
                                "control.dlqr's K)")
-    Ki: Any = Field(None, description="integral gain (m x q): u = ... - Ki z, z[k+1] = z[k] + r[k] - Cr x_hat[k|k] "
+    Ki: Matrix | None = Field(None, description="integral gain (m x q): u = ... - Ki z, z[k+1] = z[k] + r[k] - Cr x_hat[k|k] "
                                       "(needs a reference; the sign of the integrator block of control.dlqr's gain "
                                       "on the model augmented with z)")
     feedforward: bool = Field(True, description="add the steady-state feed-forward of an output reference: "
@@ -305,14 +482,13 @@ class _StateFeedbackParams(_Limits):
 
 
 @register("controller", "state_feedback", "u = u_ff(r) - K x_hat with a given gain K")
-class StateFeedbackPart:
+class StateFeedbackPart(LawPartBase):
     """``law: {type: state_feedback, K, Ki, feedforward, u_min, u_max}``."""
 
     Params = _StateFeedbackParams
-    fed_state = True
 
     @classmethod
-    def build(cls, params: _StateFeedbackParams, design: Design) -> Any:
+    def build(cls, params: _StateFeedbackParams, design: Design, rng: np.random.Generator) -> Any:
         from netsim.control.lqr import StateFeedback
 
         return StateFeedback(design.A, design.B, params.K, Cr=design.Cr, Ki=params.Ki,
@@ -322,10 +498,10 @@ class StateFeedbackPart:
 class _MPCParams(_Limits):
     horizon: int = Field(ge=1, le=1000, description="prediction horizon N in samples of the task period (inputs "
                                                    "u_0 .. u_{N-1}, states x_1 .. x_N)")
-    Q: Weight = Field(None, description=_Q_TEXT)
-    Qy: Weight = Field(None, description=_QY_TEXT)
+    Q: Weight | None = Field(None, description=_Q_TEXT)
+    Qy: Weight | None = Field(None, description=_QY_TEXT)
     R: Weight = Field(description="input weight (m x m, positive definite, per input unit squared)")
-    P: Weight = Field(None, description="terminal weight on x_N - x_s (n x n, PSD; default: the LQR Riccati "
+    P: Weight | None = Field(None, description="terminal weight on x_N - x_s (n x n, PSD; default: the LQR Riccati "
                                         "solution of (A, B, Q + C' Qy C, R))")
     du_min: float | list[float] | None = Field(None, description="lower limit of u_k - u_{k-1} per sample, in input "
                                                                  "units (one number, or one per input; <= 0)")
@@ -344,7 +520,7 @@ class _MPCParams(_Limits):
 
 
 @register("controller", "mpc", "linear MPC: horizon, input/rate/state box constraints, LQR terminal cost")
-class MPCPart:
+class MPCPart(LawPartBase):
     """``law: {type: mpc, horizon, Q, R, P, u_min, u_max, du_min, du_max, x_min, x_max, solver, tol}``.
 
     The plant's initial state (when the scenario gives ``plant.x0``) is checked against the state limits and
@@ -353,10 +529,9 @@ class MPCPart:
     """
 
     Params = _MPCParams
-    fed_state = True
 
     @classmethod
-    def build(cls, params: _MPCParams, design: Design) -> Any:
+    def build(cls, params: _MPCParams, design: Design, rng: np.random.Generator) -> Any:
         from netsim.control.mpc import LinearMPC
 
         return LinearMPC(design.A, design.B, params.Q, params.R, params.horizon, P=params.P,
@@ -365,6 +540,131 @@ class MPCPart:
                          x0=design.x0, Qy=params.Qy, C=design.C)
 
 
-#: The estimator and law types a ``state_feedback`` program accepts (``pid`` is the registered PID).
-ESTIMATOR_TYPES = ("kalman", "steady_state_kalman", "ekf", "luenberger", "none")
-LAW_TYPES = ("lqr", "state_feedback", "mpc", "pid")
+class PIDPart(LawPartBase):
+    """``law: {type: pid, K, Ti, Td, N, b, h, u_min, u_max}``: the registered :class:`~netsim.control.pid.PID`,
+    fed the first measured output (:class:`~netsim.control.pid.PIDLaw`), ``h`` defaulting to the task period."""
+
+    Params = PIDParams
+    fed_state = False
+
+    @classmethod
+    def build(cls, params: PIDParams, design: Design, rng: np.random.Generator) -> Any:
+        from netsim.control.pid import PID, PIDLaw
+
+        return PIDLaw(PID.from_params(params, design.period_ns))
+
+
+#: netsim's own parts by ``type:`` name (``pid`` is registered as the :class:`~netsim.control.pid.PID` itself).
+BUILTIN_ESTIMATORS: dict[str, type[EstimatorPartBase]] = {
+    "kalman": KalmanPart, "steady_state_kalman": SteadyStateKalmanPart, "ekf": ModelEKFPart,
+    "luenberger": LuenbergerPart, "none": NoEstimatorPart}
+BUILTIN_LAWS: dict[str, type[LawPartBase]] = {
+    "lqr": LQRPart, "state_feedback": StateFeedbackPart, "mpc": MPCPart, "pid": PIDPart}
+#: The estimator and law types a ``state_feedback`` program accepts besides registered ones.
+ESTIMATOR_TYPES = tuple(BUILTIN_ESTIMATORS)
+LAW_TYPES = tuple(BUILTIN_LAWS)
+
+
+# --------------------------------------------------------------------------------------------- typed specs
+class PartSpec(BaseModel):
+    """A validated ``{type: NAME, its parameters}`` block of netsim's own parts: the part's ``Params`` with its
+    ``type``, frozen. It dumps as it was written (the resolved scenario shows the block as given)."""
+
+    model_config = ConfigDict(frozen=True)
+    _given: Any = PrivateAttr(None)
+    #: The part class (set on each generated spec model).
+    part: ClassVar[Any] = None
+
+    @property
+    def params(self) -> Any:
+        """The parameters ``build`` takes: the spec itself (a subclass of the part's ``Params``)."""
+        return self
+
+    @property
+    def given(self) -> Any:
+        """The block as written (``type`` included)."""
+        return self._given
+
+    @model_validator(mode="wrap")
+    @classmethod
+    def _keep_given(cls, data: Any, handler: Any) -> Any:
+        spec = handler(data)
+        if spec._given is None:
+            spec._given = copy.deepcopy(data) if isinstance(data, dict) else data
+        return spec
+
+    @model_serializer(mode="plain")
+    def _as_given(self) -> Any:
+        return copy.deepcopy(self._given)
+
+
+@dataclass(frozen=True, eq=False)
+class RegisteredPartSpec:
+    """A validated block naming a part registered by a plugin (not one of netsim's own): its ``type``, the part,
+    and its parameters validated with the part's ``Params`` (the raw mapping when it declares none)."""
+
+    type: str
+    part: Any
+    params: Any
+    given: dict[str, Any]
+
+
+def _spec_model(kind: str, name: str, part: Any) -> type[PartSpec]:
+    title = kind.capitalize() + "".join(w.capitalize() for w in name.split("_"))  # EstimatorSteadyStateKalman
+    model = create_model(title, __base__=(part.Params, PartSpec), __module__=__name__,
+                         type=(Literal[name], Field(description=f"'{name}'")))
+    model.part = part
+    return model
+
+
+def _registered(kind: str, field: str, example: str) -> Any:
+    """The validator of a block naming a registered part that is not one of netsim's own."""
+    from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
+
+    def validate(data: Any) -> RegisteredPartSpec:
+        if isinstance(data, RegisteredPartSpec):
+            return data
+        if not isinstance(data, dict):
+            raise ValueError(f"{field} is a mapping {{type: NAME, its parameters}} (e.g. {{type: {example}}}), got "
+                             f"{str(data)[:60]!r}")
+        name = data.get("type")
+        if not isinstance(name, str):
+            raise ValueError(f"{field} needs a 'type' (e.g. 'type: {example}')")
+        from netsim import registry
+
+        try:
+            part = registry.lookup(kind, name)
+        except ConfigError as exc:
+            raise ValidationError.from_exception_data(field, [InitErrorDetails(
+                type=PydanticCustomError("unknown_part", "{text}", {"text": exc.message}), loc=("type",),
+                input=name)]) from None
+        values = {k: v for k, v in data.items() if k != "type"}
+        model = registry.params_model(part)
+        params = model.model_validate(values) if model is not None else values
+        return RegisteredPartSpec(type=name, part=part, params=params, given=copy.deepcopy(data))
+
+    return validate
+
+
+def _part_union(kind: str, field: str, example: str, builtins: dict[str, Any]) -> Any:
+    """``{type: NAME, ...}`` as a pydantic union discriminated on ``type``: netsim's own parts by their tags, any
+    other name as a registered part (validated with its registered ``Params``)."""
+    from netsim.scenario.schema import TAG_MARK
+
+    members = [Annotated[_spec_model(field, name, part), Tag(f"{TAG_MARK}{name}")] for name, part in builtins.items()]
+    members.append(Annotated[RegisteredPartSpec, PlainValidator(_registered(kind, field, example)),
+                             PlainSerializer(lambda spec: copy.deepcopy(spec.given)), Tag(f"{TAG_MARK}registered")])
+
+    def tag(data: Any) -> str:
+        name = data.get("type") if isinstance(data, dict) else getattr(data, "type", None)
+        return f"{TAG_MARK}{name}" if name in builtins and not isinstance(data, RegisteredPartSpec) else \
+            f"{TAG_MARK}registered"
+
+    return Annotated[Union[tuple(members)], Discriminator(tag),  # noqa: UP007 - a runtime-built union
+                     WithJsonSchema({"type": "object"})]
+
+
+#: ``estimator: {type: NAME, ...}``: one of :data:`BUILTIN_ESTIMATORS` or a registered estimator, typed.
+EstimatorSpec = _part_union("estimator", "estimator", "kalman", BUILTIN_ESTIMATORS)
+#: ``law: {type: NAME, ...}``: one of :data:`BUILTIN_LAWS` or a registered controller, typed.
+LawSpec = _part_union("controller", "law", "lqr", BUILTIN_LAWS)

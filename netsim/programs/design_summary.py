@@ -41,6 +41,7 @@ prints (:mod:`netsim.cli.design` builds the plant for it), and :func:`nominal_wa
 
 from __future__ import annotations
 
+import copy
 import json
 import logging
 from dataclasses import dataclass
@@ -61,6 +62,7 @@ __all__ = [
     "run_designs",
     "static_designs",
     "summarize",
+    "summary_of",
     "write_design",
 ]
 
@@ -122,7 +124,7 @@ class LinearController:
 
 def _estimator(est: Any, design: Any) -> tuple[dict[str, Any], tuple[str, np.ndarray] | None]:
     """The estimator's summary, and ``(form, L)`` when it is a linear estimator with a constant gain."""
-    from netsim.control.kalman import KalmanFilter, kalman_gain, steady_state_prior
+    from netsim.control.kalman import KalmanFilter, kalman_gain
     from netsim.control.luenberger import LuenbergerObserver
     from netsim.control.model_ekf import ModelEKF
     from netsim.control.parts import DirectState
@@ -147,7 +149,7 @@ def _estimator(est: Any, design: Any) -> tuple[dict[str, Any], tuple[str, np.nda
             out["gain_kind"] = "steady-state Kalman gain (filter DARE), the gain the filter uses"
         else:
             try:
-                M = steady_state_prior(est.A, est.C, est.Q, est.R)
+                M = est.dare_prior()
             except ConfigError as exc:
                 out["reason"] = f"time-varying Kalman filter without a steady state: {exc.message}"
                 return out, None
@@ -353,11 +355,22 @@ def summarize(design: Any, estimator: Any, law: Any, fed_state: bool, *, rows: l
     }
 
 
+def summary_of(made: Any, plant: Any, source: str | None, *, margin: bool = True) -> dict[str, Any]:
+    """:func:`summarize` of a :class:`~netsim.programs.feedback_design.TaskDesign`, made once per design and
+    option (validation's warning, the run's warning and ``design.json`` share it); a copy."""
+    got = made.summaries.get(margin)
+    if got is None:
+        got = summarize(made.design, made.estimator, made.law, made.fed_state, rows=made.rows, source=source,
+                        plant=plant, margin=margin)
+        made.summaries[margin] = got
+    return copy.deepcopy(got)  # type: ignore[no-any-return]
+
+
 def _task_entry(node: str, index: int, spec: Any, summary: dict[str, Any], program: Any = None) -> dict[str, Any]:
     p = spec.validated_params() if program is None else program.p
     entry = {"node": node, "task": spec.name, "path": f"nodes.{node}.tasks[{index}]",
              "period_ns": int(spec.period) if spec.period is not None else None,
-             "estimator_type": str(p.estimator.get("type")), "law_type": str(p.law.get("type"))}
+             "estimator_type": str(p.estimator.type), "law_type": str(p.law.type)}
     entry.update(summary)
     delay, applied = getattr(p, "input_delay", None), getattr(p, "applied_input", None) is not None
     entry["input_delay_s"] = None if delay is None else int(delay) / 1e9
@@ -388,16 +401,15 @@ def _state_feedback_tasks(scenario: Any) -> list[tuple[str, int, Any]]:
 def static_designs(scenario: Any, plant: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a valid scenario, built as validation builds
     them (:func:`~netsim.programs.feedback_design.build_parts`, nothing simulated)."""
-    from netsim.programs.feedback_design import build_parts, model_source
+    from netsim.programs.feedback_design import model_source, task_design
 
     out: dict[str, dict[str, Any]] = {}
     for node, i, task in _state_feedback_tasks(scenario):
         params = task.validated_params()
         period = task.period if task.release_kind == "periodic" else None
         path = f"nodes.{node}.tasks[{i}]"
-        design, _, rows, est, law, fed = build_parts(params, scenario, plant, period, path, node)
-        summary = summarize(design, est, law, fed, rows=rows, source=model_source(params, plant), plant=plant,
-                            margin=margin)
+        made = task_design(params, scenario, plant, period, path, node)
+        summary = summary_of(made, plant, model_source(params, plant), margin=margin)
         out[f"{node}.{task.name}"] = _task_entry(node, i, task, summary)
     return out
 
@@ -414,8 +426,7 @@ def run_designs(sim: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
         prog = sim.programs.get(f"{node}.{task.name}")
         if prog is None:
             continue
-        summary = summarize(prog.design, prog.estimator, prog.law, prog.fed_state, rows=prog.rows,
-                            source=model_source(prog.p, plant), plant=plant, margin=margin)
+        summary = summary_of(prog.task_design, plant, model_source(prog.p, plant), margin=margin)
         out[f"{node}.{task.name}"] = _task_entry(node, i, task, summary, prog)
     return out
 

@@ -1,19 +1,26 @@
 """The control design of a ``state_feedback`` task: the discrete model, the estimator and the law it names.
 
-:func:`build_parts` is what building the program and ``netsim validate`` (through the program's
-``check_design``, :mod:`netsim.scenario.static_build`) both run, so validation refuses what a run would refuse,
-at the same YAML path. See :mod:`netsim.programs.state_feedback` for the parameters.
+:func:`task_design` is what ``netsim validate`` (through the program's ``check_design``,
+:mod:`netsim.scenario.static_build`) and building the program both run, so validation refuses what a run would
+refuse, at the same YAML path. It designs once: the result (a :class:`TaskDesign`: the model, the estimator and
+the law, never stepped) is kept on the task's validated parameters, keyed by the numbers it was designed from,
+and the program of the run takes it (:func:`claim_design`) instead of solving the Riccati equations again. A
+second run of the same loaded scenario designs anew (the first run's objects have run). See
+:mod:`netsim.programs.state_feedback` for the parameters.
 """
 
 from __future__ import annotations
 
+import hashlib
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from netsim.errors import ConfigError
 
-__all__ = ["MODEL_SOURCES", "build_parts", "design_model", "model_source", "part_params"]
+__all__ = ["MODEL_SOURCES", "TaskDesign", "as_part", "build_parts", "claim_design", "design_model", "model_source",
+           "part_params", "task_design"]
 
 
 def _part(kind: str, name: Any) -> Any:
@@ -23,15 +30,63 @@ def _part(kind: str, name: Any) -> Any:
 
 
 def part_params(kind: str, name: Any) -> Any:
+    """The ``Params`` model of the estimator (``kind`` ``estimator``) or law (``controller``) named ``name``."""
+    from netsim.control.parts import BUILTIN_LAWS
+
+    if kind == "controller" and name in BUILTIN_LAWS:
+        return BUILTIN_LAWS[name].Params
     try:
         obj = _part(kind, name)
     except ConfigError:  # unknown type: the caller reports it at <field>.type
         return None
-    if kind == "controller" and name == "pid":
-        from netsim.control.pid import PIDParams
+    from netsim.registry import params_model
 
-        return PIDParams
-    return getattr(obj, "Params", None)
+    return params_model(obj)
+
+
+class _LegacyEstimator:
+    """A registered estimator written before :class:`~netsim.control.parts.EstimatorPart`: ``build(params,
+    design)``, no declared capabilities (the defaults of :class:`~netsim.control.parts.EstimatorPartBase`)."""
+
+    needs_nonlinear_model = False
+    input_delay = "any"
+    late_inputs = False
+    starts_from_measurement = False
+
+    def __init__(self, obj: Any) -> None:
+        self.obj = obj
+
+    def build(self, params: Any, design: Any, rng: np.random.Generator) -> Any:
+        return self.obj.build(params, design)
+
+
+class _LegacyLaw:
+    """A registered law written before :class:`~netsim.control.parts.LawPart`: ``build(params, design)``, fed the
+    state estimate."""
+
+    fed_state = True
+
+    def __init__(self, obj: Any) -> None:
+        self.obj = obj
+
+    def build(self, params: Any, design: Any, rng: np.random.Generator) -> Any:
+        return self.obj.build(params, design)
+
+
+def as_part(kind: str, spec: Any, where: str) -> Any:
+    """The :class:`~netsim.control.parts.EstimatorPart` / :class:`~netsim.control.parts.LawPart` of a validated
+    block: netsim's own part, a registered one declaring the protocol (a subclass of its base), or an older
+    registered one behind an adapter (refused at ``<where>.type`` when it has no ``build``)."""
+    from netsim.control.parts import EstimatorPartBase, LawPartBase
+
+    part = spec.part
+    base = EstimatorPartBase if kind == "estimator" else LawPartBase
+    if isinstance(part, type) and issubclass(part, base):
+        return part
+    if not callable(getattr(part, "build", None)):  # the one look at an object that declares no protocol
+        raise ConfigError(f"{kind} '{spec.type}' cannot be built from a scenario (it has no build(params, "
+                          "design)); choose another type", path=f"{where}.type")
+    return _LegacyEstimator(part) if kind == "estimator" else _LegacyLaw(part)
 
 
 # --------------------------------------------------------------------------------------------- design
@@ -157,7 +212,7 @@ def design_model(p: Any, scenario: Any, plant: Any, period_ns: int) -> tuple[Any
     if scenario is not None and scenario.plant is not None and scenario.plant.x0 is not None and p.model is None:
         x0 = np.asarray(scenario.plant.x0, dtype=float)
     return Design(A=np.asarray(A, float), B=np.asarray(B, float), C=np.asarray(Cf[rows], float), period_s=h,
-                  Cr=Cr, x0=x0, nonlinear=_continuous_model(plant, rows)), per, rows
+                  Cr=Cr, x0=x0, nonlinear=_continuous_model(plant, rows), period_ns=int(period_ns)), per, rows
 
 
 def _continuous_model(plant: Any, rows: list[int]) -> Any:
@@ -171,13 +226,6 @@ def _continuous_model(plant: Any, rows: list[int]) -> Any:
         return None
     return ContinuousModel(f=f, h=h, params=getattr(plant, "params", None), n_states=int(plant.n_states),
                            n_inputs=int(plant.n_inputs), rows=tuple(rows))
-
-
-def _located(exc: ConfigError, prefix: str, raw: dict[str, Any]) -> ConfigError:
-    """``exc`` at ``prefix`` (plus the field its message starts with, when that is a key of ``raw``)."""
-    head = exc.message.split(" ", 1)[0].rstrip(":,")
-    field = head if head in raw else None
-    return ConfigError(exc.message, path=f"{prefix}.{field}" if field else prefix)
 
 
 def _check_sources(p: Any, scenario: Any, node: str | None, pp: str) -> None:
@@ -228,17 +276,53 @@ def _check_sender_widths(p: Any, scenario: Any, node: str | None, pp: str, per: 
                         path=f"{pp}.measurements[{i}]")
 
 
-def build_parts(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
-                node: str | None = None) -> tuple[Any, ...]:
-    """Design, estimator, law (and whether the law is fed the state) of a ``state_feedback`` task at ``path``.
+def _given_keys(spec: Any) -> set[str]:
+    return set(spec.given if isinstance(spec.given, dict) else ()) - {"type"}
 
-    ``netsim validate`` calls this too (:mod:`netsim.scenario.static_build`), so it refuses what build refuses.
 
-    Raises
-    ------
-    ConfigError
-        At ``<path>.params.<field>`` (``...params.law.Q``, ``...params.estimator``, ``...params.measurements``).
+@dataclass(eq=False)
+class TaskDesign:
+    """One ``state_feedback`` task designed: what :func:`task_design` returns and the program runs.
+
+    Attributes
+    ----------
+    design
+        The discrete model the law is designed on (:class:`~netsim.control.parts.Design`).
+    per_source, rows
+        Per measurement source, the model output rows it measures; all measured rows in order.
+    estimator
+        The estimator, built on the model of the input the plant holds (``input_delay``, ``applied_input``).
+    law, fed_state
+        The law; whether it is fed the estimate (else the first measured output).
+    inputs
+        How the estimator is fed the input (:class:`~netsim.programs.state_feedback_inputs.InputPlan`).
+    summaries
+        :func:`~netsim.programs.design_summary.summarize` results kept for the run (by their options).
     """
+
+    design: Any
+    per_source: list[list[int]]
+    rows: list[int]
+    estimator: Any
+    law: Any
+    fed_state: bool
+    inputs: Any
+    claimed: bool = False
+    summaries: dict[Any, Any] = field(default_factory=dict)
+
+
+def _key(path: str, node: str | None, period_ns: int, design: Any, plan_key: Any) -> str:
+    """What a design depends on: the task, its period, the model's numbers and the plant's own model."""
+    h = hashlib.sha256(f"{path}|{node}|{period_ns}|{plan_key}".encode())
+    for M in (design.A, design.B, design.C, design.Cr, design.x0):
+        h.update(b"-" if M is None else np.ascontiguousarray(M, dtype=float).tobytes() + str(M.shape).encode())
+    nl = design.nonlinear
+    h.update(b"-" if nl is None else repr((nl.f, nl.h, nl.params, nl.rows)).encode())
+    return h.hexdigest()
+
+
+def _model(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
+           node: str | None) -> tuple[Any, list[list[int]], list[int]]:
     pp = f"{path}.params"
     _check_sources(p, scenario, node, pp)
     if period_ns is None:
@@ -255,39 +339,85 @@ def build_parts(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: 
             raise ConfigError(rest, path=f"{pp}.{where}") from None
         raise ConfigError(exc.message, path=pp) from None
     _check_sender_widths(p, scenario, node, pp, per)
-    parts: list[Any] = []
-    for field, kind in (("estimator", "estimator"), ("law", "controller")):
-        raw = getattr(p, field)
-        where = f"{pp}.{field}"
-        try:
-            obj = _part(kind, raw["type"])
-        except ConfigError as exc:
-            raise ConfigError(exc.message, path=f"{where}.type") from None
-        values = {k: v for k, v in raw.items() if k != "type"}
-        cls = part_params(kind, raw["type"])
-        try:
-            params = cls.model_validate(values) if cls is not None else values
-        except Exception as exc:  # noqa: BLE001 - validate reports these per field; build names the part
-            raise ConfigError(f"{field} '{raw['type']}': {exc}", path=where) from None
-        try:
-            if kind == "controller" and raw["type"] == "pid":
-                from netsim.control.pid import PID, PIDLaw
-
-                parts.append((PIDLaw(PID.from_params(params, period_ns)), False))
-                continue
-            build = getattr(obj, "build", None)
-            if not callable(build):
-                raise ConfigError(f"{kind} '{raw['type']}' cannot be built from a scenario (it has no build(params, "
-                                  "design)); choose another type", path=f"{where}.type")
-            made = build(params, design)
-            parts.append((made, bool(getattr(obj, "fed_state", True))))
-        except ConfigError as exc:
-            if exc.path is not None:
-                raise
-            raise _located(exc, where, values) from None
-        except (ValueError, TypeError, np.linalg.LinAlgError) as exc:
-            raise ConfigError(f"{field} '{raw['type']}' cannot be designed: {exc}", path=where) from None
-    (estimator, _), (law, fed_state) = parts
-    return design, per, rows, estimator, law, fed_state
+    return design, per, rows
 
 
+def _build(kind: str, field_name: str, spec: Any, part: Any, design: Any, rng: np.random.Generator, pp: str,
+           wrap: str | None = None, wrap_path: str | None = None) -> Any:
+    """``part.build`` with its errors at the YAML path (``wrap``: the message's lead and path for an estimator
+    rebuilt on the model of a delayed input)."""
+    where = f"{pp}.{field_name}"
+    try:
+        return part.build(spec.params, design, rng)
+    except ConfigError as exc:
+        if exc.path is not None:
+            raise
+        if wrap is not None:
+            raise ConfigError(f"{wrap}: {exc.message}", path=wrap_path) from None
+        head = exc.message.split(" ", 1)[0].rstrip(":,")
+        located = f"{where}.{head}" if head in _given_keys(spec) else where
+        raise ConfigError(exc.message, path=located) from None
+    except (ValueError, TypeError, np.linalg.LinAlgError) as exc:
+        raise ConfigError(f"{field_name} '{spec.type}' cannot be designed: {exc}", path=where) from None
+
+
+def _design_rng(scenario: Any, path: str) -> np.random.Generator:
+    """The random stream a part's ``build`` gets: ``design:<path>`` of the scenario's seed (the same at
+    validation and in the run, so a design made once serves both)."""
+    from netsim.env import stream_seed
+
+    seed = int(getattr(scenario, "seed", 0) or 0) if scenario is not None else 0
+    return np.random.Generator(np.random.PCG64(stream_seed(seed, f"design:{path}")))
+
+
+def task_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
+                node: str | None = None) -> TaskDesign:
+    """The design of a ``state_feedback`` task at ``path``, made once per model (see the module docstring).
+
+    Raises
+    ------
+    ConfigError
+        At ``<path>.params.<field>`` (``...params.law.Q``, ``...params.estimator``, ``...params.measurements``).
+    """
+    from netsim.programs.state_feedback_inputs import input_plan
+
+    pp = f"{path}.params"
+    design, per, rows = _model(p, scenario, plant, period_ns, path, node)
+    est_part = as_part("estimator", p.estimator, f"{pp}.estimator")
+    law_part = as_part("controller", p.law, f"{pp}.law")
+    est_design, plan, wrap = input_plan(p, est_part, design, plant, int(period_ns), path)  # type: ignore[arg-type]
+    key = _key(path, node, int(period_ns), design, plan.key())  # type: ignore[arg-type]
+    cache = p.design_cache()
+    made = cache.get(key)
+    if made is not None:
+        return made  # type: ignore[no-any-return]
+    rng = _design_rng(scenario, path)
+    estimator = _build("estimator", "estimator", p.estimator, est_part, est_design, rng, pp,
+                       *(wrap or (None, None)))
+    plan.check_built(estimator, p, path)
+    law = _build("controller", "law", p.law, law_part, design, rng, pp)
+    made = TaskDesign(design=design, per_source=per, rows=rows, estimator=estimator, law=law,
+                      fed_state=bool(law_part.fed_state), inputs=plan)
+    cache[key] = made
+    return made
+
+
+def claim_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
+                 node: str | None = None) -> TaskDesign:
+    """:func:`task_design` for the program that runs it: the design made at validation when no run has taken
+    it yet (its estimator and law have never stepped), else a new one (kept for this run's summaries)."""
+    made = task_design(p, scenario, plant, period_ns, path, node)
+    if made.claimed:
+        cache = p.design_cache()
+        for key in [k for k, v in cache.items() if v is made]:
+            del cache[key]
+        made = task_design(p, scenario, plant, period_ns, path, node)
+    made.claimed = True
+    return made
+
+
+def build_parts(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
+                node: str | None = None) -> tuple[Any, ...]:
+    """``(design, per_source, rows, estimator, law, fed_state)`` of :func:`task_design` (its older form)."""
+    made = task_design(p, scenario, plant, period_ns, path, node)
+    return made.design, made.per_source, made.rows, made.estimator, made.law, made.fed_state

@@ -96,7 +96,7 @@ from collections.abc import Generator
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import Field, ValidationInfo, field_validator, model_validator
+from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
 
 from netsim.errors import ConfigError
 from netsim.programs.basic import (
@@ -105,9 +105,9 @@ from netsim.programs.basic import (
     _destination,
     _destination_given,
 )
-from netsim.programs.feedback_design import build_parts, part_params
+from netsim.control.parts import EstimatorSpec, LawSpec
+from netsim.programs.feedback_design import claim_design, task_design
 from netsim.programs.inbox import take_matching
-from netsim.programs.state_feedback_inputs import input_options
 from netsim.registry import register
 from netsim.units import QuietDefaultsModel, StrictModel, Time
 
@@ -174,11 +174,11 @@ class SolveTime(StrictModel):
 class _Params(QuietDefaultsModel):
     measurements: list[MeasurementSource] = Field(min_length=1, description="the sources whose values make up y "
                                                   "(ADC channels or messages), in the order of y's rows")
-    estimator: dict[str, Any] = Field(default_factory=lambda: {"type": "kalman"},
-                                      description="the state estimator: {type: kalman | steady_state_kalman | ekf | "
+    estimator: EstimatorSpec = Field(default_factory=lambda: {"type": "kalman"}, validate_default=True,
+                                     description="the state estimator: {type: kalman | steady_state_kalman | ekf | "
                                                   "luenberger | none | <registered>, its parameters} (netsim list "
                                                   "estimator <type>)")
-    law: dict[str, Any] = Field(description="the control law: {type: lqr | state_feedback | mpc | pid | "
+    law: LawSpec = Field(description="the control law: {type: lqr | state_feedback | mpc | pid | "
                                             "<registered>, its parameters} (netsim list controller <type>)")
     reference: str | None = Field(None, description="a scenario signal: the reference of the tracked outputs "
                                                     "(default: none, the law regulates the state to zero)")
@@ -225,19 +225,12 @@ class _Params(QuietDefaultsModel):
     #: Fields added in issue 26, left out of the resolved scenario while at their defaults (its text, and the
     #: golden digests of the shipped scenarios, stay as they were).
     _QUIET_DEFAULTS: ClassVar[dict[str, Any]] = {"input_delay": None, "applied_input": None, "x0_hat": "x0"}
+    _designs: dict[str, Any] = PrivateAttr(default_factory=dict)
 
     @field_validator("to")
     @classmethod
     def _to(cls, to: str | None, info: ValidationInfo) -> str | None:
         return _destination_given(to, info)
-
-    @field_validator("estimator", "law")
-    @classmethod
-    def _typed(cls, value: dict[str, Any], info: ValidationInfo) -> dict[str, Any]:
-        if not isinstance(value.get("type"), str):
-            example = "kalman" if info.field_name == "estimator" else "lqr"
-            raise ValueError(f"{info.field_name} needs a 'type' (e.g. 'type: {example}')")  # noqa: TRY004 - pydantic reports ValueError
-        return value
 
     @model_validator(mode="after")
     def _output(self) -> _Params:
@@ -247,15 +240,10 @@ class _Params(QuietDefaultsModel):
                              "(and 'to') for the control signal" + (f" (got {', '.join(given)})" if given else ""))
         return self
 
-    def nested_params(self) -> list[tuple[str, Any, dict[str, Any]]]:
-        """The estimator's and the law's own parameters with their ``Params`` models (``netsim validate``)."""
-        out = []
-        for field, kind in (("estimator", "estimator"), ("law", "controller")):
-            raw = getattr(self, field)
-            cls = part_params(kind, raw.get("type"))
-            if cls is not None:
-                out.append((field, cls, {k: v for k, v in raw.items() if k != "type"}))
-        return out
+    def design_cache(self) -> dict[str, Any]:
+        """The task's designs made in this process, by what they were designed from
+        (:func:`~netsim.programs.feedback_design.task_design`)."""
+        return self._designs
 
 
 # --------------------------------------------------------------------------------------------- program
@@ -274,11 +262,13 @@ class StateFeedbackProgram:
         plant = ctx.env.components.get("plant")
         self.period = ctx.period
         self.offset = int(getattr(node, "offset", 0) or 0)
-        (self.design, self.per_source, self.rows, self.estimator, self.law,
-         self.fed_state) = build_parts(params, ctx.scenario, plant, ctx.period, path, ctx.node)
+        made = claim_design(params, ctx.scenario, plant, ctx.period, path, ctx.node)
+        self.task_design = made
+        self.design, self.per_source, self.rows = made.design, made.per_source, made.rows
+        self.law, self.fed_state = made.law, made.fed_state
         self.m = self.design.B.shape[1]
-        self.estimator, self.delay_line, self.timeline = input_options(params, self.design, self.estimator, plant,
-                                                                        ctx.period, self.offset, path)
+        self.estimator, self.delay_line, self.timeline = made.inputs.runtime(made.estimator, self.m, ctx.period,
+                                                                             self.offset)
         self.started = params.x0_hat != "first_measurement"
         if params.output_channels is not None and len(params.output_channels) != self.m:
             raise ConfigError(f"output_channels must name {self.m} DAC channels (one per input), got "
@@ -534,8 +524,7 @@ class StateFeedbackProgram:
         params = spec.validated_params()
         path = f"nodes.{node}.tasks[{index}]"
         period = spec.period if spec.release_kind == "periodic" else None
-        design, _, _, estimator, _, _ = build_parts(params, scenario, plant, period, path, node)
-        input_options(params, design, estimator, plant, period, int(getattr(spec, "offset", 0) or 0), path)
+        task_design(params, scenario, plant, period, path, node)
 
 
 def _task_path(ctx: ProgramContext) -> str:

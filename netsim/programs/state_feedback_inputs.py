@@ -1,59 +1,104 @@
 """The input a ``state_feedback`` task's estimator predicts with: ``input_delay`` and ``applied_input``.
 
-:func:`input_options` rebuilds the task's estimator on the model of the input the plant really holds (issue 26
-section 5; the equations are in :mod:`netsim.control.interface` and :mod:`netsim.programs.state_feedback`) and
-checks ``x0_hat``. Building the program and ``netsim validate`` both call it, so validation refuses what a run
-would refuse, at the same YAML path.
+:func:`input_plan` decides, from the estimator part's declared capabilities (:class:`~netsim.control.parts.
+EstimatorPart`), the model the estimator is built on (issue 26 section 5; the equations are in
+:mod:`netsim.control.interface` and :mod:`netsim.programs.state_feedback`) and checks ``x0_hat``, before the
+estimator is built, so it is built once, on that model. Validation and the run both call it (through
+:func:`~netsim.programs.feedback_design.task_design`), so validation refuses what a run would refuse, at the same
+YAML path. :meth:`InputPlan.runtime` makes the run's own delay line or report timeline.
 """
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, Literal
 
 import numpy as np
 
 from netsim.errors import ConfigError
 
-__all__ = ["input_options"]
+__all__ = ["InputPlan", "input_plan"]
 
 
-def input_options(p: Any, design: Any, estimator: Any, plant: Any, period_ns: int | None, offset_ns: int,
-                   path: str) -> tuple[Any, Any, Any]:
-    """The estimator rebuilt for ``input_delay`` / ``applied_input``, the delay line and the report timeline.
+@dataclass(frozen=True, eq=False)
+class InputPlan:
+    """How the estimator is fed the input the plant holds.
+
+    Attributes
+    ----------
+    kind
+        ``computed``: ``u[k]`` as computed; ``delayed``: ``[u[k-d]; u[k-d-1]]`` from an
+        :class:`~netsim.control.interface.InputDelayLine` (model ``B = [Gamma0 Gamma1]``); ``delayed_first``:
+        ``u[k-d]`` only (a part taking whole periods of delay); ``applied``: the effect of the reported input
+        over each period (model ``B = I``, :class:`~netsim.control.interface.AppliedInputTimeline`).
+    d
+        Whole periods of ``input_delay``.
+    continuous
+        The plant's continuous ``(A, B)`` (for ``applied``).
+    """
+
+    kind: Literal["computed", "delayed", "delayed_first", "applied"] = "computed"
+    d: int = 0
+    continuous: tuple[np.ndarray, np.ndarray] | None = None
+
+    def key(self) -> str:
+        """What the estimator's model depends on beyond the design's matrices."""
+        return f"{self.kind}:{self.d}"
+
+    def check_built(self, estimator: Any, p: Any, path: str) -> None:
+        """``applied_input`` re-predicts past periods: the built estimator keeps ``history >= 1`` samples."""
+        if self.kind == "applied" and int(estimator.history) < 1:
+            raise ConfigError("applied_input re-predicts past periods: give the estimator 'history' >= 1 samples",
+                              path=f"{path}.params.estimator.history")
+
+    def runtime(self, estimator: Any, m: int, period_ns: int, offset_ns: int) -> tuple[Any, Any, Any]:
+        """The run's ``(estimator, delay line, timeline)``: fresh delay line / timeline objects."""
+        from netsim.control.interface import AppliedInputTimeline, InputDelayLine
+
+        if self.kind == "delayed":
+            return estimator, InputDelayLine(m, self.d), None
+        if self.kind == "delayed_first":
+            return _FirstHalf(estimator, m), InputDelayLine(m, self.d), None
+        if self.kind == "applied":
+            Ac, Bc = self.continuous  # type: ignore[misc]
+            return estimator, None, AppliedInputTimeline(Ac, Bc, int(period_ns), offset_ns)
+        return estimator, None, None
+
+
+def input_plan(p: Any, part: Any, design: Any, plant: Any, period_ns: int,
+               path: str) -> tuple[Any, InputPlan, tuple[str, str] | None]:
+    """The model the estimator is built on, how it is fed, and (for a changed model) the lead and YAML path of a
+    build error.
 
     ``input_delay = d * period + tau'``: the estimator is built on ``B = [Gamma0 Gamma1]`` (the ZOH split of the
     period at ``tau'``, :func:`~netsim.control.interface.zoh_split`; ``[B 0]`` when ``tau' = 0``) and fed
-    ``[u[k-d]; u[k-d-1]]`` (:class:`~netsim.control.interface.InputDelayLine`). ``applied_input``: built on
-    ``B = I`` and fed the effect of the reported input over each period
-    (:class:`~netsim.control.interface.AppliedInputTimeline`). Also checks ``x0_hat``.
+    ``[u[k-d]; u[k-d-1]]``. ``applied_input``: built on ``B = I`` and fed the effect of the reported input over
+    each period. Also checks ``x0_hat``.
 
     Raises
     ------
     ConfigError
         At ``<path>.params.input_delay`` / ``.applied_input`` / ``.x0_hat``.
     """
-    import dataclasses
-
-    from netsim.control.interface import AppliedInputTimeline, InputDelayLine, zoh_split
+    from netsim.control.interface import zoh_split
     from netsim.programs.feedback_design import model_source
 
     pp = f"{path}.params"
-    kind = str(p.estimator.get("type"))
-    if p.x0_hat == "first_measurement" and kind != "none" and not callable(getattr(estimator, "start_from", None)):
+    kind = p.estimator.type
+    if p.x0_hat == "first_measurement" and not part.starts_from_measurement:
         raise ConfigError(f"the estimator '{kind}' cannot start from a measurement; use x0_hat: x0 (and the "
                           "estimator's x0), or a kalman, steady_state_kalman, ekf or luenberger estimator",
                           path=f"{pp}.x0_hat")
     if p.input_delay is None and p.applied_input is None:
-        return estimator, None, None
+        return design, InputPlan(), None
     if p.input_delay is not None and p.applied_input is not None:
         raise ConfigError("give input_delay (a known constant delay) or applied_input (the actuator's reports), not "
                           "both", path=f"{pp}.applied_input")
-    if period_ns is None:
-        return estimator, None, None  # build_parts has refused it already
     continuous = None
     if p.model is None and model_source(p, plant) == "zoh":
         continuous = (np.atleast_2d(np.asarray(plant.A, dtype=float)), np.asarray(plant.B, dtype=float))
-    n, m = design.A.shape[0], design.B.shape[1]
+    n = design.A.shape[0]
     if p.input_delay is not None:
         where = f"{pp}.input_delay"
         if p.input_delay < 0:
@@ -64,52 +109,30 @@ def input_options(p: Any, design: Any, estimator: Any, plant: Any, period_ns: in
             raise ConfigError(f"input_delay is {d} periods and {rest / 1e6:g} ms: a fraction of a period needs the "
                               "plant's continuous linear model (A, B) for the ZOH split; give a whole number of "
                               f"periods (e.g. {lo} or {hi})", path=where)
-        if kind == "ekf":
+        if part.input_delay == "whole_periods":
             if rest:
-                raise ConfigError("the ekf estimator takes whole periods of input delay only; give a multiple of the "
-                                  f"period (e.g. {lo} or {hi})", path=where)
-            line = InputDelayLine(m, d)
-            return _FirstHalf(estimator, m), line, None
+                raise ConfigError(f"the {kind} estimator takes whole periods of input delay only; give a multiple of "
+                                  f"the period (e.g. {lo} or {hi})", path=where)
+            return design, InputPlan("delayed_first", d), None
         if rest:
             _, G0, G1 = zoh_split(*continuous, period_ns * 1e-9, rest * 1e-9)  # type: ignore[misc]
         else:
             G0, G1 = design.B, np.zeros_like(design.B)
-        est = _rebuild(p, dataclasses.replace(design, B=np.hstack([G0, G1])), where)
-        return est, InputDelayLine(m, d), None
+        return (dataclasses.replace(design, B=np.hstack([G0, G1])), InputPlan("delayed", d),
+                (f"the estimator '{kind}' on the model with the delayed input", where))
     where = f"{pp}.applied_input"
     if continuous is None:
         raise ConfigError("applied_input needs the plant's continuous linear model (A, B), to integrate the "
                           "reported input over each period; use input_delay with a whole number of periods",
                           path=where)
-    if kind == "ekf":
-        raise ConfigError("applied_input is for the linear Kalman filters (kalman, steady_state_kalman); with ekf "
-                          "use input_delay", path=where)
-    est = _rebuild(p, dataclasses.replace(design, B=np.eye(n)), where)
-    if not callable(getattr(est, "revise_inputs", None)):
-        raise ConfigError(f"the estimator '{kind}' cannot take inputs learned late (it keeps no history): use "
-                          "input_delay, or a Kalman filter (kalman, steady_state_kalman)", path=where)
-    if int(getattr(est, "history", 0)) < 1:
-        raise ConfigError("applied_input re-predicts past periods: give the estimator 'history' >= 1 samples",
-                          path=f"{pp}.estimator.history")
-    return est, None, AppliedInputTimeline(continuous[0], continuous[1], int(period_ns), offset_ns)
-
-
-def _rebuild(p: Any, design: Any, where: str) -> Any:
-    """The task's estimator built again on ``design`` (its input matrix replaced)."""
-    from netsim.programs.feedback_design import part_params
-    from netsim.registry import lookup
-
-    raw = p.estimator
-    kind = "estimator"
-    obj = lookup(kind, str(raw["type"]))
-    cls = part_params(kind, raw["type"])
-    values = {k: v for k, v in raw.items() if k != "type"}
-    params = cls.model_validate(values) if cls is not None else values
-    try:
-        return obj.build(params, design)
-    except ConfigError as exc:
-        raise ConfigError(f"the estimator '{raw['type']}' on the model with the delayed input: {exc.message}",
-                          path=where) from None
+    if not part.late_inputs:
+        lead = (f"applied_input is for the linear Kalman filters (kalman, steady_state_kalman); with {kind} use "
+                "input_delay") if part.input_delay == "whole_periods" else (
+                f"the estimator '{kind}' cannot take inputs learned late (it keeps no history): use input_delay, or "
+                "a Kalman filter (kalman, steady_state_kalman)")
+        raise ConfigError(lead, path=where)
+    return (dataclasses.replace(design, B=np.eye(n)), InputPlan("applied", 0, continuous),
+            (f"the estimator '{kind}' on the model with the delayed input", where))
 
 
 class _FirstHalf:

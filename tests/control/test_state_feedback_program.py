@@ -161,7 +161,7 @@ def _with(path: str, value) -> dict:
     (_with("plant.B", [0.0, 0.0]), f"{P0}.law", "not stabilisable: the mode(s) at eigenvalue 1"),
     (_with("plant.C", [[0.0, 1.0]]), f"{P0}.estimator", "not detectable: the mode(s) at eigenvalue 1"),
     (_with("nodes.controller.tasks.0.params.estimator", {"type": "kalman", "Q": "big", "R": 1e-6}),
-     f"{P0}.estimator.Q", "a number (times the identity), a list (the diagonal) or a 2x2 matrix"),
+     f"{P0}.estimator.Q", "a number (times the identity), a list (the diagonal) or a square matrix"),
     (_with("nodes.controller.tasks.0.params.estimator", {"type": "luenberger", "poles": [0.5, 1.2]}),
      f"{P0}.estimator.poles", "inside the unit circle"),
     (_with("nodes.controller.tasks.0.params.law", {"type": "mpc", "horizon": 10, "Q": [1, 0], "R": 1,
