@@ -273,7 +273,7 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None,
         problems.append(Problem("duration", f"this run simulates at least {total:.3g} events (duration / period "
                                             f"summed: {top}); it may take very long: shorten 'duration' or lengthen "
                                             "those periods if that was not meant", severity=WARNING))
-    memory = memory_problem(raw)  # what the run would keep in memory, against the budget (issue 31)
+    memory = memory_problem(raw, tasks)  # what the run would keep in memory, against the budget (issue 31)
     if memory is not None:
         problems.append(memory)
     return problems

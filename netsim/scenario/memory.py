@@ -26,7 +26,7 @@ import gc
 import os
 import re
 import resource
-from typing import Any, Final
+from typing import Any, Final, Mapping
 
 from netsim.errors import SimulationError
 from netsim.scenario.paths import PathPart, format_path
@@ -109,8 +109,10 @@ def _l(x: Any) -> list[Any]:
     return x if isinstance(x, list) else []
 
 
-def estimated_bytes(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]]:
-    """The memory a run of ``raw`` keeps until its end (see the module docstring), and its parts, largest first."""
+def estimated_bytes(raw: dict[str, Any], tasks: Mapping[tuple[str, int], Any] | None = None
+                    ) -> tuple[float, list[tuple[str, float]]]:
+    """The memory a run of ``raw`` keeps until its end (see the module docstring), and its parts, largest first;
+    ``tasks``: the validated tasks by ``(node, index)`` (their periods are read there, not parsed again)."""
     duration = _ns(raw.get("duration"))
     if not duration:
         return 0.0, []
@@ -126,10 +128,15 @@ def estimated_bytes(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]
                  if isinstance(n, str)}
     for node_name, node in _d(raw.get("nodes")).items():
         for i, task in enumerate(_l(_d(node).get("tasks"))):
+            model = tasks.get((str(node_name), i)) if tasks is not None else None
             task = _d(task)
-            release = task.get("release", "periodic" if task.get("period") is not None else None)
+            release = (model.release_kind if model is not None
+                       else task.get("release", "periodic" if task.get("period") is not None else None))
             key = "period" if release == "periodic" else "min_interarrival" if release == "sporadic" else None
-            every = _ns(task.get(key)) if key else None
+            if model is not None:
+                every = getattr(model, key) if key else None
+            else:
+                every = _ns(task.get(key)) if key else None
             if not every:
                 continue
             rows = duration / every * (jobs_full + (messages_full and node_name in networked))
@@ -140,9 +147,9 @@ def estimated_bytes(raw: dict[str, Any]) -> tuple[float, list[tuple[str, float]]
     return float(sum(b for _, b in parts)), parts
 
 
-def memory_problem(raw: dict[str, Any]) -> Problem | None:
+def memory_problem(raw: dict[str, Any], tasks: Mapping[tuple[str, int], Any] | None = None) -> Problem | None:
     """An error at ``duration`` when the run's estimated memory exceeds the budget, else None."""
-    need, parts = estimated_bytes(raw)
+    need, parts = estimated_bytes(raw, tasks)
     if not need:
         return None
     try:
