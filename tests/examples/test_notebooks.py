@@ -8,6 +8,7 @@ The DC servo notebook (about 15 s) runs in the default suite; the others are slo
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -28,7 +29,11 @@ def _execute(name: str, folder: Path) -> nbformat.NotebookNode:
     from nbclient import NotebookClient
 
     nb = nbformat.read(EXAMPLES / name, as_version=4)
-    NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(folder)}}).execute()
+    # the kernel gets the environment of a user's fresh kernel: not the test suite's MPLBACKEND=Agg
+    # (tests/conftest.py), under which pyplot figures would not show inline
+    env = {key: value for key, value in os.environ.items() if key != "MPLBACKEND"}
+    client = NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(folder)}})
+    client.execute(env=env)
     return nb
 
 
