@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from netsim.casestudy import Quotes, fmt
+from netsim.casestudy import Quotes, fmt, md_table
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
@@ -497,10 +497,7 @@ def _fmt(v: Any) -> str:
 
 
 def _md_table(df: pd.DataFrame, cols: list[str]) -> list[str]:
-    lines = ["| " + " | ".join(cols) + " |", "|---" * len(cols) + "|"]
-    for _, r in df.iterrows():
-        lines.append("| " + " | ".join(_fmt(r[c]) for c in cols) + " |")
-    return lines
+    return md_table(df, cols, cell=_fmt)
 
 
 def _readme(table: pd.DataFrame, readings: pd.DataFrame, texts: dict[str, str], figs: list[str],

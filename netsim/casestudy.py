@@ -28,8 +28,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, TypeVar
 
-__all__ = ["fmt", "Quotes", "fill", "digits_outside_labels", "run_all", "log_progress", "Progress", "RunCache",
-           "scenario_key", "code_fingerprint"]
+__all__ = ["fmt", "Quotes", "fill", "digits_outside_labels", "md_table", "splice", "run_all", "log_progress",
+           "Progress", "RunCache", "scenario_key", "code_fingerprint"]
 
 log = logging.getLogger(__name__)
 
@@ -84,6 +84,36 @@ def digits_outside_labels(template: str, labels: Iterable[str]) -> list[str]:
     for pat in labels:
         s = re.sub(pat, "", s, flags=re.MULTILINE)
     return re.findall(r"\d+", s)
+
+
+def md_table(frame: Any, columns: Sequence[str] | None = None, cell: Callable[[Any], str] = str) -> list[str]:
+    """The lines of a Markdown table of ``frame``'s ``columns`` (default: all), each value written by ``cell``."""
+    cols = list(frame.columns if columns is None else columns)
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for _, row in frame.iterrows():
+        lines.append("| " + " | ".join(cell(row[c]) for c in cols) + " |")
+    return lines
+
+
+def splice(lines: list[str], marks: tuple[str, str], section: list[str], before: str) -> list[str]:
+    """``lines`` with ``section`` in place of the lines from ``marks[0]`` to ``marks[1]`` and the line after it;
+    without the marks, ``section`` goes in before the first line starting with ``before``.
+
+    Raises
+    ------
+    ValueError
+        Neither the marks nor a line starting with ``before`` are in ``lines``.
+    """
+    out = list(lines)
+    if marks[0] in out:
+        i, j = out.index(marks[0]), out.index(marks[1])
+        out[i:j + 2] = section
+        return out
+    at = next((n for n, line in enumerate(out) if line.startswith(before)), None)
+    if at is None:
+        raise ValueError(f"no line starts with {before!r} (nor is {marks[0]!r} there) to put the section at")
+    out[at:at] = section
+    return out
 
 
 #: Markers of a quote inside a text (:meth:`Quotes.mark`): open, key/text separator, close.

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from netsim.casestudy import (Quotes, RunCache, code_fingerprint, digits_outside_labels, fill, fmt, log_progress,
-                              run_all, scenario_key)
+                              md_table, run_all, scenario_key, splice)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -67,6 +67,25 @@ def test_digits_outside_labels_finds_a_number_written_into_a_template():
     labels = [r"eq \(\d+\)"]
     assert digits_outside_labels("as eq (22) says, {x} runs", labels) == []
     assert digits_outside_labels("as eq (22) says, 12 runs", labels) == ["12"]
+
+
+def test_md_table_writes_a_header_a_rule_and_one_line_per_row():
+    import pandas as pd
+
+    df = pd.DataFrame({"a": [1.23456, 2.0], "b": ["x", "y"]})
+    assert md_table(df) == ["| a | b |", "|---|---|", "| 1.23456 | x |", "| 2.0 | y |"]
+    assert md_table(df, ["b"], cell=lambda v: v.upper()) == ["| b |", "|---|", "| X |", "| Y |"]
+
+
+def test_splice_replaces_a_marked_section_or_puts_it_before_its_anchor():
+    marks = ("<!-- s -->", "<!-- /s -->")
+    new = [marks[0], "new", marks[1], ""]
+    first = splice(["# T", "", "## Next", "end"], marks, new, "## Next")
+    assert first == ["# T", "", marks[0], "new", marks[1], "", "## Next", "end"]
+    again = splice(first, marks, [marks[0], "newer", marks[1], ""], "## Next")
+    assert again == ["# T", "", marks[0], "newer", marks[1], "", "## Next", "end"]
+    with pytest.raises(ValueError, match="## Gone"):
+        splice(["# T"], marks, new, "## Gone")
 
 
 def test_run_all_keeps_the_order_and_reports_progress():

@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from netsim.casestudy import Quotes, fmt as _fmt, log_progress, run_all as _run_pool
+from netsim.casestudy import Quotes, fmt as _fmt, log_progress, md_table, run_all as _run_pool, splice
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
@@ -663,11 +663,7 @@ def _ms(text: str) -> float:
 
 
 def _md_table(df: pd.DataFrame) -> list[str]:
-    cols = list(df.columns)
-    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    for _, r in df.iterrows():
-        lines.append("| " + " | ".join(fmt(v) if isinstance(v, float) else str(v) for v in r) + " |")
-    return lines
+    return md_table(df, cell=lambda v: fmt(v) if isinstance(v, float) else str(v))
 
 
 def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> None:
@@ -789,12 +785,7 @@ def pendulum_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
     texts = dict(zip(qd["key"], qd["text"].astype(str)))
     section = delay_aware_lines(texts, da, margins)
     readme = (out / "README.md").read_text().split("\n")
-    if DELAY_AWARE_MARK[0] in readme:
-        i, j = readme.index(DELAY_AWARE_MARK[0]), readme.index(DELAY_AWARE_MARK[1])
-        readme[i:j + 2] = section
-    else:
-        i = readme.index("### Loss, solve time, quantisation")
-        readme[i:i] = section
+    readme = splice(readme, DELAY_AWARE_MARK, section, "### Loss, solve time, quantisation")
     (out / "README.md").write_text("\n".join(readme))
     return {"delay_aware": da, "delay_aware_margins": margins, "quoted": qd}
 

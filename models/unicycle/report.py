@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from netsim.casestudy import code_fingerprint, fmt
+from netsim.casestudy import code_fingerprint, fmt, splice
 from netsim.models.unicycle import studies as S
 from netsim.models.unicycle.design import PHASES
 from netsim.lazy_import import lazy_module
@@ -182,14 +182,8 @@ def unicycle_delay_aware_report(out_dir: Path | None = None, plots: bool = True,
     q.section = "s5da"
     marked = "\n".join(delay_aware_section(q, T, F))
     for name, text in (("README.md", Quotes.render(marked)), ("template.md", Quotes.template(marked))):
-        lines = (out / name).read_text().split("\n")
-        new = text.split("\n")
-        if DELAY_AWARE_MARK[0] in lines:
-            i, j = lines.index(DELAY_AWARE_MARK[0]), lines.index(DELAY_AWARE_MARK[1])
-            lines[i:j + 2] = new
-        else:
-            i = next(n for n, ln in enumerate(lines) if ln.startswith("Late samples are fused"))
-            lines[i:i] = new
+        lines = splice((out / name).read_text().split("\n"), DELAY_AWARE_MARK, text.split("\n"),
+                       "Late samples are fused")
         (out / name).write_text("\n".join(lines))
     quoted = pd.read_csv(out / "quoted.csv", keep_default_na=False, dtype={"text": str})
     quoted = pd.concat([quoted[~quoted["key"].astype(str).str.startswith("s5da.")],
