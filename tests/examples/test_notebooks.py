@@ -8,7 +8,7 @@ The DC servo notebook (about 15 s) runs in the default suite; the others are slo
 
 from __future__ import annotations
 
-import os
+import importlib.util
 import re
 from pathlib import Path
 
@@ -23,23 +23,25 @@ SLOW = ["02_delay_jitter_lqg.ipynb", "03_threshold_sweep_surface.ipynb", "04_pyt
         "05_pendulum_hold_still.ipynb"]
 
 
+def _runner():
+    """tests/examples/notebook_runner.py (a script without pytest, also run from the wheel's venv)."""
+    spec = importlib.util.spec_from_file_location("notebook_runner", Path(__file__).with_name("notebook_runner.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+RUNNER = _runner()
+
+
 def _execute(name: str, folder: Path) -> nbformat.NotebookNode:
     """Run the notebook in a fresh python3 kernel whose working folder is ``folder``; a failing cell raises
     :class:`nbclient.exceptions.CellExecutionError` naming the cell and its traceback."""
-    from nbclient import NotebookClient
-
-    nb = nbformat.read(EXAMPLES / name, as_version=4)
-    # the kernel gets the environment of a user's fresh kernel: not the test suite's MPLBACKEND=Agg
-    # (tests/conftest.py), under which pyplot figures would not show inline
-    env = {key: value for key, value in os.environ.items() if key != "MPLBACKEND"}
-    client = NotebookClient(nb, timeout=900, kernel_name="python3", resources={"metadata": {"path": str(folder)}})
-    client.execute(env=env)
-    return nb
+    return RUNNER.execute(EXAMPLES / name, folder)
 
 
 def _images(nb: nbformat.NotebookNode) -> int:
-    return sum("image/png" in out.get("data", {}) for cell in nb.cells if cell.cell_type == "code"
-               for out in cell.outputs)
+    return RUNNER.image_count(nb)
 
 
 def test_the_gallery_holds_the_five_studies():
