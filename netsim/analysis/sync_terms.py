@@ -1,4 +1,4 @@
-"""``netsim analyze`` for tasks that use a node's sync objects: execution times, blocking terms, self-suspension.
+"""The analysis of tasks that use a node's sync objects: execution times, blocking terms, self-suspension.
 
 A program that uses monitors, mailboxes, semaphores or events declares its timing (``Program.timing(params,
 execution_ns, node)`` returning a :class:`~netsim.programs.sync_programs.SyncTiming`): the execution time of a
@@ -36,7 +36,7 @@ def program_timing(task: Any, execution: int | None, node: Any) -> Any:
 
 
 class NodeSyncAnalysis:
-    """What one node's sync objects change in its task rows (used by :mod:`netsim.cli.analyze`).
+    """What one node's sync objects change in its tasks' analysis (used by :mod:`netsim.analysis.from_scenario`).
 
     Parameters
     ----------
