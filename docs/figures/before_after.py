@@ -19,7 +19,9 @@ DPI = 72
 def main(which: str) -> None:
     out = Path(__file__).resolve().parent / which
     out.mkdir(parents=True, exist_ok=True)
-    pend = netsim.run(ROOT / "scenarios" / "pendulum_lqr.yaml")
+    # after: the channels declare their units (io.<name>.unit, which the code before did not know)
+    units = {"io.theta_m.unit": "rad", "io.alpha_m.unit": "rad", "io.u.unit": "V"} if which == "after" else {}
+    pend = netsim.run(ROOT / "scenarios" / "pendulum_lqr.yaml", overrides=units)
     pend.plot().savefig(out / "responses_pendulum_lqr.png", dpi=DPI)
     servo = netsim.run(ROOT / "scenarios" / "dc_servo_can.yaml")  # 2 s, 201 sensor jobs of 0.5 ms
     servo.plot_schedule().savefig(out / "schedule_dc_servo_can.png", dpi=DPI)

@@ -1,6 +1,10 @@
-"""Figures of the 2WD cart report (``netsim report unicycle``).
+"""Figures of the 2WD cart report (``netsim report unicycle``), in the paper style.
 
 Kept apart from :mod:`netsim.models.unicycle.report`, which runs the studies and writes the tables and README.
+Each ``*_figure`` function builds one figure (one paper column wide, states as symbols with their units, time in
+seconds); :func:`report_figures` saves the four into the report folder in the current plot format
+(:func:`netsim.figure_style.save_figure`); :func:`regenerate` redraws them from fresh runs of the scenario and of
+the Monte-Carlo loop (about a minute), without the report's sweeps.
 """
 
 from __future__ import annotations
@@ -10,57 +14,121 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["report_figures"]
+__all__ = ["STATES", "bands_figure", "measurements_figure", "qr_rms_figure", "det_p_figure", "report_figures",
+           "regenerate"]
+
+#: The filter's states: (signal name, symbol, unit).
+STATES = (("x", "$x$", "m"), ("y", "$y$", "m"), ("theta", r"$\theta$", "rad"))
+#: The blackout (both sensors off) of the scenario, in seconds: shaded in the figures.
+BLACKOUT_S = (4.0, 6.0)
 
 
-def report_figures(out: Path, base: Any, qr: dict[str, list[dict]], t: np.ndarray) -> None:
-    """Write the report's figures: ``fig1_qr_rms.png``, ``fig2_bands.png``, ``fig3_measurements.png``, ``detP.png``."""
-    import matplotlib.pyplot as plt
+def _figure(height: float, rows: int) -> tuple[Any, Any]:
+    from matplotlib.figure import Figure
 
-    sig = base.to_pandas()
-    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
-    for j, (s, unit) in enumerate((("x", "m"), ("y", "m"), ("theta", "rad"))):
-        tt = sig.index.to_numpy()
-        m, sd = sig[f"xhat[{j}]"].to_numpy(), sig[f"sd[{j}]"].to_numpy()
-        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C0", alpha=0.25, label="95 % band")
+    from netsim.figure_style import COLUMN_WIDTH_IN
+
+    fig = Figure(figsize=(COLUMN_WIDTH_IN, height), layout="constrained")
+    return fig, fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+
+
+def _blackout(ax: Any, label: bool = False) -> None:
+    ax.axvspan(*BLACKOUT_S, color="0.88", lw=0, zorder=0, label="both sensors off" if label else None)
+
+
+def bands_figure(sig: Any) -> Any:
+    """The estimate of each state with its 95 % band against the truth (``sig``: the run's signals indexed by
+    time in seconds, with ``xhat[j]``, ``sd[j]`` and the true ``x``, ``y``, ``theta``)."""
+    from netsim.figure_style import TIME_LABEL
+
+    fig, ax = _figure(3.6, 3)
+    tt = sig.index.to_numpy(float)
+    for j, (s, sym, unit) in enumerate(STATES):
+        m, sd = sig[f"xhat[{j}]"].to_numpy(float), sig[f"sd[{j}]"].to_numpy(float)
+        _blackout(ax[j], j == 0)
+        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C0", alpha=0.25, lw=0, label="95 % band")
         ax[j].plot(tt, m, "C0", label="estimate")
-        ax[j].plot(tt, sig[s].to_numpy(), "k--", lw=1, label="truth")
-        ax[j].axvspan(4, 6, color="0.9")
-        ax[j].set_ylabel(f"{s} [{unit}]")
-    ax[0].legend(loc="best", fontsize=8)
-    ax[-1].set_xlabel("time [s] (grey: both sensors off)")
-    fig.tight_layout()
-    fig.savefig(out / "fig2_bands.png", dpi=90)
-    plt.close(fig)
-    fig, ax = plt.subplots(2, 1, figsize=(8, 5), sharex=True)
-    for j, name in enumerate(("front", "side")):
-        tt = sig.index.to_numpy()
-        m, sd = sig[f"zhat[{j}]"].to_numpy(), sig[f"zsd[{j}]"].to_numpy()
-        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C1", alpha=0.25, label="95 % band of z")
+        ax[j].plot(tt, sig[s].to_numpy(float), "--", color="k", lw=0.8, label="truth")
+        ax[j].set_ylabel(f"{sym} ({unit})")
+    ax[-1].set_xlabel(TIME_LABEL)
+    fig.legend(*ax[0].get_legend_handles_labels(), loc="outside lower center", ncols=2)
+    return fig
+
+
+def measurements_figure(sig: Any) -> Any:
+    """The predicted reading of each distance sensor with its 95 % band against the noiseless reading."""
+    from netsim.figure_style import TIME_LABEL
+
+    fig, ax = _figure(2.8, 2)
+    tt = sig.index.to_numpy(float)
+    for j, (col, name) in enumerate((("z_front", "front"), ("z_side", "side"))):
+        m, sd = sig[f"zhat[{j}]"].to_numpy(float), sig[f"zsd[{j}]"].to_numpy(float)
+        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C1", alpha=0.25, lw=0, label="95 % band")
         ax[j].plot(tt, m, "C1", label="predicted reading")
-        ax[j].plot(tt, sig["z_front" if j == 0 else "z_side"].to_numpy(), "k--", lw=1, label="noiseless reading")
-        ax[j].set_ylabel(f"z {name} [m]")
-    ax[0].legend(fontsize=8)
-    ax[-1].set_xlabel("time [s]")
-    fig.tight_layout()
-    fig.savefig(out / "fig3_measurements.png", dpi=90)
-    plt.close(fig)
-    fig, ax = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+        ax[j].plot(tt, sig[col].to_numpy(float), "--", color="k", lw=0.8, label="noiseless reading")
+        ax[j].set_ylabel(f"{name} distance (m)")
+    ax[-1].set_xlabel(TIME_LABEL)
+    fig.legend(*ax[0].get_legend_handles_labels(), loc="outside lower center", ncols=3)
+    return fig
+
+
+def qr_rms_figure(qr: dict[str, list[dict]], t: np.ndarray) -> Any:
+    """RMS estimation error of each state over the Monte-Carlo runs, one line per (Q, R) setting."""
+    from netsim.figure_style import TIME_LABEL
+
+    fig, ax = _figure(3.6, 3)
     for name, runs in qr.items():
         E = np.stack([r["e"] for r in runs]).astype(float)
-        for j, s in enumerate(("x", "y", "theta")):
-            ax[j].plot(t, np.sqrt(np.mean(E[:, :, j] ** 2, axis=0)), label=name)
-            ax[j].set_ylabel(f"RMS error {s}")
-    ax[0].legend(fontsize=8)
-    ax[-1].set_xlabel(f"time [s] ({len(next(iter(qr.values())))} runs per setting)")
-    fig.tight_layout()
-    fig.savefig(out / "fig1_qr_rms.png", dpi=90)
-    plt.close(fig)
-    fig, ax = plt.subplots(1, 1, figsize=(8, 3.5))
-    ax.semilogy(sig.index.to_numpy(), sig["detP"].to_numpy())
-    ax.axvspan(4, 6, color="0.9")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("det P")
-    fig.tight_layout()
-    fig.savefig(out / "detP.png", dpi=90)
-    plt.close(fig)
+        for j in range(len(STATES)):
+            ax[j].plot(t, np.sqrt(np.mean(E[:, :, j] ** 2, axis=0)), label=name, lw=0.8)
+    for j, (_, sym, unit) in enumerate(STATES):
+        _blackout(ax[j])
+        ax[j].set_ylabel(f"RMS error {sym} ({unit})")
+    n = len(next(iter(qr.values()))) if qr else 0
+    ax[-1].set_xlabel(f"{TIME_LABEL}; {n} runs per setting")
+    fig.legend(*ax[0].get_legend_handles_labels(), loc="outside lower center", ncols=4,
+               title="filter's (Q, R) against the truth's")
+    return fig
+
+
+def det_p_figure(sig: Any) -> Any:
+    """The determinant of the filter's covariance over time (log axis)."""
+    from netsim.figure_style import TIME_LABEL
+
+    fig, ax = _figure(1.9, 1)
+    _blackout(ax[0], True)
+    ax[0].semilogy(sig.index.to_numpy(float), sig["detP"].to_numpy(float), color="C0")
+    ax[0].set_xlabel(TIME_LABEL)
+    ax[0].set_ylabel(r"$\det P$")
+    ax[0].legend(loc="upper left")
+    return fig
+
+
+def report_figures(out: Path, base: Any, qr: dict[str, list[dict]], t: np.ndarray) -> list[Path]:
+    """Write the report's figures into ``out``: ``fig1_qr_rms``, ``fig2_bands``, ``fig3_measurements``, ``detP``
+    (in the current plot format); ``base`` is the ``unicycle_ekf`` run, ``qr`` the Monte-Carlo runs by setting."""
+    from netsim.figure_style import paper_style, save_figure
+
+    out = Path(out)
+    sig = base.to_pandas()
+    with paper_style():
+        return [save_figure(bands_figure(sig), out / "fig2_bands.png"),
+                save_figure(measurements_figure(sig), out / "fig3_measurements.png"),
+                save_figure(qr_rms_figure(qr, t), out / "fig1_qr_rms.png"),
+                save_figure(det_p_figure(sig), out / "detP.png")]
+
+
+def regenerate(out: Path, runs: int = 200, workers: int | None = 1) -> list[Path]:
+    """Redraw the four figures in ``out``: the ``unicycle_ekf`` run and the Monte-Carlo runs of each (Q, R)
+    setting again, as :func:`netsim.models.unicycle.report.unicycle_report` makes them (same seeds)."""
+    import netsim
+    from netsim.models.unicycle import studies as S
+    from netsim.models.unicycle.model import Q_REPORT, R_REPORT
+
+    from netsim.shipped import scenario_path
+
+    base = netsim.run(scenario_path("unicycle_ekf"))
+    t = np.arange(int(round(10 / 0.01)) + 1) * 0.01
+    qr = {name: S.mc_runs(runs, seed0=10_000, workers=workers, Q_filter=fq * Q_REPORT, R_filter=fr * R_REPORT)
+          for name, (fq, fr) in S.QR_SETTINGS.items()}
+    return report_figures(out, base, qr, t)

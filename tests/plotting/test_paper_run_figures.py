@@ -82,6 +82,13 @@ def test_density_window_gives_the_smallest_feature_its_pixels() -> None:
     b = (np.arange(0, 2, 0.006), np.arange(0, 2, 0.006) + 0.004)
     assert density_window([a, b], 2.0, 500.0) == (0.0, pytest.approx(0.001 * 500 / MIN_FEATURE_PX))
     assert density_window([a], 0.2, 500.0) == (0.0, 0.2)  # fits: the whole run
+    # a network timeline (gaps=None): a retransmission 10 us after a 1 ms frame does not shrink the window, but
+    # instants without length are told apart by their gaps
+    frames = (np.array([0.0, 0.00101, 0.5]), np.array([0.001, 0.00201, 0.501]))
+    assert density_window([frames], 2.0, 500.0, gaps=True)[1] == pytest.approx(1e-5 * 500 / MIN_FEATURE_PX)
+    assert density_window([frames], 2.0, 500.0, gaps=None)[1] == pytest.approx(1e-3 * 500 / MIN_FEATURE_PX)
+    instants = (np.array([0.0, 0.002, 0.004]),) * 2
+    assert density_window([instants], 2.0, 500.0, gaps=None)[1] == pytest.approx(2e-3 * 500 / MIN_FEATURE_PX)
 
 
 def _raster(fig):
