@@ -464,7 +464,8 @@ def _metrics_view(result: RunResult) -> RunResult:
                      messages=_lazy_view(result, "messages"), metrics=result.metrics, meta=result.meta,
                      scenario=result.scenario, schedule=_lazy_view(result, "schedule"), out_dir=result.out_dir,
                      traces=result.traces, job_summary=result.job_summary, message_summary=result.message_summary,
-                     _job_rows=result._job_rows, _message_rows=result._message_rows, _signal_source=result._signal_source)
+                     _job_rows=result._job_rows, _message_rows=result._message_rows, _signal_source=result._signal_source,
+                     _streams=result._streams)
 
 
 def _shared(result: RunResult) -> RunResult:

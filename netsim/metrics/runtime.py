@@ -28,7 +28,8 @@ Registered metrics (scenario ``metrics:`` list, ``fn(result, params, baseline) -
     actuator.actuate]``: for every job of the last task, the chain is followed backwards through the messages
     table (the message delivered to the job's node last at or before its release, sent by the previous task
     during one of its jobs) to the first task's job; latency = actuation job finish - sampling job start.
-    Keys ``<name>.mean_s``, ``.max_s``, ``.min_s``, ``.count``.
+    Keys ``<name>.mean_s``, ``.max_s``, ``.min_s``, ``.count``. With ``output.jobs`` or ``output.messages`` not
+    ``full`` the same walk is streamed while the run goes, in bounded memory (:mod:`netsim.metrics.chain`).
 """
 
 from __future__ import annotations
@@ -56,6 +57,8 @@ __all__ = [
     "latency",
     "chain_latencies",
     "chain_latencies_ns",
+    "latency_stream",
+    "latency_stream_key",
     "compute_metrics",
     "job_outcome_counts",
     "held_integrals",
@@ -349,9 +352,11 @@ def chain_latencies_ns(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[s
     """Sample-to-actuation latencies in integer ns along ``chain`` (see the module docstring).
 
     One value per complete chain (int64 array). Every comparison and the final subtraction work on exact
-    integer nanoseconds, so a 3.5 ms latency is exactly 3 500 000 ns. Vectorised: each backward step is two
-    ``searchsorted`` calls over the sorted messages and jobs.
+    integer nanoseconds, so a 3.5 ms latency is exactly 3 500 000 ns. The walk itself is
+    :func:`netsim.metrics.chain.chain_walk` (the one a summary-mode run streams through).
     """
+    from netsim.metrics.chain import chain_walk
+
     empty = np.zeros(0, dtype=np.int64)
     if len(chain) < 1 or jobs is None or jobs.empty:
         return empty
@@ -365,8 +370,7 @@ def chain_latencies_ns(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[s
 
     rel, first_start, fin = task_arrays(*steps[-1])
     keep = fin != _NO_TIME
-    end, cur_release, first_start = fin[keep], rel[keep], first_start[keep]
-    ok = np.ones(len(end), dtype=bool)
+    links = []
     if len(steps) > 1:
         if messages is None or messages.empty:
             return empty
@@ -378,21 +382,9 @@ def chain_latencies_ns(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[s
         pair = delivered[(delivered["receiver"] == node) & (delivered["sender"] == prev_node)]
         deliv = _ns(pair["delivered_s"])
         order = np.argsort(deliv, kind="stable")
-        deliv, sent = deliv[order], _ns(pair["sent_s"])[order]
-        p_rel, p_start, p_fin = task_arrays(*steps[i - 1])
-        if len(sent) == 0 or len(p_start) == 0:
-            return empty
-        # the message delivered last at or before the job's release ...
-        k = np.searchsorted(deliv, cur_release, side="right") - 1
-        ok &= k >= 0
-        sent_at = sent[np.clip(k, 0, None)]
-        # ... sent by the previous task during one of its jobs (started at or before, not finished before)
-        j = np.searchsorted(p_start, sent_at, side="right") - 1
-        jj = np.clip(j, 0, None)
-        ok &= (j >= 0) & (p_fin[jj] >= sent_at)
-        cur_release = p_rel[jj]
-        first_start = p_start[jj]
-    return (end - first_start)[ok]
+        links.append((deliv[order], _ns(pair["sent_s"])[order], *task_arrays(*steps[i - 1])))
+    latency, ok, _ = chain_walk(fin[keep], rel[keep], first_start[keep], links)
+    return latency[ok]
 
 
 def chain_latencies(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[str]) -> list[float]:
@@ -403,21 +395,37 @@ def chain_latencies(jobs: pd.DataFrame, messages: pd.DataFrame, chain: list[str]
 @register("metric", "latency", "sample-to-actuation latency along a task chain, from the jobs/messages tables")
 def latency(result: Any, params: Any, baseline: Any = None) -> dict[str, float]:
     """Mean/max/min latency and the number of complete chains."""
+    from netsim.metrics.chain import latency_values
+
     p = validate_params(LatencyParams, params, "latency")
+    stream = (getattr(result, "_streams", None) or {}).get(latency_stream_key(params))
+    if stream is not None:  # output.jobs / messages not full: streamed while the run went (netsim.metrics.chain)
+        return stream.metrics()
     values = chain_latencies_ns(result.jobs, result.messages, p.chain)
-    n = p.name
     if values.size == 0:
-        return {f"{n}.mean_s": math.nan, f"{n}.max_s": math.nan, f"{n}.min_s": math.nan, f"{n}.count": 0.0}
+        return latency_values(p.name, 0, 0, None, None)
     total = sum(int(v) for v in values)  # exact integer sum; one division for the mean
-    return {
-        f"{n}.mean_s": total / (values.size * S),
-        f"{n}.max_s": int(values.max()) / S,
-        f"{n}.min_s": int(values.min()) / S,
-        f"{n}.count": float(values.size),
-    }
+    return latency_values(p.name, int(values.size), total, int(values.min()), int(values.max()))
+
+
+def latency_stream_key(params: Any) -> tuple[str, str, tuple[str, ...]]:
+    """The key of a ``latency`` metric's stream in a run result (its name and chain)."""
+    p = validate_params(LatencyParams, params, "latency")
+    return ("latency", p.name, tuple(p.chain))
+
+
+def latency_stream(params: Any) -> Any:
+    """A :class:`~netsim.metrics.chain.ChainLatencyStream` for a ``latency`` metric's ``params``, fed by a run
+    whose jobs or messages table is not kept in full (:func:`netsim.results.traces.attach_streams`)."""
+    from netsim.metrics.chain import ChainLatencyStream
+
+    p = validate_params(LatencyParams, params, "latency")
+    return ChainLatencyStream([_split_task(c) for c in p.chain], p.name)
 
 
 latency.tables = ("jobs", "messages")  # type: ignore[attr-defined]  # rows it reads (output.jobs/messages: full)
+latency.stream = latency_stream  # type: ignore[attr-defined]  # ... or streams them when they are not kept
+latency.stream_key = latency_stream_key  # type: ignore[attr-defined]
 
 
 def compute_metrics(result: Any, specs: list[Any], baseline: Any = None) -> dict[str, float]:

@@ -211,6 +211,8 @@ class RunResult:
     #: The kernels' schedule traces ``[(node, [(task, state, t0_ns, t1_ns), ...]), ...]`` (this run's): ``schedule.csv``
     #: is written from them, ``schedule`` is built from them when read.
     _schedule_source: Any = None
+    #: Metrics streamed while the run went, by key (:func:`netsim.results.traces.attach_streams`; this run's).
+    _streams: Any = None
 
     def _signal_chunks(self, names: list[str]) -> Any:
         """The signals table's rows in windows, ``(t_ns, [column of each name, ...])`` per window

@@ -53,6 +53,7 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
     traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
     return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
                      _job_rows=job_cols, _message_rows=msg_cols, _signal_source=source, _schedule_source=traces_kept,
+                     _streams=getattr(sim, "metric_streams", None),
                      job_summary=summary_table(job_stats, JOB_SUMMARY_COLUMNS) if output.jobs == "summary" else None,
                      message_summary=summary_table(msg_stats, MESSAGE_SUMMARY_COLUMNS)
                      if output.messages == "summary" else None)

@@ -11,6 +11,9 @@ The hook into the engine is the container the records are appended to: the runne
 (:func:`attach_traces`). Both take ``append`` like the list did and hold only the records that can still
 change (a job unfinished at the end of the run, a message copy still in flight), so the kernel and the networks
 are unchanged.
+
+A metric that reads the rows (``latency``) and can stream them is fed the records as they are appended, by
+listeners on those containers (:func:`attach_streams`; a table still kept in full gets an :class:`ObservedList`).
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ import math
 from collections.abc import Iterable, Iterator
 from typing import Any
 
-__all__ = ["QUANTILES", "TRACE_MODES", "JobSummary", "MessageSummary", "QuantileSketch", "attach_traces", "trace_problems"]
+__all__ = ["QUANTILES", "TRACE_MODES", "JobSummary", "MessageSummary", "ObservedList", "QuantileSketch", "attach_streams",
+           "attach_traces", "trace_problems"]
 
 #: The percentiles a summary reports (``p50``, ``p95``, ``p99``).
 QUANTILES = (0.50, 0.95, 0.99)
@@ -145,10 +149,14 @@ class JobSummary:
         self.keep = bool(keep)
         self._held: list[Any] = []
         self._tasks: dict[str, _Stats] = {}
+        #: Called with every record appended (streamed metrics, :func:`attach_streams`).
+        self.listeners: list[Any] = []
 
     # the list interface the kernel uses -------------------------------------------------------------------
     def append(self, rec: Any) -> None:
         """Count a final record (finished or killed); hold an unfinished one."""
+        for listen in self.listeners:
+            listen(rec)
         if rec.finish is None:
             self._held.append(rec)
         elif self.keep:
@@ -230,9 +238,13 @@ class MessageSummary:
         self._live: list[Any] = []
         self._next = self._BATCH
         self._stats = _Stats()
+        #: Called with every record appended (streamed metrics, :func:`attach_streams`).
+        self.listeners: list[Any] = []
 
     def append(self, rec: Any) -> None:
         """Hold ``rec`` until it is final (delivered or dropped)."""
+        for listen in self.listeners:
+            listen(rec)
         if not self.keep:
             return
         live = self._live
@@ -293,6 +305,61 @@ def attach_traces(sim: Any, output: Any) -> None:
     if messages != "full":
         for name, net in sim.networks.items():
             net.records = MessageSummary(name, keep=messages == "summary")
+    attach_streams(sim)
+
+
+class ObservedList(list):  # type: ignore[type-arg]
+    """A list of records (a table kept in full) that also hands each appended record to its ``listeners``."""
+
+    def __init__(self, items: Iterable[Any] = ()) -> None:
+        super().__init__(items)
+        self.listeners: list[Any] = []
+
+    def append(self, rec: Any) -> None:
+        for listen in self.listeners:
+            listen(rec)
+        super().append(rec)
+
+    def extend(self, recs: Iterable[Any]) -> None:
+        for rec in recs:
+            self.append(rec)
+
+
+def _streamed(spec: Any) -> tuple[Any, Any] | None:
+    """The (key, stream) of a metric spec whose function streams the rows it reads (``fn.stream``), else None."""
+    from netsim.errors import ConfigError
+    from netsim.registry import lookup
+
+    try:
+        fn = lookup("metric", spec.type)
+    except ConfigError:
+        return None
+    make = getattr(fn, "stream", None)
+    if make is None:
+        return None
+    return fn.stream_key(spec.params or {}), make(spec.params or {})
+
+
+def attach_streams(sim: Any) -> None:
+    """Feed the metrics that stream (``latency``) the job and message records as the run makes them, when
+    ``output.jobs`` or ``output.messages`` keeps no table (:mod:`netsim.metrics.chain`); the streams are in
+    ``sim.metric_streams`` (key: the metric function's ``stream_key(params)``), read by the metric at the end."""
+    scenario = getattr(sim, "scenario", None)
+    output = getattr(scenario, "output", None)
+    if output is None or (getattr(output, "jobs", "full") == "full" and getattr(output, "messages", "full") == "full"):
+        return
+    streams = dict(s for s in (_streamed(spec) for spec in scenario.metrics) if s is not None)
+    if not streams:
+        return
+    for kernel in sim.kernels.values():
+        if not hasattr(kernel.job_records, "listeners"):
+            kernel.job_records = ObservedList(kernel.job_records)
+        kernel.job_records.listeners.extend(stream.job for stream in streams.values())
+    for net in sim.networks.values():
+        if not hasattr(net.records, "listeners"):
+            net.records = ObservedList(net.records)
+        net.records.listeners.extend(stream.message for stream in streams.values())
+    sim.metric_streams = streams
 
 
 def trace_problems(scenario: Any) -> list[str]:
@@ -311,6 +378,8 @@ def trace_problems(scenario: Any) -> list[str]:
             fn = lookup("metric", spec.type)
         except ConfigError:  # an unknown metric: validation reports it
             fn = None
+        if getattr(fn, "stream", None) is not None:  # streamed while the run goes when a table is not kept
+            continue
         for table in getattr(fn, "tables", ()):
             mode = getattr(output, table, "full")
             if mode != "full":
