@@ -1,4 +1,6 @@
-"""Sweeps on a real Dask cluster, with faults: a worker killed, the scheduler killed, Ctrl-C.
+"""Sweeps on a real Dask cluster, with faults: a worker killed, the scheduler killed, Ctrl-C; a worker then the
+scheduler killed and the whole cluster restarted (issue 31 fault 3); plugin scenarios on workers started without
+the user's permission (--allow-plugins travels with each task).
 
 The cluster is what a user starts on several machines: ``dask scheduler`` and two ``dask worker`` processes
 (separate process groups, on localhost, ports chosen by the scheduler itself: ``--port 0`` with a
