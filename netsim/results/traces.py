@@ -366,7 +366,8 @@ def trace_problems(scenario: Any) -> list[str]:
     """What a scenario's metrics need that its ``output`` trace settings do not keep, one sentence each.
 
     A metric function that reads the rows of the jobs or messages table says so in a ``tables`` attribute
-    (``latency.tables = ("jobs", "messages")``); it needs ``output.<table>: full``.
+    (``et_control.tables = ("messages",)``); it needs ``output.<table>: full``, unless it streams them (a
+    ``stream`` attribute, as ``latency`` has: :func:`attach_streams`).
     """
     from netsim.errors import ConfigError
     from netsim.registry import lookup
