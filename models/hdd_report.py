@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from netsim.casestudy import Quotes, fmt, md_table
+from netsim.casestudy import sweep as run_study_sweep
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
@@ -267,10 +268,8 @@ def _scenario_value(case: int, path: str) -> Any:
 
 def _run_gpi(workers: int | None, sweep: str = "hdd_gpi_sweep", folder: str = "gpi") -> tuple[pd.DataFrame, dict]:
     """Run (or resume, in ``reports/hdd/runs/<folder>``) a GPI sweep; return its summary and run facts."""
-    from netsim.sweep.run import run_sweep
-
-    res = run_sweep(shipped_scenarios() / f"{sweep}.yaml", out=Path("reports") / "hdd" / "runs" / folder,
-                    workers=workers, progress=False)
+    res = run_study_sweep(shipped_scenarios() / f"{sweep}.yaml", Path("reports") / "hdd" / "runs" / folder,
+                          workers=workers, complete=False)  # a point without a result: NaN on the surface
     summ = res.summary
     keep = [c for c in ("sigma_s", "sigma_c", "et.GPI", "et.Uc", "et.Ua", "et.NE", "et.Nsc", "et.Nca", "et.N_max",
                         "et.played_past_packet", "et.u_gap_max", "status") if c in summ.columns]

@@ -3,7 +3,8 @@
 One place for what every reproduction report needs besides its own study:
 
 * :func:`run_all` -- a list of points through one function, in one process pool (or in this process), in
-  order, with progress (:func:`log_progress`); sweep files go through :func:`netsim.sweep.run.run_sweep`;
+  order, with progress (:func:`log_progress`); :func:`sweep` -- a sweep file through
+  :func:`netsim.sweep.run.run_sweep`, every run required to give a result;
 * :class:`RunCache` -- rows of runs already made, one JSON file per run named by its scenario hash
   (:func:`scenario_key`: the hash :func:`netsim.sweep.points.point_hash` gives a sweep's run), in a folder
   named by a fingerprint of the study's own code (:func:`code_fingerprint`);
@@ -29,7 +30,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 __all__ = ["fmt", "Quotes", "fill", "digits_outside_labels", "md_table", "splice", "run_all", "log_progress",
-           "Progress", "RunCache", "scenario_key", "code_fingerprint"]
+           "Progress", "sweep", "RunCache", "scenario_key", "code_fingerprint"]
 
 log = logging.getLogger(__name__)
 
@@ -236,6 +237,25 @@ def run_all(fn: Callable[[T], R], items: Sequence[T], *, workers: int | None = N
         if pool is not None:
             pool.shutdown(cancel_futures=True)
     return out
+
+
+def sweep(path: Path, out: Path, *, workers: int | None = None, progress: bool = False, complete: bool = True) -> Any:
+    """Run (or resume) the sweep file ``path`` into ``out`` (:func:`netsim.sweep.run.run_sweep`) and return its
+    result (``.summary``, ``.wall_time_s``, ``.n_executed``, ``.n_resumed``).
+
+    Parameters
+    ----------
+    complete
+        Refuse a sweep with a run that gave no result (status ``error``, ``interrupted`` or ``pending``:
+        :func:`netsim.sweep.summary.require_results`), which a table would otherwise count as a failed run.
+    """
+    from netsim.sweep.run import run_sweep
+    from netsim.sweep.summary import require_results
+
+    res = run_sweep(path, out=out, workers=workers, progress=progress)
+    if complete:
+        require_results(res.summary, Path(path).stem)
+    return res
 
 
 # ------------------------------------------------------------------------------------------------ cache

@@ -27,11 +27,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from netsim.casestudy import sweep
 from netsim.shipped import folder as shipped_scenarios
 
 __all__ = ["SWEEPS", "run_sweeps", "point_values", "estimator_name", "tuning_table", "delay_cost_table",
            "noise_delay_margins", "equal_ratio_gain_difference", "NETWORK_BASE_DELAY_MS", "CI_LEVEL",
-           "DELAY_AWARE_SWEEP", "run_delay_aware", "delay_aware_table", "delay_aware_margins", "with_results"]
+           "DELAY_AWARE_SWEEP", "run_delay_aware", "delay_aware_table", "delay_aware_margins"]
 
 log = logging.getLogger("netsim.progress.pendulum")
 
@@ -47,32 +48,17 @@ CI_LEVEL = 0.95
 
 
 def run_sweeps(out: Path, workers: int | None = None) -> dict[str, Any]:
-    """Run (or resume) each shipped sweep into ``out/runs/<sweep>``; returns ``summary.csv`` as a DataFrame by name."""
-    from netsim.sweep.run import run_sweep
+    """Run (or resume) each shipped sweep into ``out/runs/<sweep>``; returns ``summary.csv`` as a DataFrame by name.
 
+    The tables count a diverged or unstable run as a run that did not stay balanced (``stable`` 0); a run that
+    gave no result (``error``, ``interrupted``, ``pending``) stops the report (:func:`netsim.casestudy.sweep`)."""
     summaries = {}
     for name in SWEEPS:
         log.info("pendulum: sweep %s (scenarios/%s.yaml) ...", name, name)
-        res = run_sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers,
-                        progress=sys.stderr.isatty())
+        res = sweep(_SCEN / f"{name}.yaml", out / "runs" / name, workers=workers, progress=sys.stderr.isatty())
         log.info("pendulum: %s", res.describe().splitlines()[0])
-        summaries[name] = with_results(res.summary, name)
+        summaries[name] = res.summary
     return summaries
-
-
-def with_results(summary: Any, name: str) -> Any:
-    """``summary`` when every run gave a result; the tables count a diverged or unstable run as a run that did not
-    stay balanced (``stable`` 0), so a run that gave none (``error``, ``interrupted``, ``pending``) would be
-    miscounted as a fall.
-
-    Raises
-    ------
-    NetsimError
-        Naming the first run without a result and its error.
-    """
-    from netsim.sweep.summary import require_results
-
-    return require_results(summary, name)
 
 
 def point_values(name: str) -> list[dict[str, Any]]:
@@ -227,12 +213,9 @@ def noise_delay_margins(cost: Any) -> dict[str, tuple[float, float]]:
 
 def run_delay_aware(out: Path, workers: int | None = None) -> Any:
     """Run (or resume) :data:`DELAY_AWARE_SWEEP` into ``out/runs/<sweep>``; returns its ``summary.csv``."""
-    from netsim.sweep.run import run_sweep
-
     log.info("pendulum: sweep %s ...", DELAY_AWARE_SWEEP)
-    res = run_sweep(_SCEN / f"{DELAY_AWARE_SWEEP}.yaml", out=out / "runs" / DELAY_AWARE_SWEEP, workers=workers,
-                    progress=sys.stderr.isatty())
-    return with_results(res.summary, DELAY_AWARE_SWEEP)
+    return sweep(_SCEN / f"{DELAY_AWARE_SWEEP}.yaml", out / "runs" / DELAY_AWARE_SWEEP, workers=workers,
+                 progress=sys.stderr.isatty()).summary
 
 
 def delay_aware_table(summary: Any, estimators: Mapping[str, dict[str, Any]], unaware: Any) -> Any:

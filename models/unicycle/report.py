@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from netsim.casestudy import code_fingerprint, fmt, splice
+from netsim.casestudy import code_fingerprint, fmt, splice, sweep
 from netsim.models.unicycle import studies as S
 from netsim.models.unicycle.design import PHASES
 from netsim.lazy_import import lazy_module
@@ -73,13 +73,9 @@ def counted_runs(summary: pd.DataFrame, name: str) -> pd.DataFrame:
 
 
 def _sweep(name: str, out: Path, workers: int | None) -> pd.DataFrame:
-    from netsim.sweep.run import run_sweep
-
-    res = run_sweep(_SCEN / f"{name}.yaml", out=out / "runs" / name, workers=workers, progress=False)
-    return counted_runs(res.summary, name)
+    return counted_runs(sweep(_SCEN / f"{name}.yaml", out / "runs" / name, workers=workers).summary, name)
 
 
-@register("report", "unicycle", "2WD cart (seed 001): EKF bands and coverage, blackout, Q/R study, LQR, network")
 def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: int = 200, replicates_note: str = "",
                     workers: int | None = None, sweeps: bool = True, progress: Any = None) -> dict[str, pd.DataFrame]:
     """Run the studies and write ``reports/unicycle`` (or ``out_dir``); returns ``{"table": ...}``.
