@@ -36,6 +36,7 @@ What the figures follow:
 from __future__ import annotations
 
 import logging
+import re
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -322,7 +323,8 @@ def responses_figure(signals: pd.DataFrame, scenario: Mapping[str, Any] | None =
         ax.set_ylabel(label)
         if group:
             ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, frameon=False)
-    axes[0].set_title(title or "responses")
+    # a scenario's name is an identifier (three_servos_edf): shown in words, as the figures show every name
+    axes[0].set_title(title.replace("_", " ") if re.fullmatch(r"[A-Za-z0-9_-]+", title) else (title or "responses"))
     axes[-1].set_xlabel(TIME_LABEL)
     if window is not None:
         zax = grid[-1]

@@ -197,3 +197,103 @@ def test_hdd_gpi_figure_marks_a_run_that_was_not_ok() -> None:
     fig = gpi_figure(gpi, PAPER_OPT)
     marked = [line for line in fig.axes[0].lines if line.get_label() == "run not ok (unstable)"]
     assert len(marked) == 1 and list(marked[0].get_xdata()) == [gpi["sigma_s"].iloc[2]]
+
+
+# ------------------------------------------------------------------------------------------ paper checks
+_UNIT = re.compile(r"\(([^()]+)\)")
+
+
+def unitless_axes(fig: Any, allowed: set[str] = frozenset()) -> list[str]:
+    """Axis labels (x and y, of every axes that has data) without a unit in parentheses, except ``allowed``."""
+    bad = []
+    for ax in fig.axes:
+        if ax.get_label() == "<colorbar>" or not (ax.lines or ax.collections or ax.patches):
+            continue
+        for label in (ax.get_xlabel(), ax.get_ylabel()):
+            if label and label not in allowed and not _UNIT.search(label):
+                bad.append(label)
+    return bad
+
+
+def lines_without_legend(fig: Any) -> list[str]:
+    """Axes drawing two or more labelled artists with no legend of their own and no figure legend."""
+    if fig.legends:
+        return []
+    bad = []
+    for ax in fig.axes:
+        labelled = [a for a in ax.get_lines() + ax.collections if not str(a.get_label()).startswith("_")]
+        if len(labelled) >= 2 and ax.get_legend() is None:
+            bad.append(ax.get_ylabel() or ax.get_title())
+    return bad
+
+
+def assert_paper_figure(fig: Any, allowed_unitless: set[str] = frozenset()) -> None:
+    assert not raw_identifiers(fig), figure_texts(fig)
+    assert not unitless_axes(fig, allowed_unitless), unitless_axes(fig, allowed_unitless)
+    assert not lines_without_legend(fig), lines_without_legend(fig)
+    times = [ax.get_xlabel() for ax in fig.axes if "time" in ax.get_xlabel()]
+    assert all(t.startswith("time (s)") for t in times), times  # one time style: "time (s)"
+
+
+def test_the_paper_checks_find_a_unitless_axis_and_a_missing_legend() -> None:
+    from matplotlib.figure import Figure
+
+    fig = Figure()
+    ax = fig.add_subplot()
+    ax.plot([0, 1], label="a")
+    ax.plot([1, 0], label="b")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("angle")
+    assert unitless_axes(fig) == ["angle"] and lines_without_legend(fig) == ["angle"]
+    ax.set_ylabel("angle (rad)")
+    ax.legend()
+    assert_paper_figure(fig)
+
+
+@pytest.fixture(scope="module")
+def pendulum_run():
+    import netsim
+
+    return netsim.run(Path(__file__).resolve().parents[1] / "scenarios" / "pendulum_lqr.yaml", overrides={
+        "duration": "1 s", "io.theta_m.unit": "rad", "io.alpha_m.unit": "rad", "io.u.unit": "V"})
+
+
+def test_run_figures_are_paper_figures(pendulum_run) -> None:
+    import netsim
+
+    assert_paper_figure(pendulum_run.plot())
+    servo = netsim.run(Path(__file__).resolve().parents[1] / "scenarios" / "dc_servo_can.yaml",
+                       overrides={"duration": "0.2 s"})
+    assert_paper_figure(servo.plot(), {"output (unit not declared)", "input (unit not declared)"})
+    assert_paper_figure(servo.plot_schedule(), {"node.task"})
+    assert_paper_figure(servo.plot_network(), {"network: sender"})
+
+
+def test_pendulum_report_figures_are_paper_figures() -> None:
+    from netsim.models.pendulum.figures import closed_loop_lqr_figure, delay_cost_figure
+
+    t = np.arange(0, 1, 0.005)
+    runs = {e: pd.DataFrame({"alpha": 0.2 * np.exp(-5 * t), "u": np.sin(t) * k}, index=t)
+            for k, e in enumerate(("fd_raw", "luenberger", "kalman"), start=1)}
+    fig = closed_loop_lqr_figure(runs)
+    assert_paper_figure(fig)
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == [
+        "finite differences", "Luenberger observer", "Kalman filter"]
+    dc = pd.read_csv(Path(__file__).resolve().parents[1] / "reports" / "pendulum" / "delay_cost.csv")
+    assert_paper_figure(delay_cost_figure(dc), {"stationary cost per sample"})
+
+
+def test_unicycle_report_figures_are_paper_figures() -> None:
+    from netsim.models.unicycle.figures import bands_figure, det_p_figure, measurements_figure, qr_rms_figure
+
+    t = np.arange(0, 10.01, 0.01)
+    sig = pd.DataFrame({"x": t, "y": -t, "theta": 0.1 * t, "z_front": 1.0, "z_side": 0.5, "detP": np.exp(-t)},
+                       index=t)
+    for j in range(3):
+        sig[f"xhat[{j}]"], sig[f"sd[{j}]"] = sig[["x", "y", "theta"][j]] + 0.01, 0.02
+    for j in range(2):
+        sig[f"zhat[{j}]"], sig[f"zsd[{j}]"] = 0.7, 0.01
+    qr = {name: [{"e": np.zeros((t.size, 3)) + k} for k in range(3)] for name in ("(Q, R)", "(5Q, R)")}
+    for fig in (bands_figure(sig), measurements_figure(sig), qr_rms_figure(qr, t)):
+        assert_paper_figure(fig)
+    assert_paper_figure(det_p_figure(sig), {"$\\det P$"})
