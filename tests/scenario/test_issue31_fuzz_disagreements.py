@@ -62,3 +62,18 @@ def test_a_misspelt_measurement_sender_gets_a_did_you_mean() -> None:
     raw["nodes"]["controller"]["tasks"][0]["params"]["measurements"][0]["sender"] = "sensr"
     message = _errors(raw)[f"{MEASUREMENT}.sender"]
     assert "did you mean 'sensor'?" in message
+
+
+def test_validate_refuses_a_metric_that_needs_a_table_the_output_does_not_keep() -> None:
+    """Before: validate passed it and run refused it (et_control reads the messages row by row)."""
+    raw = _raw("hdd_case1.yaml")
+    raw["output"] = {"messages": "summary"}
+    message = _errors(raw)["output.messages"]
+    assert "(et_control) reads the messages table row by row" in message and "set output.messages: full" in message
+
+
+def test_the_latency_metric_with_summary_output_is_valid() -> None:
+    """latency streams the rows it reads (netsim.metrics.chain)."""
+    raw = _raw("dc_servo_can.yaml")
+    raw["output"] = {"jobs": "summary", "messages": "summary"}
+    assert _errors(raw) == {}
