@@ -1,4 +1,4 @@
-"""What each ``netsim`` sub-command does: validate, run, batch, sweep, report, list, scenarios, completion.
+"""What each ``netsim`` sub-command does: validate, run, batch, sweep, report, list.
 
 Each ``_cmd_<name>(args) -> exit code`` imports the heavy modules it needs inside, so ``netsim --help`` stays fast.
 """
@@ -495,29 +495,4 @@ def _cmd_schema(args: argparse.Namespace) -> int:
     from netsim.cli.docs import json_schema
 
     sys.stdout.write(json.dumps(json_schema(), indent=2, sort_keys=True) + "\n")
-    return EXIT_OK
-
-
-def _cmd_scenarios(args: argparse.Namespace) -> int:
-    """``netsim scenarios``: each shipped scenario and sweep with its one-line summary (or ``--path``: the folder)."""
-    from netsim import shipped
-
-    if args.path:
-        print(shipped.folder())
-        return EXIT_OK
-    items = shipped.catalogue()
-    width = max((len(item.name) for item in items), default=0)
-    for item in items:
-        kind = "sweep   " if item.is_sweep else "scenario"
-        print(f"{item.name:<{width}}  {kind}  {item.summary}".rstrip())
-    return EXIT_OK
-
-
-def _cmd_completion(args: argparse.Namespace) -> int:
-    """``netsim completion bash|zsh``: a completion script written by shtab from the command's own parser."""
-    import shtab
-
-    from netsim.cli.parser import build_parser
-
-    sys.stdout.write(shtab.complete(build_parser(), shell=args.shell))
     return EXIT_OK

@@ -8,12 +8,10 @@ from netsim.cli.commands import (
     LIST_KINDS,
     _cmd_analyze,
     _cmd_batch,
-    _cmd_completion,
     _cmd_docs,
     _cmd_list,
     _cmd_report,
     _cmd_run,
-    _cmd_scenarios,
     _cmd_schema,
     _cmd_sweep,
     _cmd_validate,
@@ -325,6 +323,18 @@ def _cmd_design(args: argparse.Namespace) -> int:
 
     args.file = resolve(args.file)  # a shipped scenario's name, as for run
     return cmd_design(args)
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    from netsim.cli.shell import cmd_scenarios
+
+    return cmd_scenarios(args)
+
+
+def _cmd_completion(args: argparse.Namespace) -> int:
+    from netsim.cli.shell import cmd_completion
+
+    return cmd_completion(args, build_parser())
 
 
 def _positive_int(text: str) -> int:
