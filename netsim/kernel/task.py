@@ -18,6 +18,7 @@ import numbers
 import re
 from collections import deque
 from collections.abc import Callable, Iterable
+import dataclasses
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal, Union
 
@@ -28,7 +29,7 @@ from netsim.errors import BuildError
 from netsim.timebase import format_time
 from netsim.units import Duration, Time
 
-__all__ = ["RELEASE_KINDS", "SET_PERIOD_RULES", "SetPeriodRule", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
+__all__ = ["RELEASE_KINDS", "SET_PERIOD_RULES", "CheckedTask", "SetPeriodRule", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
 
 
 def did_you_mean(name: str, known: Iterable[str]) -> str:
@@ -249,14 +250,9 @@ class TaskSpec(BaseModel):
         """True for a task the kernel releases by itself: periodic (``period``) or sporadic."""
         return self.period is not None or self.min_interarrival is not None
 
-    def replaced(self, **changes: Any) -> TaskSpec:
-        """A copy of this (checked) description with ``changes`` (run-time parameters, integer ns)."""
-        spec = self.model_copy(update=changes)
-        spec._checked = None
-        return spec
-
-    def checked(self, node: str) -> TaskSpec:
-        """This description validated for node ``node``, with ``deadline`` defaulting to the period.
+    def checked(self, node: str) -> CheckedTask:
+        """This description validated for node ``node``, with ``deadline`` defaulting to the period: the
+        :class:`CheckedTask` the kernel runs from.
 
         Every check depends on the description only, so ``netsim validate`` runs this same method on a
         scenario's tasks before anything is built (then the scheduling policy's ``check``). The result is kept:
@@ -274,7 +270,7 @@ class TaskSpec(BaseModel):
         self._checked = (node, result)
         return result
 
-    def _check(self, node: str) -> TaskSpec:
+    def _check(self, node: str) -> CheckedTask:
         name = self.name
         release = self.release_kind
         period_ns = check_time(node, name, "period", self.period, positive=True, allow_none=True)
@@ -329,11 +325,27 @@ class TaskSpec(BaseModel):
                              "'wcet: 2 ms' (the execution budget per job)")
         if self.deadline_handler is not None and deadline_ns is None:
             raise task_error(node, name, "deadline_handler", "needs a deadline (or a period) to detect misses")
-        return TaskSpec.model_construct(
+        return CheckedTask(
             name=name, period=period_ns, offset=offset_ns, deadline=deadline_ns, priority=priority, wcet=wcet_ns,
             release=self.release, preemptible=bool(self.preemptible), wcet_handler=self.wcet_handler,
             deadline_handler=self.deadline_handler, release_jitter=jitter, min_interarrival=mia_ns,
             extra_interarrival=extra, abort_on_miss=self.abort_on_miss, set_period=self.set_period)
+
+
+def _replaced(self: Any, **changes: Any) -> Any:
+    """A copy with ``changes`` (run-time parameters in integer ns: ``Kernel.set_period`` ...)."""
+    return dataclasses.replace(self, **changes)
+
+
+#: The checked form of a :class:`TaskSpec` (:meth:`TaskSpec.checked`): the same fields, integer ns, defaults filled,
+#: as a frozen slotted record. The kernel reads it at every release; a pydantic model's attribute reads cost
+#: about 4x a slot's (its ``__getattr__`` hook keeps CPython from specialising them), which the kernel benchmark
+#: showed. Made only by ``checked`` (its fields are TaskSpec's, not a second list).
+CheckedTask = dataclasses.make_dataclass(
+    "CheckedTask", [(name, Any) for name in TaskSpec.model_fields], frozen=True, slots=True,
+    namespace={"__module__": __name__, "__doc__": "A checked TaskSpec (see TaskSpec.checked).",
+               "release_kind": TaskSpec.release_kind, "release_network": TaskSpec.release_network,
+               "self_released": TaskSpec.self_released, "replaced": _replaced})
 
 
 def _distribution(node: str, task: str, field: str, value: Any) -> Any:

@@ -9,6 +9,7 @@ import pytest
 from netsim.env import SimEnv
 from netsim.errors import BuildError
 from netsim.kernel import HandlerSpec, Kernel, TaskSpec
+from netsim.kernel.task import CheckedTask
 from netsim.scenario import schema
 from netsim.timebase import MS, US
 
@@ -19,8 +20,8 @@ def body(job):
 
 def test_checked_fills_the_deadline_with_the_period_and_keeps_the_rest():
     spec = TaskSpec("ctl", period=10 * MS, priority=2).checked("cpu")
-    assert spec == TaskSpec("ctl", period=10 * MS, offset=0, deadline=10 * MS, priority=2, wcet=None,
-                            preemptible=True)
+    assert _fields(spec) == _fields(TaskSpec("ctl", period=10 * MS, offset=0, deadline=10 * MS, priority=2, wcet=None,
+                                             preemptible=True))
     assert TaskSpec("bg").checked("cpu").deadline is None  # aperiodic without a deadline: none
 
 
@@ -79,6 +80,12 @@ def test_a_yaml_task_is_checked_by_the_kernel_as_it_is():
     assert on_msg.checked("cpu").period is None and on_msg.release_network == "can"
     isr = schema.HandlerSpec.model_validate({"name": "isr", "program": "p", "latency": "5 us", "priority": 2})
     assert isr.kernel_spec() == HandlerSpec("isr", priority=2, latency=5 * US)
+
+
+def test_the_checked_form_has_exactly_the_task_spec_fields():
+    # the kernel runs from a slotted record (fast reads at every release), made from TaskSpec's own field list
+    assert [f.name for f in dataclasses.fields(CheckedTask)] == list(TaskSpec.model_fields)
+    assert TaskSpec("ctl", period=5 * MS).checked("cpu").replaced(period=7 * MS).period == 7 * MS
 
 
 def test_checked_runs_once_per_node_for_one_description():
