@@ -41,12 +41,14 @@ model ``x' = Ac x + Bc u`` and an input that changes from ``u_old`` to ``u_new``
 
 from __future__ import annotations
 
-from typing import Any, Protocol, runtime_checkable
+from dataclasses import dataclass
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
 __all__ = ["ControlLaw", "StateEstimator", "OutputFeedback", "sample_index", "zoh_split", "InputDelayLine",
-           "AppliedInputTimeline", "first_measurement_estimate"]
+           "AppliedInputTimeline", "first_measurement_estimate", "EstimatorCapabilities", "EstimatorBase",
+           "LawBase", "capabilities_of"]
 
 
 def sample_index(t_ns: int, period_ns: int, start_ns: int = 0) -> int:
@@ -98,6 +100,74 @@ class StateEstimator(Protocol):
     def predict(self, u: Any) -> None:
         """Advance the estimate to the next sample with input ``u`` held over the period."""
         ...
+
+
+@dataclass(frozen=True)
+class EstimatorCapabilities:
+    """What a state estimator can do beyond ``correct(y)`` / ``predict(u)`` / ``x_hat``, declared by it.
+
+    Attributes
+    ----------
+    fuses_at_sample
+        ``correct(y, k, rows=None)`` fuses a measurement at its own sample ``k`` (re-filtering from ``history``
+        stored samples); the estimator counts its samples in ``k`` and the measurements it refused in ``stale``
+        and ``duplicates``.
+    history
+        Samples back a delayed measurement (or a late input, ``revise_inputs``) is still fused.
+    fuses_partial
+        ``correct(y, k, rows=...)`` fuses part of ``y``; ``independent_rows(groups)`` says when that is exact.
+    corrects_previous
+        ``correct_previous(y)`` fuses a measurement of sample ``k-1`` read at ``k`` (estimators without history).
+    starts_from, starts_previous
+        ``start_from(y[, k, rows])`` / ``start_previous(y)`` start the estimate from a first measurement.
+    """
+
+    fuses_at_sample: bool = False
+    history: int = 0
+    fuses_partial: bool = False
+    corrects_previous: bool = False
+    starts_from: bool = False
+    starts_previous: bool = False
+
+
+class EstimatorBase:
+    """Base of netsim's estimators: they declare their :class:`EstimatorCapabilities` (read, never probed)."""
+
+    @property
+    def capabilities(self) -> EstimatorCapabilities:
+        """What this estimator can do (see :class:`EstimatorCapabilities`)."""
+        return EstimatorCapabilities()
+
+
+class LawBase:
+    """Base of netsim's control laws: what a law declares beyond ``step`` and ``reset``.
+
+    Attributes
+    ----------
+    reports_solver
+        The law solves an optimisation per step and reports it: ``last_iterations``, ``last_solve_time_s`` and
+        ``metrics()`` (``fallbacks``, ``solver_calls``, ``solver_iterations``).
+    """
+
+    reports_solver: ClassVar[bool] = False
+
+
+def capabilities_of(estimator: Any) -> EstimatorCapabilities:
+    """The declared capabilities of ``estimator``; for an object of a registered estimator written before
+    :class:`EstimatorBase` (no declaration), the ones its methods show (this compatibility path is the one place
+    that looks at an estimator's methods)."""
+    if isinstance(estimator, EstimatorBase):
+        return estimator.capabilities
+    import inspect
+
+    correct = getattr(estimator, "correct", None)
+    at_sample = callable(correct) and "k" in inspect.signature(correct).parameters
+    return EstimatorCapabilities(
+        fuses_at_sample=at_sample, history=int(getattr(estimator, "history", 0)),
+        fuses_partial=bool(getattr(estimator, "fuses_partial", False)),
+        corrects_previous=callable(getattr(estimator, "correct_previous", None)),
+        starts_from=callable(getattr(estimator, "start_from", None)),
+        starts_previous=callable(getattr(estimator, "start_previous", None)))
 
 
 class OutputFeedback:

@@ -25,6 +25,7 @@ from netsim.control.design_checks import (
     check_square,
     check_weight,
 )
+from netsim.control.interface import EstimatorBase, EstimatorCapabilities
 from netsim.errors import ConfigError, SimulationError
 from netsim.lazy_import import lazy_module
 
@@ -93,7 +94,7 @@ class _Sample:
         return False
 
 
-class KalmanFilter:
+class KalmanFilter(EstimatorBase):
     """Discrete Kalman filter for ``x[k+1] = A x[k] + B u[k] + w[k]``, ``y[k] = C x[k] + v[k]``.
 
     ``w ~ N(0, Q)`` and ``v ~ N(0, R)`` are white and independent. The filter lives on the sampling grid
@@ -248,6 +249,13 @@ class KalmanFilter:
         IKC = self._I - K @ C
         P = IKC @ P @ IKC.T + K @ R @ K.T  # Joseph form: stays symmetric positive semidefinite
         return x, P
+
+    @property
+    def capabilities(self) -> EstimatorCapabilities:
+        """Fuses at a measurement's own sample within ``history``; part of ``y`` when time-varying; starts from a
+        first measurement."""
+        return EstimatorCapabilities(fuses_at_sample=True, history=self.history, fuses_partial=self.fuses_partial,
+                                     starts_from=True)
 
     @property
     def fuses_partial(self) -> bool:

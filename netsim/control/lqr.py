@@ -34,6 +34,7 @@ from netsim.control.design_checks import (
     check_stabilizable,
     check_weight,
 )
+from netsim.control.interface import LawBase
 from netsim.errors import ConfigError, SimulationError
 
 __all__ = ["StateFeedback", "LQR", "dlqr_gain", "output_weighted", "reference_gains", "trajectory_feedforward"]
@@ -150,7 +151,7 @@ def trajectory_feedforward(A: Any, B: Any, X_ref: Any) -> np.ndarray:
     return U.T
 
 
-class StateFeedback:
+class StateFeedback(LawBase):
     """``u = u_ff(r) - K x_hat`` (and ``- Ki z`` with integral action), optionally saturated.
 
     Parameters

@@ -48,6 +48,7 @@ from netsim.control.design_checks import (
     check_square,
     uncontrollable_modes,
 )
+from netsim.control.interface import EstimatorBase, EstimatorCapabilities
 from netsim.errors import ConfigError, SimulationError
 
 __all__ = ["LuenbergerObserver", "observer_gain"]
@@ -107,7 +108,7 @@ def observer_gain(A: Any, C: Any, poles: Any, form: Literal["predictor", "curren
     return L
 
 
-class LuenbergerObserver:
+class LuenbergerObserver(EstimatorBase):
     """Discrete Luenberger observer (see the module docstring for both forms and their error dynamics).
 
     Parameters
@@ -149,6 +150,12 @@ class LuenbergerObserver:
         self.poles = check_poles("poles", poles, n)
         self.x0 = np.zeros(n) if x0 is None else as_vector("x0", x0, n)
         self.reset()
+
+    @property
+    def capabilities(self) -> EstimatorCapabilities:
+        """No history: a measurement of the previous sample is fused one step late (``correct_previous``); starts
+        from a first measurement (``start_from``, ``start_previous``)."""
+        return EstimatorCapabilities(corrects_previous=True, starts_from=True, starts_previous=True)
 
     def reset(self, x0: Any = None) -> None:
         """Back to the initial estimate, no stored measurement."""

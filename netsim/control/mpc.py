@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from netsim.control.design_checks import as_matrix, as_vector, check_weight
+from netsim.control.interface import LawBase
 from netsim.control.lqr import _limits, _model, dlqr_gain, output_weighted, reference_gains
 from netsim.control.qp_backends import Backend, make_backend
 from netsim.errors import ConfigError, SimulationError
@@ -52,7 +53,7 @@ SOLVERS = ("daqp", "clarabel", "osqp", "piqp")
 _SHORTCUT_TOL = 1e-9
 
 
-class LinearMPC:
+class LinearMPC(LawBase):
     """Linear MPC with box, rate and state constraints (see the module docstring).
 
     Parameters
@@ -96,6 +97,8 @@ class LinearMPC:
         Solver iterations of the last step (0 when no solver ran) and their total: the input of a
         per-iteration execution-time model.
     """
+
+    reports_solver = True
 
     def __init__(
         self,

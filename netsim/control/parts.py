@@ -1,9 +1,13 @@
 """The estimators and control laws a scenario names: ``estimator: {type: NAME, ...}``, ``law: {type: NAME, ...}``.
 
-Each entry is registered (kind ``estimator`` or ``controller``) with a ``Params`` model, what ``netsim list
-estimator kalman`` prints and ``netsim validate`` checks, and ``build(params, design)``, which makes the plain
-numeric object of :mod:`netsim.control` from the parameters and the :class:`Design` (the discrete model the
-controller program runs on: the plant discretised at the task period, unless the scenario gives one).
+Each entry is registered (kind ``estimator`` or ``controller``) and follows the :class:`EstimatorPart` /
+:class:`LawPart` protocol: a ``Params`` model (what ``netsim list estimator kalman`` prints), declared
+capabilities (class attributes: what the program and ``netsim validate`` read instead of probing the built
+object), and ``build(params, design, rng)``, which makes the plain numeric object of :mod:`netsim.control` from
+the parameters and the :class:`Design` (the discrete model the controller program runs on: the plant
+discretised at the task period, unless the scenario gives one). A scenario's block validates into a typed spec
+(:mod:`netsim.control.part_specs`); a registered part from a plugin subclasses :class:`EstimatorPartBase` or
+:class:`LawPartBase` (one written with ``build(params, design)`` still runs, with the default capabilities).
 
 Estimators (:class:`~netsim.control.interface.StateEstimator`)
     ``kalman`` (time-varying :class:`~netsim.control.kalman.KalmanFilter`, delayed measurements fused at their
@@ -16,7 +20,8 @@ Laws (:class:`~netsim.control.interface.ControlLaw`)
     registered under that name (fed the first measured output, through
     :class:`~netsim.control.pid.PIDLaw`).
 
-Weights and covariances accept a number (times the identity), a list (the diagonal) or a matrix. Every
+Weights and covariances accept a number (times the identity), a list (the diagonal) or a matrix, parsed once
+into typed values (:mod:`netsim.control.weights`). Every
 constructor check (shapes, symmetry, definiteness, stabilisability, detectability, pole positions, MPC
 feasibility of the initial state) raises :class:`~netsim.errors.ConfigError` naming the parameter; the
 program adds the YAML path (``nodes.<n>.tasks[i].params.law.Q``).
@@ -24,132 +29,41 @@ program adds the YAML path (``nodes.<n>.tasks[i].params.law.Q``).
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
-from typing import Annotated, Any, ClassVar, Literal, Protocol, Union
+from typing import Any, ClassVar, Literal, Protocol
 
 import numpy as np
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Discriminator,
-    Field,
-    PlainSerializer,
-    PlainValidator,
-    PrivateAttr,
-    Tag,
-    WithJsonSchema,
-    create_model,
-    model_serializer,
-    model_validator,
-)
+from pydantic import BaseModel, Field, model_validator
 
+from netsim.control.interface import EstimatorBase, EstimatorCapabilities
 from netsim.control.pid import PIDParams
-
+from netsim.control.weights import Matrix, Weight
 from netsim.errors import ConfigError
 from netsim.registry import register
 from netsim.units import StrictModel
 
 __all__ = [
+    "BUILTIN_ESTIMATORS",
+    "BUILTIN_LAWS",
     "ESTIMATOR_TYPES",
     "LAW_TYPES",
     "ContinuousModel",
     "Design",
     "DirectState",
+    "EstimatorPart",
+    "EstimatorPartBase",
     "KalmanPart",
     "LQRPart",
+    "LawPart",
+    "LawPartBase",
     "LuenbergerPart",
     "MPCPart",
     "ModelEKFPart",
     "NoEstimatorPart",
+    "PIDPart",
     "StateFeedbackPart",
     "SteadyStateKalmanPart",
 ]
-
-# --------------------------------------------------------------------------------------------- typed values
-class MatrixValue:
-    """A matrix parameter as parsed from YAML, once: a number, a list or a list of rows of finite floats.
-
-    ``given`` is the value as written (what the resolved scenario shows), ``array`` the parsed float array
-    (0-D, 1-D or 2-D, read-only). ``np.asarray(value)`` gives ``array``, so the constructors of
-    :mod:`netsim.control` take it where they take a list; they make the one conversion to the matrix of the
-    model's size (:func:`~netsim.control.design_checks.check_weight`, ``as_matrix``), where ``n`` is known.
-    :data:`parses` counts the parses (the tests count them per run).
-    """
-
-    __slots__ = ("given", "array")
-    #: Parses made in this process (by :func:`_parse_matrix`).
-    parses: ClassVar[int] = 0
-
-    def __init__(self, given: Any, array: np.ndarray) -> None:
-        self.given = given
-        array.setflags(write=False)
-        self.array = array
-
-    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
-        return self.array if dtype is None else self.array.astype(dtype)
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.given!r})"
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, MatrixValue) and self.given == other.given
-
-    def __hash__(self) -> int:
-        return hash(repr(self.given))
-
-
-class WeightValue(MatrixValue):
-    """A weight or covariance as parsed: a number (times the identity), a list (the diagonal) or a square matrix."""
-
-    __slots__ = ()
-
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    return value
-
-
-def _parse_matrix(value: Any, square: bool) -> np.ndarray:
-    MatrixValue.parses += 1
-    if isinstance(value, bool) or (isinstance(value, (list, tuple)) and any(isinstance(v, bool) for v in value)):
-        raise ValueError(f"expected numbers, got {str(value)[:60]!r}")
-    what = "a number (times the identity), a list (the diagonal) or a square matrix" if square else "a matrix"
-    try:
-        arr = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ValueError(f"must be {what} of numbers (a list of rows), got {str(value)[:60]!r}") from None
-    if arr.ndim > 2:
-        raise ValueError(f"must be {what} (at most two levels of lists), got an array of shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError("contains NaN or infinite entries")
-    if square and arr.ndim == 2 and arr.shape[0] != arr.shape[1]:
-        raise ValueError(f"must be square (n x n), got {arr.shape[0]}x{arr.shape[1]}")
-    return arr
-
-
-def _weight(value: Any) -> WeightValue:
-    if isinstance(value, MatrixValue):
-        return WeightValue(value.given, value.array)
-    return WeightValue(_plain(value), _parse_matrix(value, square=True))
-
-
-def _matrix(value: Any) -> MatrixValue:
-    if isinstance(value, MatrixValue):
-        return value
-    return MatrixValue(_plain(value), _parse_matrix(value, square=False))
-
-
-_NUMBERS = {"type": "array", "items": {"type": "number"}}
-#: A weight or covariance: a number (times the identity), a list (the diagonal) or a square matrix (rows),
-#: parsed once into a :class:`WeightValue` (finite numbers, at most 2-D, square); its size and definiteness are
-#: checked where the model's size is known (:func:`~netsim.control.design_checks.check_weight`).
-Weight = Annotated[WeightValue, PlainValidator(_weight), PlainSerializer(lambda w: w.given),
-                   WithJsonSchema({"anyOf": [{"type": "number"}, _NUMBERS, {"type": "array", "items": _NUMBERS}]})]
-#: A gain or cross weight: a number, a list (one row) or a matrix of finite numbers, parsed once.
-Matrix = Annotated[MatrixValue, PlainValidator(_matrix), PlainSerializer(lambda m: m.given),
-                   WithJsonSchema({"anyOf": [{"type": "number"}, _NUMBERS, {"type": "array", "items": _NUMBERS}]})]
 
 
 @dataclass(frozen=True)
@@ -194,9 +108,14 @@ class ContinuousModel:
     rows: tuple[int, ...]
 
 
-class DirectState:
+class DirectState(EstimatorBase):
     """The state is measured (``C`` square and invertible): ``x_hat = C^-1 y``; without a measurement the
     estimate is the model prediction ``A x_hat + B u``."""
+
+    @property
+    def capabilities(self) -> EstimatorCapabilities:
+        """No history: a measurement of the previous sample is fused one step late (``correct_previous``)."""
+        return EstimatorCapabilities(corrects_previous=True)
 
     def __init__(self, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> None:
         n = A.shape[0]
@@ -563,108 +482,3 @@ BUILTIN_LAWS: dict[str, type[LawPartBase]] = {
 #: The estimator and law types a ``state_feedback`` program accepts besides registered ones.
 ESTIMATOR_TYPES = tuple(BUILTIN_ESTIMATORS)
 LAW_TYPES = tuple(BUILTIN_LAWS)
-
-
-# --------------------------------------------------------------------------------------------- typed specs
-class PartSpec(BaseModel):
-    """A validated ``{type: NAME, its parameters}`` block of netsim's own parts: the part's ``Params`` with its
-    ``type``, frozen. It dumps as it was written (the resolved scenario shows the block as given)."""
-
-    model_config = ConfigDict(frozen=True)
-    _given: Any = PrivateAttr(None)
-    #: The part class (set on each generated spec model).
-    part: ClassVar[Any] = None
-
-    @property
-    def params(self) -> Any:
-        """The parameters ``build`` takes: the spec itself (a subclass of the part's ``Params``)."""
-        return self
-
-    @property
-    def given(self) -> Any:
-        """The block as written (``type`` included)."""
-        return self._given
-
-    @model_validator(mode="wrap")
-    @classmethod
-    def _keep_given(cls, data: Any, handler: Any) -> Any:
-        spec = handler(data)
-        if spec._given is None:
-            spec._given = copy.deepcopy(data) if isinstance(data, dict) else data
-        return spec
-
-    @model_serializer(mode="plain")
-    def _as_given(self) -> Any:
-        return copy.deepcopy(self._given)
-
-
-@dataclass(frozen=True, eq=False)
-class RegisteredPartSpec:
-    """A validated block naming a part registered by a plugin (not one of netsim's own): its ``type``, the part,
-    and its parameters validated with the part's ``Params`` (the raw mapping when it declares none)."""
-
-    type: str
-    part: Any
-    params: Any
-    given: dict[str, Any]
-
-
-def _spec_model(kind: str, name: str, part: Any) -> type[PartSpec]:
-    title = kind.capitalize() + "".join(w.capitalize() for w in name.split("_"))  # EstimatorSteadyStateKalman
-    model = create_model(title, __base__=(part.Params, PartSpec), __module__=__name__,
-                         type=(Literal[name], Field(description=f"'{name}'")))
-    model.part = part
-    return model
-
-
-def _registered(kind: str, field: str, example: str) -> Any:
-    """The validator of a block naming a registered part that is not one of netsim's own."""
-    from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
-
-    def validate(data: Any) -> RegisteredPartSpec:
-        if isinstance(data, RegisteredPartSpec):
-            return data
-        if not isinstance(data, dict):
-            raise ValueError(f"{field} is a mapping {{type: NAME, its parameters}} (e.g. {{type: {example}}}), got "
-                             f"{str(data)[:60]!r}")
-        name = data.get("type")
-        if not isinstance(name, str):
-            raise ValueError(f"{field} needs a 'type' (e.g. 'type: {example}')")
-        from netsim import registry
-
-        try:
-            part = registry.lookup(kind, name)
-        except ConfigError as exc:
-            raise ValidationError.from_exception_data(field, [InitErrorDetails(
-                type=PydanticCustomError("unknown_part", "{text}", {"text": exc.message}), loc=("type",),
-                input=name)]) from None
-        values = {k: v for k, v in data.items() if k != "type"}
-        model = registry.params_model(part)
-        params = model.model_validate(values) if model is not None else values
-        return RegisteredPartSpec(type=name, part=part, params=params, given=copy.deepcopy(data))
-
-    return validate
-
-
-def _part_union(kind: str, field: str, example: str, builtins: dict[str, Any]) -> Any:
-    """``{type: NAME, ...}`` as a pydantic union discriminated on ``type``: netsim's own parts by their tags, any
-    other name as a registered part (validated with its registered ``Params``)."""
-    from netsim.scenario.schema import TAG_MARK
-
-    members = [Annotated[_spec_model(field, name, part), Tag(f"{TAG_MARK}{name}")] for name, part in builtins.items()]
-    members.append(Annotated[RegisteredPartSpec, PlainValidator(_registered(kind, field, example)),
-                             PlainSerializer(lambda spec: copy.deepcopy(spec.given)), Tag(f"{TAG_MARK}registered")])
-
-    def tag(data: Any) -> str:
-        name = data.get("type") if isinstance(data, dict) else getattr(data, "type", None)
-        return f"{TAG_MARK}{name}" if name in builtins and not isinstance(data, RegisteredPartSpec) else \
-            f"{TAG_MARK}registered"
-
-    return Annotated[Union[tuple(members)], Discriminator(tag),  # noqa: UP007 - a runtime-built union
-                     WithJsonSchema({"type": "object"})]
-
-
-#: ``estimator: {type: NAME, ...}``: one of :data:`BUILTIN_ESTIMATORS` or a registered estimator, typed.
-EstimatorSpec = _part_union("estimator", "estimator", "kalman", BUILTIN_ESTIMATORS)
-#: ``law: {type: NAME, ...}``: one of :data:`BUILTIN_LAWS` or a registered controller, typed.
-LawSpec = _part_union("controller", "law", "lqr", BUILTIN_LAWS)

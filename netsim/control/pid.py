@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from pydantic import Field, model_validator
 
+from netsim.control.interface import LawBase
 from netsim.registry import register
 from netsim.timebase import to_seconds
 from netsim.units import Duration, StrictModel
@@ -154,7 +155,7 @@ class PID:
         return PIDLaw(self)
 
 
-class PIDLaw:
+class PIDLaw(LawBase):
     """A :class:`PID` with the toolbox's argument order: ``step(y, r) -> u`` (measurement first).
 
     The wrapped controller keeps its state; ``PIDLaw(pid).step(y, r)`` returns exactly ``pid.step(r, y)``.

@@ -199,8 +199,8 @@ def _law(law: Any, design: Any) -> tuple[dict[str, Any], Any]:
             Ac, Bc, Cc = Ac[1:, 1:], Bc[1:], Cc[:, 1:]
         return out, ("pid", Ac, Bc, Cc, Dc)
     if isinstance(law, LinearMPC):
-        Mall = getattr(law, "_Mall", None)  # the unconstrained optimum U* = Mall [x0; x_s; u_s]
-        K = law.K if Mall is None else -np.asarray(Mall[: law.m, : law.n])  # its first move: u0 = -K x0
+        Mall = law._Mall  # the unconstrained optimum U* = Mall [x0; x_s; u_s]
+        K = -np.asarray(Mall[: law.m, : law.n])  # its first move: u0 = -K x0
         Ki, Cr = None, None
         out["lqr_K"] = _matrix(law.K)
         out["horizon"] = law.N

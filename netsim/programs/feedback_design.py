@@ -385,7 +385,10 @@ def task_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: 
     design, per, rows = _model(p, scenario, plant, period_ns, path, node)
     est_part = as_part("estimator", p.estimator, f"{pp}.estimator")
     law_part = as_part("controller", p.law, f"{pp}.law")
-    est_design, plan, wrap = input_plan(p, est_part, design, plant, int(period_ns), path)  # type: ignore[arg-type]
+    continuous = None
+    if p.model is None and model_source(p, plant) == "zoh":  # the plant's continuous (A, B), for the input options
+        continuous = (np.atleast_2d(np.asarray(plant.A, dtype=float)), np.asarray(plant.B, dtype=float))
+    est_design, plan, wrap = input_plan(p, est_part, design, continuous, int(period_ns), path)  # type: ignore[arg-type]
     key = _key(path, node, int(period_ns), design, plan.key())  # type: ignore[arg-type]
     cache = p.design_cache()
     made = cache.get(key)

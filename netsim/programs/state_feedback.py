@@ -90,7 +90,6 @@ time and sends ``{"value": y, "t_ns": sample time}``. The design (model, estimat
 
 from __future__ import annotations
 
-import inspect
 import logging
 from collections.abc import Generator
 from typing import Any, ClassVar, Literal
@@ -105,7 +104,8 @@ from netsim.programs.basic import (
     _destination,
     _destination_given,
 )
-from netsim.control.parts import EstimatorSpec, LawSpec
+from netsim.control.interface import LawBase, capabilities_of
+from netsim.control.part_specs import EstimatorSpec, LawSpec
 from netsim.programs.feedback_design import claim_design, task_design
 from netsim.programs.inbox import take_matching
 from netsim.registry import register
@@ -277,16 +277,17 @@ class StateFeedbackProgram:
             raise ConfigError(f"the model has {self.m} inputs: give 'output_channels' (one DAC per input)",
                               path=f"{path}.params.output_channel")
         self.ref = ctx.signal(params.reference) if params.reference else None
-        self.takes_k = "k" in inspect.signature(self.estimator.correct).parameters
-        self.history = int(getattr(self.estimator, "history", 0))
+        self.caps = capabilities_of(self.estimator)  # declared by the estimator (issue 28: no probing here)
+        self.takes_k = self.caps.fuses_at_sample
+        self.history = self.caps.history
+        self.solver = self.law if isinstance(self.law, LawBase) and self.law.reports_solver else None
         self.p_rows = len(self.rows)
         # where each source's values go in y (positions in the measured rows)
         self.slots = [[self.rows.index(r) for r in rows] for rows in self.per_source]
         self.pending: dict[int, dict[int, np.ndarray]] = {}
         # several sources into a filter that can fuse a part of y (independent sensors): fuse each part as it comes
         est = self.estimator
-        self.by_part = (len(self.slots) > 1 and bool(getattr(est, "fuses_partial", False))
-                        and bool(est.independent_rows(self.slots)))
+        self.by_part = (len(self.slots) > 1 and self.caps.fuses_partial and bool(est.independent_rows(self.slots)))
         self.u = np.zeros(self.m)
         self.y_last = np.zeros(self.p_rows)
         self.counts = {"steps": 0, "fused": 0, "prediction_only": 0, "stale": 0, "duplicates": 0, "partial": 0}
@@ -332,20 +333,18 @@ class StateFeedbackProgram:
     def _start(self, y: np.ndarray, k: int, rows: Any = None) -> None:
         """``x0_hat: first_measurement``: start the estimate from the first measurement fused."""
         self.started = True
-        start = getattr(self.estimator, "start_from", None)
-        if start is None:  # 'none': the measurement is the estimate
+        if not self.caps.starts_from:  # 'none': the measurement is the estimate
             return
         if self.takes_k:
-            start(y, k, rows=rows)
+            self.estimator.start_from(y, k, rows=rows)
         else:
-            start(y)
+            self.estimator.start_from(y)
 
     def _start_previous(self, y: np.ndarray) -> None:
         """``x0_hat: first_measurement`` from a measurement one sample late (estimators without history)."""
         self.started = True
-        start = getattr(self.estimator, "start_previous", None)
-        if start is not None:  # 'none' has none: the measurement is the estimate
-            start(y)
+        if self.caps.starts_previous:  # 'none' has none: the measurement is the estimate
+            self.estimator.start_previous(y)
 
     # ------------------------------------------------------------------ measurements
     def _k_of(self, t_ns: int | None, k_now: int) -> int | None:
@@ -396,7 +395,7 @@ class StateFeedbackProgram:
             return self._fuse_parts(k_now)
         fused_any = False
         n_src = len(self.p.measurements)
-        late = None if self.takes_k else getattr(self.estimator, "correct_previous", None)
+        late = self.estimator.correct_previous if self.caps.corrects_previous and not self.takes_k else None
         oldest = k_now - self.history if self.takes_k else k_now - (late is not None)
         for k in sorted(self.pending):
             got = self.pending[k]
@@ -455,8 +454,7 @@ class StateFeedbackProgram:
         p = self.p
         est = self.estimator
         k_now = sample_index(job.release, self.period, self.offset)  # type: ignore[arg-type]
-        k_est = getattr(est, "k", None)
-        if k_est is not None:
+        if self.takes_k:
             while est.k < k_now:  # samples whose job has not run (overrun): predicted with the held input
                 est.predict(self._model_input(self.u, est.k))
         if self.timeline is not None:
@@ -499,20 +497,20 @@ class StateFeedbackProgram:
         st = self.p.solve_time
         if st is None:
             return 0
+        solver = self.solver
         if st.scale is not None:
-            return round(float(getattr(self.law, "last_solve_time_s", 0.0)) * st.scale * 1e9)
-        return int(st.base + st.per_iteration * int(getattr(self.law, "last_iterations", 0)))
+            return round(float(solver.last_solve_time_s if solver is not None else 0.0) * st.scale * 1e9)
+        return int(st.base + st.per_iteration * int(solver.last_iterations if solver is not None else 0))
 
     def metrics(self) -> dict[str, float]:
         """The counters of the run (``control.<node>.<task>.<name>`` in the run's metrics)."""
         out = {k: float(v) for k, v in self.counts.items()}
         est = self.estimator
-        for key in ("stale", "duplicates"):
-            if hasattr(est, key):
-                out[key] = float(max(out[key], getattr(est, key)))
-        law_metrics = getattr(self.law, "metrics", None)
-        if callable(law_metrics):
-            m = law_metrics()
+        if self.takes_k:  # an estimator fusing at the sample counts what it refused itself
+            out["stale"] = float(max(out["stale"], est.stale))
+            out["duplicates"] = float(max(out["duplicates"], est.duplicates))
+        if self.solver is not None:
+            m = self.solver.metrics()
             out["mpc_fallbacks"] = float(m.get("fallbacks", 0.0))
             out["mpc_solver_calls"] = float(m.get("solver_calls", 0.0))
             out["mpc_solver_iterations"] = float(m.get("solver_iterations", 0.0))

@@ -16,6 +16,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from netsim.control.interface import EstimatorBase, EstimatorCapabilities, capabilities_of
 from netsim.errors import ConfigError
 
 __all__ = ["InputPlan", "input_plan"]
@@ -66,7 +67,7 @@ class InputPlan:
         return estimator, None, None
 
 
-def input_plan(p: Any, part: Any, design: Any, plant: Any, period_ns: int,
+def input_plan(p: Any, part: Any, design: Any, continuous: tuple[np.ndarray, np.ndarray] | None, period_ns: int,
                path: str) -> tuple[Any, InputPlan, tuple[str, str] | None]:
     """The model the estimator is built on, how it is fed, and (for a changed model) the lead and YAML path of a
     build error.
@@ -74,7 +75,8 @@ def input_plan(p: Any, part: Any, design: Any, plant: Any, period_ns: int,
     ``input_delay = d * period + tau'``: the estimator is built on ``B = [Gamma0 Gamma1]`` (the ZOH split of the
     period at ``tau'``, :func:`~netsim.control.interface.zoh_split`; ``[B 0]`` when ``tau' = 0``) and fed
     ``[u[k-d]; u[k-d-1]]``. ``applied_input``: built on ``B = I`` and fed the effect of the reported input over
-    each period. Also checks ``x0_hat``.
+    each period. ``continuous``: the plant's continuous ``(A, B)`` when the model is its ZOH discretisation.
+    Also checks ``x0_hat``.
 
     Raises
     ------
@@ -82,7 +84,6 @@ def input_plan(p: Any, part: Any, design: Any, plant: Any, period_ns: int,
         At ``<path>.params.input_delay`` / ``.applied_input`` / ``.x0_hat``.
     """
     from netsim.control.interface import zoh_split
-    from netsim.programs.feedback_design import model_source
 
     pp = f"{path}.params"
     kind = p.estimator.type
@@ -95,9 +96,6 @@ def input_plan(p: Any, part: Any, design: Any, plant: Any, period_ns: int,
     if p.input_delay is not None and p.applied_input is not None:
         raise ConfigError("give input_delay (a known constant delay) or applied_input (the actuator's reports), not "
                           "both", path=f"{pp}.applied_input")
-    continuous = None
-    if p.model is None and model_source(p, plant) == "zoh":
-        continuous = (np.atleast_2d(np.asarray(plant.A, dtype=float)), np.asarray(plant.B, dtype=float))
     n = design.A.shape[0]
     if p.input_delay is not None:
         where = f"{pp}.input_delay"
@@ -135,11 +133,15 @@ def input_plan(p: Any, part: Any, design: Any, plant: Any, period_ns: int,
             (f"the estimator '{kind}' on the model with the delayed input", where))
 
 
-class _FirstHalf:
+class _FirstHalf(EstimatorBase):
     """An estimator fed ``u[k-d]`` from an :class:`~netsim.control.interface.InputDelayLine` (whole periods)."""
 
     def __init__(self, estimator: Any, m: int) -> None:
         self._est, self._m = estimator, m
+
+    @property
+    def capabilities(self) -> EstimatorCapabilities:
+        return capabilities_of(self._est)
 
     def predict(self, u: Any = None) -> None:
         self._est.predict(None if u is None else np.asarray(u)[: self._m])

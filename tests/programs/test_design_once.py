@@ -19,7 +19,7 @@ import pytest
 
 import netsim
 from netsim.control import kalman, lqr
-from netsim.control.parts import MatrixValue
+from netsim.control.weights import MatrixValue
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "dc_servo_lqr_kalman.yaml"
 
