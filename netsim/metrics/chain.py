@@ -12,8 +12,9 @@ latencies. It runs the same :func:`chain_walk` on batches of the last task's job
 records (the last :data:`KEEP` per task and per sender-receiver pair), so it gives the same numbers as the whole
 tables; a latency whose walk would need a record older than the window is not counted, and is reported
 (``<name>.beyond_window``, with a warning) instead of being guessed. A job is resolved only once nothing it
-depends on can still change: a job of the previous task still running (it may have sent the message) or a
-delivery at the current instant defer it to the next batch, or to the end of the run.
+depends on can still change: a job of the previous task still running that started at or before the send (it may
+have sent the message; the kernels say which job runs) or a delivery at the current instant defer it to the next
+batch, or to the end of the run.
 """
 
 from __future__ import annotations
@@ -142,6 +143,10 @@ class ChainLatencyStream:
         self._pending: list[tuple[int, int, int]] = []  # last-task jobs (release, start, finish) to resolve
         self._now = -1
         self._final = False
+        #: ``active(node, task)``: the start of the task's job now on the CPU (or blocked after starting), None
+        #: when it has none; set by :func:`netsim.results.traces.attach_streams` from the kernels. Without it, a
+        #: job is deferred whenever the previous task's last recorded job finished at or after the send.
+        self.active: Any = None
         self.count = 0
         self.total = 0
         self.low: int | None = None
@@ -214,8 +219,13 @@ class ChainLatencyStream:
                 unsafe |= alive & (cur_release >= self._now)  # a delivery at this very instant may come next
             beyond |= alive & self._msgs[i].beyond(cur_release, k, deliv)
             found_msg = alive & (k >= 0)
-            if not self._final:  # a job of the previous task still running started after its last finish
-                unsafe |= found_msg & (sent_at >= self._last_finish[i - 1])
+            if not self._final:  # a job of the previous task that started and is still running may have sent it
+                if self.active is not None:
+                    running = self.active(*self.chain[i - 1])
+                    if running is not None:
+                        unsafe |= found_msg & (sent_at >= running)
+                else:  # without the kernels: such a job started at or after the task's last recorded finish
+                    unsafe |= found_msg & (sent_at >= self._last_finish[i - 1])
             beyond |= found_msg & self._jobs[i - 1].beyond(sent_at, j, p_start)
         done = ~unsafe
         counted = done & ok & ~beyond

@@ -351,6 +351,17 @@ def attach_streams(sim: Any) -> None:
     streams = dict(s for s in (_streamed(spec) for spec in scenario.metrics) if s is not None)
     if not streams:
         return
+    kernels = sim.kernels
+
+    def active(node: str, task: str) -> int | None:
+        """The start of the job of ``node.task`` that has started and not finished, if any."""
+        state = getattr(kernels.get(node), "tasks", {}).get(task)
+        job = getattr(state, "active", None)
+        start = getattr(job, "start", None)
+        return None if start is None else int(start)
+
+    for stream in streams.values():
+        stream.active = active
     for kernel in sim.kernels.values():
         if not hasattr(kernel.job_records, "listeners"):
             kernel.job_records = ObservedList(kernel.job_records)

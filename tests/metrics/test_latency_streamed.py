@@ -129,3 +129,21 @@ def test_a_chain_reaching_back_past_the_window_is_reported_not_guessed(monkeypat
     assert got["lat.beyond_window"] > 0 and "reach back past" in caplog.text
     n = int(got["lat.count"])  # the first n actuator jobs, k = 0 .. n-1: latency k ms + 0.5 ms from sensor job 0
     assert got["lat.min_s"] == 0.0005 and got["lat.max_s"] == pytest.approx((n - 1) * 1e-3 + 0.0005, abs=1e-15)
+
+
+def test_a_sender_that_stopped_does_not_keep_jobs_pending(monkeypatch) -> None:
+    """The sensor sends once, at the end of its only job, and never runs again (a node out of battery); the
+    actuator keeps running on that sample. With the kernels saying no sensor job runs, every actuator job is
+    resolved in its batch (without them, each would wait for a sensor job that never ends: pending would grow
+    with the run)."""
+    monkeypatch.setattr(chain_module, "BATCH", 10)
+    stream = ChainLatencyStream([("sensor", "sample"), ("actuator", "actuate")], "lat")
+    stream.active = lambda node, task: None
+    stream.job(_job("sensor", "sample", 0, 0, 0, MS // 10))
+    stream.message(_message("sensor", "actuator", MS // 10, 2 * MS // 10))
+    for k in range(1000):
+        t = k * MS + 3 * MS // 10
+        stream.job(_job("actuator", "actuate", k, t, t, t + MS // 10))
+        assert len(stream._pending) < 10
+    got = stream.metrics()
+    assert got["lat.count"] == 1000 and got["lat.min_s"] == 0.0004  # actuator job 0 ends at 0.4 ms
