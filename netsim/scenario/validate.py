@@ -15,9 +15,11 @@ What is checked
 - A network's ``nodes`` exist; ``release: on_message:<net>`` and ``trigger: {on_message: <net>}`` name a
   network the node is attached to.
 - A periodic task has a period, an aperiodic or message-released task has none, a sporadic task has a
-  ``min_interarrival`` (and only it); under policy ``fp`` every
-  task has a priority. A deadline longer than the period is allowed (TrueTime semantics: jobs continue and
-  may queue up) but reported as a **warning**.
+  ``min_interarrival`` (and only it): the kernel's release rules (:meth:`netsim.kernel.task.TaskSpec.checked`);
+  under policy ``fp`` every task has a priority. A deadline longer than the period is allowed (TrueTime
+  semantics: jobs continue and may queue up) but reported as a **warning**. These read each task's validated
+  model (the scenario's, or the entry validated alone when the schema refused something else), never its raw
+  times.
 - Program parameter naming conventions: ``network``/``*_network`` (and ``networks``/``*_networks``) name a
   network the node is on; ``to`` names a node on that network, or ``all`` to broadcast (netsim's own programs
   refuse a missing ``to``); a source of interfering traffic (program attribute ``interference_source``) whose
@@ -35,7 +37,7 @@ What is checked
   metric reads them from the signals table after the run). A metric's ``chain`` (or ``*_chain``) lists
   ``node.task`` names of existing tasks or handlers.
 - (The baseline, ``baseline.overrides`` applied, is validated by the loader like the scenario itself.)
-- The kernel's own task checks (:func:`netsim.kernel.building.task_spec`, then the built-in policy's
+- The kernel's own task checks (:meth:`netsim.kernel.task.TaskSpec.checked`, then the built-in policy's
   ``check``): e.g. ``rm``/``dm`` refuse a deadline longer than the period, a ``wcet_handler`` needs a ``wcet``.
 - A ``module:attr`` plugin must accept the arguments build calls it with (:mod:`netsim.scenario.calls`); a
   registered plant that does not declare its ports is built (build's own ``make_plant``) for the io check.
