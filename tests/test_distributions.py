@@ -77,3 +77,13 @@ def test_a_bare_execution_time_resolves_as_the_time_and_inline_empirical_values_
     data = task.model_dump(mode="json")
     assert data["execution"] == "500 us"
     assert data["release_jitter"] == {"dist": "empirical", "values": ["1 ms"]}
+
+
+def test_a_jitter_read_from_a_missing_file_is_refused_at_its_yaml_path(tmp_path):
+    from netsim.scenario import check_scenario
+
+    raw = {"name": "j", "duration": "1 s", "nodes": {"cpu": {"tasks": [
+        {"name": "t", "program": "idle", "period": "10 ms", "priority": 1,
+         "release_jitter": {"dist": "empirical", "file": str(tmp_path / "none.csv")}}]}}}
+    errors = {p.path: p.message for p in check_scenario(raw) if p.severity == "error"}
+    assert list(errors) == ["nodes.cpu.tasks[0].release_jitter"] and "does not exist" in errors[list(errors)[0]]

@@ -24,8 +24,8 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, model_validator
 
-from netsim.distributions import Distribution, DistributionSpec
-from netsim.errors import BuildError
+from netsim.distributions import Distribution, DistributionSpec, Empirical
+from netsim.errors import BuildError, ConfigError
 from netsim.timebase import format_time
 from netsim.units import Duration, Time
 
@@ -352,11 +352,16 @@ def _distribution(node: str, task: str, field: str, value: Any) -> Any:
     """A distribution field of a task as a :class:`~netsim.distributions.Distribution` (an int: constant ns)."""
     if value is None:
         return None
+    if isinstance(value, Empirical):
+        try:
+            value.table()  # a CSV file is read now, so a missing one is refused at this field before the run
+        except ConfigError as exc:
+            raise task_error(node, task, field, exc.message) from None
     if isinstance(value, Distribution):
         return value
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise task_error(node, task, field, f"must be a distribution (netsim.distributions) or an integer number of ns, got "
-                         f"{value!r}")
+        raise task_error(node, task, field, f"must be a distribution (netsim.distributions) or an integer number of "
+                         f"ns, got {value!r}")
     if value < 0:
         raise task_error(node, task, field, f"must not be negative, got {format_time(int(value))}")
     return Distribution.constant(int(value))
