@@ -87,3 +87,15 @@ def test_a_jitter_read_from_a_missing_file_is_refused_at_its_yaml_path(tmp_path)
          "release_jitter": {"dist": "empirical", "file": str(tmp_path / "none.csv")}}]}}}
     errors = {p.path: p.message for p in check_scenario(raw) if p.severity == "error"}
     assert list(errors) == ["nodes.cpu.tasks[0].release_jitter"] and "does not exist" in errors[list(errors)[0]]
+
+
+def test_an_execution_time_read_from_a_missing_file_is_refused_by_validate(tmp_path):
+    from netsim.scenario import check_scenario, load_scenario
+
+    raw = {"name": "j", "duration": "10 ms", "nodes": {"cpu": {"tasks": [
+        {"name": "t", "program": "idle", "period": "10 ms", "priority": 1,
+         "execution": {"dist": "empirical", "file": str(tmp_path / "times.csv")}}]}}}
+    errors = {p.path: p.message for p in check_scenario(raw) if p.severity == "error"}
+    assert list(errors) == ["nodes.cpu.tasks[0].execution"] and "does not exist" in errors[list(errors)[0]]
+    (tmp_path / "times.csv").write_text("0.001\n0.003\n")  # seconds, the default unit
+    assert load_scenario(raw).nodes["cpu"].tasks[0].execution_time().upper_bound() == 3 * MS

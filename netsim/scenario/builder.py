@@ -313,6 +313,19 @@ def _recording_write(recorder: Any, name: str, write: Callable[[int, Any], None]
     return recorded_write
 
 
+def _execution(spec: Any, path: str) -> Any:
+    """The entry's execution time (a distribution; None when not given); one read from a CSV file is read now,
+    so a missing file is refused at ``<path>.execution`` when the run is built."""
+    execution = spec.execution_time()
+    table = getattr(execution, "table", None)
+    if table is not None:
+        try:
+            table()
+        except ConfigError as exc:
+            raise BuildError(exc.message, path=f"{path}.execution") from None
+    return execution
+
+
 def _program(spec: Any, ctx: Any, path: str) -> Any:
     cls = spec.plugin()
     params = spec.validated_params()
@@ -340,7 +353,7 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
 
     def body(spec: Any, kernel: Any, node_name: str, path: str, period: int | None) -> Any:
         ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=spec.name,
-                             execution=spec.execution_time(), signals=signals, scenario=scenario,
+                             execution=_execution(spec, path), signals=signals, scenario=scenario,
                              period=period, spec=spec)
         made = _program(spec, ctx, path)
         programs[f"{node_name}.{spec.name}"] = made

@@ -411,6 +411,12 @@ class _Checker:
             if self.network_ref(node_name, net, [*at, "release"]):
                 self.one_receiver(node_name, net, at, [*at, "release"])
         refused = self.kernel_checks(node_name, node, model, at)
+        table = getattr(model.execution, "table", None) if model is not None else None
+        if table is not None:  # an empirical execution time read from a CSV file: build reads it (builder._execution)
+            try:
+                table()
+            except ConfigError as exc:
+                self.error([*at, "execution"], exc.message)
         if model is not None and model.period is not None and model.deadline is not None \
                 and model.deadline > model.period and "deadline" not in refused:
             self.warn([*at, "deadline"], f"deadline {format_time(model.deadline)} is longer than the period "
