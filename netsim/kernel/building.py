@@ -26,7 +26,7 @@ __all__ = ["KernelBuilder", "task_spec"]
 
 def task_spec(node: str, name: str, **fields: Any) -> TaskSpec:
     """``TaskSpec(name, **fields).checked(node)``: the checked description of a task, as
-    :meth:`KernelBuilder.create_task` makes it (``netsim validate`` calls this on a scenario's tasks).
+    :meth:`KernelBuilder.create_task` makes it (fields in integer ns; a scenario's task is checked as it is).
 
     Raises
     ------
