@@ -51,8 +51,9 @@ def loop_scenario(duration: str, mode: str = "summary") -> dict[str, Any]:
 
 
 def peak_rss(folder: Path, duration: str, mode: str = "summary", windows: tuple[int, int] | None = None
-             ) -> tuple[float, float, dict[str, float]]:
-    """Run the loop for ``duration`` in a child process; its peak RSS (MiB), wall time (s) and latency metrics.
+             ) -> tuple[float, float, dict[str, float], float]:
+    """Run the loop for ``duration`` in a child process; its peak RSS (MiB), wall time (s), latency metrics and CPU
+    time (s).
     ``windows`` = (KEEP, BATCH) of the latency stream, set in the child before the run."""
     name = f"{mode}_{duration.replace(' ', '')}"
     path = folder / f"{name}.yaml"
@@ -77,15 +78,15 @@ def peak_rss(folder: Path, duration: str, mode: str = "summary", windows: tuple[
     assert proc.returncode == 0, err.read_text()
     lines = out.read_text().splitlines()
     metrics = {line.split()[0]: float(line.split()[1]) for line in lines if line.startswith("latency.")}
-    return usage.ru_maxrss / 1024, wall, metrics  # Linux: ru_maxrss in KiB
+    return usage.ru_maxrss / 1024, wall, metrics, usage.ru_utime + usage.ru_stime  # Linux: ru_maxrss in KiB
 
 
 def test_summary_output_keeps_flat_memory_and_the_latency_of_a_short_run(tmp_path: Path) -> None:
     """Default suite: 1 s against 6 s with stream windows of 256 records (full after 0.3 s of this loop).
     Kept in full, the 5000 more periods would add about 15 MiB (5 rows a period, about 600 B a row:
     netsim.scenario.memory.ROW_BYTES), over the 10 % allowed here."""
-    short_rss, _, short = peak_rss(tmp_path, "1 s", windows=(256, 128))
-    long_rss, _, long = peak_rss(tmp_path, "6 s", windows=(256, 128))
+    short_rss, _, short, _ = peak_rss(tmp_path, "1 s", windows=(256, 128))
+    long_rss, _, long, _ = peak_rss(tmp_path, "6 s", windows=(256, 128))
     assert short["latency.count"] == 1000 and long["latency.count"] == 6000  # one chain per period
     assert long["latency.mean_s"] == short["latency.mean_s"] == pytest.approx(0.00056, abs=1e-12)
     assert long_rss <= 1.10 * short_rss, (short_rss, long_rss)
@@ -95,10 +96,11 @@ def test_summary_output_keeps_flat_memory_and_the_latency_of_a_short_run(tmp_pat
 def test_a_1000_s_run_of_a_1_ms_loop_stays_within_10_percent_of_the_10_s_run(tmp_path: Path) -> None:
     """Issue 31 fault 6, as stated: 1000 s simulated against 10 s, summary output, the latency metric on.
     Prints the figures for the note (pytest -s)."""
-    short_rss, short_wall, short = peak_rss(tmp_path, "10 s")
-    long_rss, long_wall, long = peak_rss(tmp_path, "1000 s")
-    print(f"\nlong run: peak RSS {short_rss:.1f} MiB (10 s, {short_wall:.0f} s wall) -> {long_rss:.1f} MiB "
-          f"(1000 s, {long_wall:.0f} s wall), latency count {long['latency.count']:.0f}, mean "
+    short_rss, short_wall, short, short_cpu = peak_rss(tmp_path, "10 s")
+    long_rss, long_wall, long, long_cpu = peak_rss(tmp_path, "1000 s")
+    print(f"\nlong run: peak RSS {short_rss:.1f} MiB (10 s, {short_wall:.0f} s wall, {short_cpu:.0f} s CPU) -> "
+          f"{long_rss:.1f} MiB (1000 s, {long_wall:.0f} s wall, {long_cpu:.0f} s CPU), latency count "
+          f"{long['latency.count']:.0f}, mean "
           f"{long['latency.mean_s'] * 1e3:.3f} ms")
     assert long["latency.count"] == 1_000_000 and long["latency.mean_s"] == short["latency.mean_s"]
     assert long_rss <= 1.10 * short_rss, (short_rss, long_rss)
