@@ -27,7 +27,7 @@ import os
 from pathlib import Path
 from typing import Iterator
 
-__all__ = ["ENV_VAR", "config_path", "plugins_allowed", "task_permission"]
+__all__ = ["ENV_VAR", "config_path", "plugins_allowed", "scenario_folder", "task_permission", "validating"]
 
 #: Environment variable that allows (or refuses) plugin files.
 ENV_VAR = "NETSIM_ALLOW_PLUGINS"
@@ -37,6 +37,8 @@ _YES = {"1", "true", "yes", "on"}
 _NO = {"0", "false", "no", "off", ""}
 #: The permission a submitted task carries (None: none carried; this process's own settings apply).
 _TASK: contextvars.ContextVar[bool | None] = contextvars.ContextVar("netsim_task_plugins", default=None)
+#: The folder of the scenario file being validated (None: a mapping, or no validation running).
+_FOLDER: contextvars.ContextVar[Path | None] = contextvars.ContextVar("netsim_scenario_folder", default=None)
 
 
 def config_path() -> Path:
@@ -92,3 +94,24 @@ def task_permission(allowed: bool) -> Iterator[None]:
         yield
     finally:
         _TASK.reset(token)
+
+
+@contextlib.contextmanager
+def validating(allowed: bool | None, folder: Path | None) -> Iterator[None]:
+    """While a scenario is validated: the caller's explicit permission (None: the settings above decide) and the
+    folder of its file, for plugin parameters that name code files (an FMU plant, :mod:`netsim.plant.fmu`)."""
+    token = _FOLDER.set(folder)
+    try:
+        if allowed is None:
+            yield
+        else:
+            with task_permission(allowed):
+                yield
+    finally:
+        _FOLDER.reset(token)
+
+
+def scenario_folder() -> Path:
+    """The folder relative file names in a scenario's parameters are read from: the scenario file's during
+    validation (:func:`validating`), else the working folder."""
+    return _FOLDER.get() or Path.cwd()

@@ -282,6 +282,17 @@ def _baseline(raw: dict[str, Any], main_valid: bool) -> tuple[list[Problem], lis
 
 def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None
             ) -> tuple[list[Problem], Scenario | None, list[Problem]]:
+    """:func:`_gather_all` with the caller's permission and the scenario file's folder known to plugin parameters
+    that name code files (:func:`netsim.trust.validating`: an FMU plant)."""
+    from netsim.trust import validating
+
+    file = os.fspath(source) if isinstance(source, (str, os.PathLike)) else None
+    with validating(allow_plugins, Path(file).resolve().parent if file else None):
+        return _gather_all(source, overrides, allow_plugins)
+
+
+def _gather_all(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None
+                ) -> tuple[list[Problem], Scenario | None, list[Problem]]:
     """Every problem of ``source`` (located), the scenario when there is no error, and its baseline's warnings."""
     if isinstance(source, Scenario) and not overrides:
         return [], source, []
