@@ -67,6 +67,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv
         Arguments without the program name (default: ``sys.argv[1:]``).
     """
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        # a Ctrl-C, or a SIGTERM in the instants between setting the command's handler and entering its try (or
+        # while its finally restores it): still exit 130. Uncaught, Python would end the process by SIGINT (-2).
+        _err("interrupted")
+        return EXIT_INTERRUPTED
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    """:func:`main` without the last-resort catch of an interrupt that lands outside the command's own try."""
     parser = build_parser()
     try:
         args = parser.parse_args(list(argv) if argv is not None else None)
@@ -123,14 +134,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         _partial_folder(exc)
         raise
     finally:
+        if previous is not None:  # first, so that a late SIGTERM no longer raises inside this cleanup
+            import signal
+
+            signal.signal(signal.SIGTERM, previous)
         if trust_before is None:
             os.environ.pop(ENV_VAR, None)
         else:
             os.environ[ENV_VAR] = trust_before
-        if previous is not None:
-            import signal
-
-            signal.signal(signal.SIGTERM, previous)
 
 
 def _drop_stdout() -> None:
