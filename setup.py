@@ -10,7 +10,8 @@ Editable and wheel installs alike. Everything else (metadata, dependencies, entr
 from setuptools import find_packages, setup
 
 _MAPPED = {"netsim.models": "models"}
-_DATA = {"netsim.scenarios": ("scenarios", ["*.yaml"])}
+# the source FMUs of the shipped FMU scenarios (C source and modelDescription.xml; built on first use)
+_DATA = {"netsim.scenarios": ("scenarios", ["*.yaml", "fmu/*/modelDescription.xml", "fmu/*/sources/*"])}
 
 packages = find_packages(include=["netsim", "netsim.*"])
 for name, folder in _MAPPED.items():

@@ -152,6 +152,7 @@ PLUGIN_MODULES: list[str] = [
     "netsim.io.signals",
     "netsim.programs",
     "netsim.plant.described",
+    "netsim.plant.fmu",
     "netsim.models",
 ]
 

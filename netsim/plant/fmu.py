@@ -1,0 +1,328 @@
+"""Plants from FMUs: ``plant: {type: fmu, path: ...}`` runs an FMI 2.0 co-simulation FMU with FMPy.
+
+A scenario writes::
+
+    plant:
+      type: fmu
+      path: fmu/dc_motor          # a .fmu file or an unpacked FMU folder, relative to the scenario file
+      inputs: [u]                 # FMU input variables, in plant input order (default: all, as declared)
+      outputs: [theta]            # FMU output variables, in plant output order (default: all)
+      states: [theta, omega]      # variables read as the plant state (default: the states of the FMU's
+                                  # ModelStructure/Derivatives; none: no state)
+      parameters: {k: 1000, a: 1} # start values set before initialisation
+      x0: [0, 0]                  # the plant section's own keys as for every plant
+      record_grid: 1 ms
+
+The names are the FMU's variable names: ``io`` channels name them as they name any plant port
+(``{type: dac, input: u}``, ``{type: adc, output: theta}``).
+
+**An FMU is code.** Its library runs inside netsim, so an ``fmu`` plant is loaded only with the permission
+plugin files need (:mod:`netsim.trust`: ``--allow-plugins``, ``allow_plugins=True``, ``NETSIM_ALLOW_PLUGINS``
+or the user's config); without it ``netsim validate`` and ``netsim run`` refuse the scenario at ``plant.path``.
+
+**Stepping.** The plant is advanced lazily like every plant (:mod:`netsim.plant`): when anything samples or
+actuates it, one ``fmi2DoStep`` takes the FMU from the plant's time to that instant under the inputs held since
+the last change (zero-order hold), and ``fmi2SetReal`` writes an input when it changes. So the FMU is stepped
+exactly between the events that touch it. The recorder's ``record_grid`` samples are such events too: the plant
+steps to each record instant, so the recorded outputs are the FMU's own values there, not an interpolation
+(an FMU that integrates with a fixed internal step is therefore sampled on a grid of communication points that
+may not be multiples of that step: the FMU decides how it handles a short step). ``x0`` sets the state
+variables during initialisation (before the first step); setting the state later (state noise) is refused, and
+disturbances must be piecewise constant or held (no sinusoid, no continuous disturbance model).
+
+Only FMI 2.0 co-simulation is run. FMI 1.0 and 3.0 FMUs, and FMUs with model exchange only, are refused at
+``plant.path`` with what to give instead. The FMU's files are read, unpacked and (a source FMU) compiled by
+:mod:`netsim.plant.fmu_files`.
+"""
+
+from __future__ import annotations
+
+import logging
+import weakref
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
+
+from netsim.errors import ConfigError, SimulationError
+from netsim.plant.base import Plant
+from netsim.plant.disturbance import _Source
+from netsim.registry import register
+from netsim.units import StrictModel
+
+__all__ = ["FmuParams", "FmuPlant", "fmu_plant"]
+
+_log = logging.getLogger(__name__)
+
+#: The refusal without permission (the words of the loader's refusal of a plugin file).
+NOT_ALLOWED = "this scenario loads code from the FMU"
+
+#: Disturbance kinds an FMU plant takes (piecewise-constant inputs: held, so exact).
+_KINDS = ("piecewise", "held", "lti_d")
+
+
+def _resolve(written: str) -> Path:
+    from netsim.trust import scenario_folder
+
+    path = Path(written).expanduser()
+    return (path if path.is_absolute() else scenario_folder() / path).resolve()
+
+
+_DESCRIPTIONS: dict[tuple[str, int, int], Any] = {}
+
+
+def _description(path: Path) -> Any:
+    """The model description of ``path``, read once per (path, modification time, size)."""
+    from netsim.plant.fmu_files import read_description
+
+    try:
+        st = path.stat()
+        key = (str(path), st.st_mtime_ns, st.st_size)
+    except OSError:
+        return read_description(path)  # raises: not found
+    found = _DESCRIPTIONS.get(key)
+    if found is None:
+        found = _DESCRIPTIONS[key] = read_description(path)
+    return found
+
+
+def _check_kind(md: Any, path: Path) -> None:
+    if md.fmiVersion != "2.0":
+        raise ValueError(f"the FMU {path.name} is FMI {md.fmiVersion}; the fmu plant runs FMI 2.0 co-simulation FMUs "
+                         "(export the model as FMI 2.0)")
+    if md.coSimulation is None:
+        raise ValueError(f"the FMU {path.name} has model exchange only; the fmu plant runs FMI 2.0 co-simulation "
+                         "FMUs (export the model with co-simulation)")
+
+
+def _variables(md: Any, causality: str | None = None) -> dict[str, Any]:
+    return {v.name: v for v in md.modelVariables
+            if v.type == "Real" and (causality is None or v.causality == causality)}
+
+
+def _default_states(md: Any) -> list[str]:
+    return [d.variable.derivative.name for d in md.derivatives if d.variable.derivative is not None]
+
+
+class FmuParams(StrictModel):
+    """An FMI 2.0 co-simulation FMU run by FMPy: inputs, outputs and states mapped by variable name."""
+
+    path: str = Field(min_length=1, description="the .fmu file or unpacked FMU folder, relative to the scenario "
+                                                "file (loaded only with --allow-plugins: an FMU is code)")
+    inputs: list[str] | None = Field(None, description="FMU input variables, in plant input order (default: all)")
+    outputs: list[str] | None = Field(None, description="FMU output variables, in plant output order (default: all)")
+    states: list[str] | None = Field(None, description="FMU variables read as the plant state (default: the states "
+                                                       "of ModelStructure/Derivatives)")
+    parameters: dict[str, float] = Field(default_factory=dict, description="start values of FMU variables, set "
+                                                                           "before initialisation")
+    name: str = Field("plant", min_length=1, description="plant name (recorded as <name>.x, <name>.u)")
+    _file: Path | None = PrivateAttr(default=None)
+
+    @field_validator("path")
+    @classmethod
+    def _path(cls, value: str) -> str:
+        from netsim.trust import plugins_allowed
+
+        path = _resolve(value)
+        if not plugins_allowed():
+            raise ValueError(f"{NOT_ALLOWED} {path}; rerun with --allow-plugins if you trust it "
+                             "(Python: allow_plugins=True)")
+        try:
+            md = _description(path)
+        except ConfigError as exc:
+            raise ValueError(exc.message) from None
+        _check_kind(md, path)
+        return value
+
+    @staticmethod
+    def _md(info: ValidationInfo) -> Any:
+        written = info.data.get("path")
+        return None if written is None else _description(_resolve(written))
+
+    @field_validator("inputs", "outputs")
+    @classmethod
+    def _ports(cls, value: list[str] | None, info: ValidationInfo) -> list[str] | None:
+        md = cls._md(info)
+        if value is None or md is None:
+            return value
+        causality = "input" if info.field_name == "inputs" else "output"
+        known = _variables(md, causality)
+        for name in value:
+            if name not in known:
+                raise ValueError(f"the FMU has no Real {causality} '{name}'; its {causality}s are {list(known)}")
+        if len(set(value)) != len(value):
+            raise ValueError(f"{info.field_name} must be unique names, got {value}")
+        return value
+
+    @field_validator("states")
+    @classmethod
+    def _states(cls, value: list[str] | None, info: ValidationInfo) -> list[str] | None:
+        md = cls._md(info)
+        if value is None or md is None:
+            return value
+        known = _variables(md)
+        for name in value:
+            if name not in known:
+                raise ValueError(f"the FMU has no Real variable '{name}'; its states are {_default_states(md)}")
+        return value
+
+    @field_validator("parameters")
+    @classmethod
+    def _parameters(cls, value: dict[str, float], info: ValidationInfo) -> dict[str, float]:
+        md = cls._md(info)
+        if md is None:
+            return value
+        known = {n: v for n, v in _variables(md).items() if v.causality == "parameter" or v.initial == "exact"}
+        for name in value:
+            if name not in known:
+                raise ValueError(f"the FMU has no Real parameter '{name}' to set; its parameters are "
+                                 f"{[n for n, v in known.items() if v.causality == 'parameter']}")
+        return value
+
+    @model_validator(mode="after")
+    def _remember(self) -> "FmuParams":
+        self._file = _resolve(self.path)  # the scenario folder is known only while validating
+        return self
+
+    def file(self) -> Path:
+        """The FMU's absolute path (resolved when validated)."""
+        return self._file if self._file is not None else _resolve(self.path)
+
+    def description(self) -> Any:
+        """FMPy's model description of the FMU."""
+        return _description(self.file())
+
+    def port_names(self) -> tuple[list[str], list[str], list[str]]:
+        """``(inputs, outputs, states)``, the defaults filled in from the model description."""
+        md = self.description()
+        ins = list(self.inputs) if self.inputs is not None else list(_variables(md, "input"))
+        outs = list(self.outputs) if self.outputs is not None else list(_variables(md, "output"))
+        states = list(self.states) if self.states is not None else _default_states(md)
+        return ins, outs, states
+
+
+def _release(slave: Any, mode: list[str]) -> None:
+    """Terminate and free the FMU instance and unload its library (at garbage collection or exit)."""
+    try:
+        if mode[0] in ("init", "step"):
+            if mode[0] == "step":
+                slave.terminate()
+            slave.freeInstance()
+        slave.freeLibrary()
+    except Exception as exc:  # noqa: BLE001 - a finaliser must not raise; the run's results are already made
+        _log.debug("releasing the FMU failed: %s", exc)
+
+
+class FmuPlant(Plant):
+    """An FMI 2.0 co-simulation FMU as a plant: one ``doStep`` per propagation (see :mod:`netsim.plant.fmu`).
+
+    Parameters
+    ----------
+    folder
+        Unpacked FMU folder holding the library for this platform (:func:`netsim.plant.fmu_files.binary_folder`).
+    description
+        FMPy's model description.
+    inputs, outputs, states
+        Variable names of the plant's inputs, outputs and state.
+    parameters
+        Start values set after instantiation, before initialisation.
+    name
+        Plant name (also the FMU instance name).
+    """
+
+    _cache_output = True
+
+    def __init__(self, folder: Path, description: Any, inputs: Sequence[str], outputs: Sequence[str],
+                 states: Sequence[str], parameters: dict[str, float] | None = None, *, name: str = "plant",
+                 divergence_bound: float = 1e12) -> None:
+        super().__init__(len(states), len(inputs), len(outputs), input_names=list(inputs),
+                         output_names=list(outputs), state_names=list(states), name=name,
+                         divergence_bound=divergence_bound)
+        from fmpy.fmi2 import FMU2Slave
+
+        variables = _variables(description)
+        self._vr_in = [variables[n].valueReference for n in inputs]
+        self._vr_out = [variables[n].valueReference for n in outputs]
+        self._vr_x = [variables[n].valueReference for n in states]
+        self._parameters = [(variables[n].valueReference, float(v)) for n, v in (parameters or {}).items()]
+        self._slave = FMU2Slave(guid=description.guid, unzipDirectory=str(folder),
+                                modelIdentifier=description.coSimulation.modelIdentifier, instanceName=name)
+        self._mode = ["loaded"]  # loaded -> init (instantiated, initialising) -> step (stepped at least once)
+        weakref.finalize(self, _release, self._slave, self._mode)
+
+    def _start(self) -> None:
+        slave = self._slave
+        slave.instantiate()
+        slave.setupExperiment(startTime=self._t / 1e9)
+        if self._parameters:
+            slave.setReal([vr for vr, _ in self._parameters], [v for _, v in self._parameters])
+        slave.enterInitializationMode()
+        self._mode[0] = "init"
+        super()._start()
+
+    def _check_source(self, src: _Source) -> None:
+        if src.kind not in _KINDS:
+            what = "state noise" if src.kind == "state" else f"a {src.kind} disturbance"
+            raise ConfigError(f"plant {self.name}: an FMU plant takes piecewise-constant or held disturbances on its "
+                              f"inputs only, not {what} (an LTI plant takes it)")
+
+    def _update_effective_input(self, t: int) -> None:
+        if self._mode[0] == "loaded" or not self._vr_in:
+            return
+        u = self._piecewise_input() if self._sources else self._u
+        self._slave.setReal(self._vr_in, u.tolist())
+
+    def _step(self, t: int) -> bool:
+        slave = self._slave
+        if self._mode[0] == "init":
+            slave.exitInitializationMode()
+            self._mode[0] = "step"
+        try:
+            slave.doStep(self._t / 1e9, (t - self._t) / 1e9)
+        except Exception as exc:  # noqa: BLE001 - FMPy's FMICallException, reported with the instant
+            raise SimulationError(f"plant {self.name}: the FMU's doStep to t = {t / 1e9:.9g} s failed: {exc}") from None
+        self._t = t
+        x = self._state_now() if self._vr_x else self._output_now()
+        if not (x.dot(x) <= self._bound2):
+            self._diverged(t, x)
+        return False
+
+    def _output_now(self) -> np.ndarray:
+        return np.array(self._slave.getReal(self._vr_out), dtype=float)
+
+    def _state_now(self) -> np.ndarray:
+        if not self._vr_x:
+            return np.zeros(0)
+        return np.array(self._slave.getReal(self._vr_x), dtype=float)
+
+    def _set_state_now(self, x: np.ndarray) -> None:
+        if self._mode[0] != "init":
+            raise SimulationError(f"plant {self.name}: an FMU's state can be set only before its first step "
+                                  "(x0), not during the run")
+        if self._vr_x:
+            self._slave.setReal(self._vr_x, [float(v) for v in x])
+
+
+@register("plant", "fmu", "an FMI 2.0 co-simulation FMU run by FMPy (needs --allow-plugins: an FMU is code)")
+def fmu_plant(params: FmuParams) -> FmuPlant:
+    """The plant of ``plant: {type: fmu, ...}``: the FMU unpacked (and a source FMU compiled) once, then loaded."""
+    from netsim.errors import BuildError
+    from netsim.plant.fmu_files import binary_folder
+
+    md = params.description()
+    try:
+        folder = binary_folder(params.file(), md)
+    except ConfigError as exc:
+        raise BuildError(exc.message, path="plant.path") from None
+    ins, outs, states = params.port_names()
+    return FmuPlant(folder, md, ins, outs, states, params.parameters, name=params.name)
+
+
+def _fmu_ports(params: FmuParams) -> tuple[list[Any], list[Any]]:
+    ins, outs, _ = params.port_names()
+    return ins, outs
+
+
+fmu_plant.Params = FmuParams  # type: ignore[attr-defined]
+fmu_plant.ports = _fmu_ports  # type: ignore[attr-defined]
