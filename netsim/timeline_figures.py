@@ -93,13 +93,11 @@ def density_window(rows: list[tuple[np.ndarray, np.ndarray]], end_s: float, widt
 
 
 def _axis_px(fig: Any, ax: Any) -> float:
-    """Pixels of ``ax``'s width at :data:`PX_PER_INCH` (a new figure's: :data:`_PLOT_SHARE` of it)."""
-    try:
-        fig.canvas.draw_idle  # noqa: B018 - a figure with a canvas: its layout is known after a draw
-        width_in = ax.get_position().width * fig.get_figwidth()
-    except AttributeError:  # a subfigure or an axes without a position
-        width_in = _PLOT_SHARE * fig.get_figwidth()
-    return max(50.0, min(width_in, _PLOT_SHARE * fig.get_figwidth()) * PX_PER_INCH)
+    """Pixels of ``ax``'s width at :data:`PX_PER_INCH`: its share of the figure's width, at most
+    :data:`_PLOT_SHARE` (before the layout runs, the axes' position is matplotlib's default, wider than the room
+    the row names and the legend leave)."""
+    share = min(float(ax.get_position().width), _PLOT_SHARE)
+    return max(50.0, share * float(fig.get_figwidth()) * PX_PER_INCH)
 
 
 def _window_note(t0: float, t1: float, end_s: float, chosen: str = "") -> str:
