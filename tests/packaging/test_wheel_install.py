@@ -1,7 +1,7 @@
 """The built wheel works in a fresh virtual environment outside the checkout (issue 27 section 1, "Done when").
 
-Slow (about 6 min here: 2.7 min to build the wheel and install it with its dependencies from the package index,
-3 min for the HDD report's runs on 2 workers): run with
+Slow (about 6.5 min here: 2.7 min to build the wheel and install it with its dependencies from the package index,
+half a minute for the gallery's DC servo notebook, 3 min for the HDD report's runs on 2 workers): run with
 ``pytest -m slow tests/packaging/test_wheel_install.py``; .ci/run does. The wheel is built from a copy of the
 package's sources (a stale ``build/`` of the checkout cannot leak into it), installed with the versions of
 ``constraints.txt`` (those the committed reports were made with) and without any extra, and every command runs
@@ -84,6 +84,16 @@ def test_wheel_in_a_fresh_venv_runs_shipped_scenarios_and_regenerates_the_hdd_re
     ran = _run([str(netsim), "run", "dc_servo_can"], work, env, 600)
     assert ran.returncode == 0, ran.stderr[-3000:]
     assert len(list((work / "reports" / "dc_servo_can").glob("*/meta.json"))) == 1
+
+    # a gallery notebook in a fresh kernel of this venv (the runner needs nbclient and ipykernel, not netsim's)
+    kernel = _run([str(python), "-m", "pip", "install", "-q", "-c", str(ROOT / "constraints.txt"), "nbclient",
+                   "ipykernel"], tmp_path, env, 900)
+    assert kernel.returncode == 0, kernel.stderr[-3000:]
+    notebook_folder = tmp_path / "notebook"
+    notebook_folder.mkdir()
+    notebook = _run([str(python), str(ROOT / "tests" / "examples" / "notebook_runner.py"),
+                     str(ROOT / "examples" / "01_dc_servo_can.ipynb"), str(notebook_folder)], notebook_folder, env, 900)
+    assert notebook.returncode == 0, (notebook.stdout + notebook.stderr)[-3000:]
 
     dask = _run([str(netsim), "sweep", "hdd_gpi_sweep", "--dask-local"], work, env, 120)  # no [dask] extra here
     assert dask.returncode == 2 and "pip install 'netsim[dask]'" in dask.stderr
