@@ -200,7 +200,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", action="store_true", help="also write PNG figures")
     p.add_argument("--plot-window", metavar="T|T0:T1",
                    help="time window of the Gantt chart and network timeline, e.g. '50 ms' or '1 s:1.2 s' "
-                        "(implies --plot; default: the whole run, up to 3000 intervals)")
+                        "(implies --plot; default: the window where every job spans 2 px, the whole run when it fits)")
     p.add_argument("--no-progress", action="store_true",
                    help="no progress bar (there is none either when stderr is not a terminal)")
     p.set_defaults(func=_cmd_run)

@@ -399,7 +399,8 @@ class RunResult:
             the returned figure yourself with ``fig.savefig(path)``).
         window : float or tuple of float, optional
             Time window of the saved Gantt chart and network timeline: ``(t0, t1)`` or a length in seconds
-            (default: the whole run when it is short, see :func:`netsim.plotting.resolve_window`).
+            (default: the window where every job spans 2 px, the whole run when it fits; see
+            :func:`netsim.plotting.density_window`).
         fig : matplotlib.figure.Figure or SubFigure, optional
             An empty figure to draw the panels into (default: a new one).
 
@@ -428,7 +429,8 @@ class RunResult:
         Parameters
         ----------
         window : float or tuple of float, optional
-            ``(t0, t1)`` or a length in seconds (default: the whole run when it is short).
+            ``(t0, t1)`` or a length in seconds (default: the window where every job spans 2 px, the whole
+            run when it fits).
         ax : matplotlib.axes.Axes, optional
             The axes to draw on (default: a new figure's).
 
@@ -454,7 +456,8 @@ class RunResult:
         Parameters
         ----------
         window : float or tuple of float, optional
-            ``(t0, t1)`` or a length in seconds (default: the whole run when it is short).
+            ``(t0, t1)`` or a length in seconds (default: the window where every job spans 2 px, the whole
+            run when it fits).
         ax : matplotlib.axes.Axes, optional
             The axes to draw on (default: a new figure's).
 
