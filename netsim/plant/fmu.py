@@ -203,13 +203,16 @@ class FmuParams(StrictModel):
 
 
 def _release(slave: Any, mode: list[str]) -> None:
-    """Terminate and free the FMU instance and unload its library (at garbage collection or exit)."""
+    """Terminate and free the FMU instance (at garbage collection or exit).
+
+    The library stays loaded: FMPy's ``freeLibrary`` unloads it even while another instance of the same FMU (the
+    plant ``netsim validate`` built, another run in this process) still uses it, which crashes that one."""
     try:
         if mode[0] in ("init", "step"):
             if mode[0] == "step":
                 slave.terminate()
             slave.freeInstance()
-        slave.freeLibrary()
+            mode[0] = "freed"
     except Exception as exc:  # noqa: BLE001 - a finaliser must not raise; the run's results are already made
         _log.debug("releasing the FMU failed: %s", exc)
 

@@ -77,7 +77,8 @@ def run_and_digest(name: str) -> dict[str, Any]:
     import netsim
 
     with tempfile.TemporaryDirectory() as tmp:
-        result = netsim.run(SCENARIOS / f"{name}.yaml", out=Path(tmp) / name)
+        # allow_plugins: the shipped scenarios are trusted (dc_servo_fmu loads an FMU, which is code)
+        result = netsim.run(SCENARIOS / f"{name}.yaml", out=Path(tmp) / name, allow_plugins=True)
         return digest_folder(Path(result.out_dir))
 
 
