@@ -87,15 +87,6 @@ def _description(path: Path) -> Any:
     return found
 
 
-def _check_kind(md: Any, path: Path) -> None:
-    if md.fmiVersion != "2.0":
-        raise ValueError(f"the FMU {path.name} is FMI {md.fmiVersion}; the fmu plant runs FMI 2.0 co-simulation FMUs "
-                         "(export the model as FMI 2.0)")
-    if md.coSimulation is None:
-        raise ValueError(f"the FMU {path.name} has model exchange only; the fmu plant runs FMI 2.0 co-simulation "
-                         "FMUs (export the model with co-simulation)")
-
-
 def _variables(md: Any, causality: str | None = None) -> dict[str, Any]:
     return {v.name: v for v in md.modelVariables
             if v.type == "Real" and (causality is None or v.causality == causality)}
@@ -129,10 +120,9 @@ class FmuParams(StrictModel):
             raise ValueError(f"{NOT_ALLOWED} {path}; rerun with --allow-plugins if you trust it "
                              "(Python: allow_plugins=True)")
         try:
-            md = _description(path)
+            _description(path)
         except ConfigError as exc:
             raise ValueError(exc.message) from None
-        _check_kind(md, path)
         return value
 
     @staticmethod
@@ -269,6 +259,12 @@ class FmuPlant(Plant):
             what = "state noise" if src.kind == "state" else f"a {src.kind} disturbance"
             raise ConfigError(f"plant {self.name}: an FMU plant takes piecewise-constant or held disturbances on its "
                               f"inputs only, not {what} (an LTI plant takes it)")
+
+    def add_state_noise(self, states: Sequence[int | str], sigma: float | Sequence[float], sample_ns: int,
+                        model: str = "increment") -> None:
+        """Refused: noise on the state would set the FMU's state during the run (see :meth:`_set_state_now`)."""
+        raise ConfigError(f"plant {self.name}: an FMU plant takes no state noise (its state can be set only before "
+                          "the first step); put the noise on an input ({inputs: [...], sigma, sample})")
 
     def _update_effective_input(self, t: int) -> None:
         if self._mode[0] == "loaded" or not self._vr_in:

@@ -53,12 +53,14 @@ def cache_folder() -> Path:
 
 
 def read_description(path: Path) -> Any:
-    """FMPy's ``ModelDescription`` of the FMU at ``path`` (archive or folder); reads XML only.
+    """FMPy's ``ModelDescription`` of the FMI 2.0 co-simulation FMU at ``path`` (archive or folder), checked against
+    the FMI schema (FMPy's validation); reads XML only.
 
     Raises
     ------
     ConfigError
-        When the file is missing or its description cannot be read (FMPy's reason, first line).
+        When the file is missing, its description cannot be read (FMPy's reason, in one line), or it is not an
+        FMI 2.0 co-simulation FMU (FMI 1.0 or 3.0, model exchange only).
     """
     fmpy = _fmpy()
     if not path.exists():
@@ -67,10 +69,31 @@ def read_description(path: Path) -> Any:
     if path.is_dir() and not (path / "modelDescription.xml").is_file():
         raise ConfigError(f"{path} is a folder without modelDescription.xml: not an unpacked FMU")
     try:
-        return fmpy.read_model_description(str(path))
+        version, cosim = _kind(path)
+        if version == "2.0" and cosim:
+            return fmpy.read_model_description(str(path))  # with FMPy's checks against the FMI schema
     except Exception as exc:  # noqa: BLE001 - FMPy's reasons (bad zip, schema errors) reported in one line
         text = " ".join(str(exc).split())
         raise ConfigError(f"cannot read the FMU's modelDescription.xml ({path}): {text[:300]}") from None
+    if version != "2.0":
+        raise ConfigError(f"the FMU {path.name} is FMI {version}; the fmu plant runs FMI 2.0 co-simulation FMUs "
+                          "(export the model as FMI 2.0)")
+    raise ConfigError(f"the FMU {path.name} has model exchange only; the fmu plant runs FMI 2.0 co-simulation FMUs "
+                      "(export the model with co-simulation)")
+
+
+def _kind(path: Path) -> tuple[str, bool]:
+    """``(fmiVersion, has a CoSimulation element)`` from the root of ``modelDescription.xml`` (archive or folder)."""
+    import zipfile
+
+    from lxml import etree
+
+    if path.is_dir():
+        root = etree.parse(str(path / "modelDescription.xml")).getroot()
+    else:
+        with zipfile.ZipFile(path) as zf, zf.open("modelDescription.xml") as fh:
+            root = etree.parse(fh).getroot()
+    return str(root.get("fmiVersion")), root.find("CoSimulation") is not None
 
 
 def has_binary(folder: Path, description: Any) -> bool:

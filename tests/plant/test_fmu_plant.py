@@ -1,0 +1,228 @@
+"""The ``fmu`` plant (issue 30): an FMI 2.0 co-simulation FMU built here from C source, run with FMPy.
+
+The FMU is the DC motor of ``scenarios/fmu/dc_motor`` (``sources/dc_motor.c``, written for netsim: theta' = omega,
+omega' = -a omega + k u, exact zero-order-hold steps); the test suite compiles it once per session into a
+temporary cache folder (``NETSIM_CACHE_DIR``) with FMPy's CMake project and the machine's C compiler.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+import shutil
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+
+pytest.importorskip("fmpy")
+
+import netsim  # noqa: E402
+from netsim.cli import main  # noqa: E402
+from netsim.scenario import check_scenario  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENARIO = ROOT / "scenarios" / "dc_servo_fmu.yaml"
+SOURCE_FMU = ROOT / "scenarios" / "fmu" / "dc_motor"
+
+
+@pytest.fixture(scope="module", autouse=True)
+def fmu_cache(tmp_path_factory: pytest.TempPathFactory) -> Any:
+    """A private cache folder (the FMU is compiled into it once) and no plugin permission from the environment
+    or the user's config unless a test gives it."""
+    saved = {k: os.environ.get(k) for k in ("NETSIM_CACHE_DIR", "NETSIM_ALLOW_PLUGINS", "XDG_CONFIG_HOME")}
+    os.environ["NETSIM_CACHE_DIR"] = str(tmp_path_factory.mktemp("cache"))
+    os.environ["XDG_CONFIG_HOME"] = str(tmp_path_factory.mktemp("config"))  # no config.toml: not allowed
+    os.environ.pop("NETSIM_ALLOW_PLUGINS", None)
+    yield Path(os.environ["NETSIM_CACHE_DIR"])
+    for k, v in saved.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
+
+
+def _scenario() -> dict[str, Any]:
+    data = yaml.safe_load(SCENARIO.read_text(encoding="utf-8"))
+    data["plant"]["path"] = str(SOURCE_FMU)  # a mapping has no folder: the path is absolute
+    return data
+
+
+def _ss_twin(data: dict[str, Any], k: float, a: float) -> dict[str, Any]:
+    """The same scenario with the plant written as ``type: ss``: theta' = omega, omega' = -a omega + k u."""
+    twin = copy.deepcopy(data)
+    twin["plant"] = {"type": "ss", "A": [[0, 1], [0, -a]], "B": [0, k], "C": [[1, 0], [0, 1]], "D": 0,
+                     "inputs": ["u"], "outputs": ["theta", "omega"], "states": ["theta", "omega"],
+                     "x0": data["plant"]["x0"], "record_grid": data["plant"]["record_grid"]}
+    return twin
+
+
+def _plant(params: dict[str, Any]) -> Any:
+    from netsim.plant.fmu import FmuParams, fmu_plant
+
+    with_trust = {"path": str(SOURCE_FMU), **params}
+    from netsim.trust import task_permission
+
+    with task_permission(True):
+        return fmu_plant(FmuParams.model_validate(with_trust))
+
+
+# ------------------------------------------------------------------------------------------------ numbers
+def test_a_linear_fmu_equals_the_same_ss_plant_in_a_closed_loop(tmp_path):
+    # PID loop of dc_servo_ideal (6 ms period, 2 ms execution: the plant is stepped over 1 ms record intervals
+    # split at the ADC read and the DAC write) with other motor parameters than the FMU's defaults, so the
+    # parameters must reach the FMU; the twin is the same model as an exact LTI plant (matrix exponential).
+    k, a = 400.0, 3.0
+    data = _scenario()
+    data["plant"]["parameters"] = {"k": k, "a": a}
+    data["plant"]["x0"] = [0.2, -1.0]
+    data["duration"] = "1 s"
+    fmu = netsim.run(data, out=tmp_path / "fmu", allow_plugins=True)
+    lti = netsim.run(_ss_twin(data, k, a), out=tmp_path / "ss")
+    for name in ("theta", "omega", "u"):
+        y_fmu, y_ss = fmu.signal(name), lti.signal(name)
+        assert len(y_fmu) == len(y_ss) > 900
+        assert np.array_equal(np.asarray(y_fmu.index), np.asarray(y_ss.index))
+        scale = float(np.nanmax(np.abs(y_ss.to_numpy())))
+        err = float(np.nanmax(np.abs(y_fmu.to_numpy() - y_ss.to_numpy())))
+        assert err <= 1e-9 * scale, (name, err, scale)  # measured: about 1e-15 of the scale
+
+
+def test_the_step_response_is_the_hand_computed_solution_at_uneven_steps():
+    # theta' = omega, omega' = -a omega + k u from rest under u = 1 (the solution by hand):
+    #   omega(t) = (k / a) (1 - exp(-a t)),  theta(t) = (k / a) (t - (1 - exp(-a t)) / a)
+    k, a = 1000.0, 1.0
+    plant = _plant({"parameters": {"k": k, "a": a}, "outputs": ["theta", "omega"]})
+    plant.set_input("u", 1.0, 0)
+    t_ns = 0
+    for h in (1, 999, 250_000, 3_000_000, 96_749_000, 400_000_000):  # uneven steps, 1 ns to 0.4 s
+        t_ns += h
+        plant.advance_to(t_ns)
+    t = t_ns / 1e9
+    assert t == pytest.approx(0.5)
+    want = np.array([(k / a) * (t - (1 - math.exp(-a * t)) / a), (k / a) * (1 - math.exp(-a * t))])
+    # theta(0.5) = 1000 (0.5 - 0.393469...) = 106.5306..., omega(0.5) = 393.4693...
+    assert np.allclose(plant.output(t_ns), want, rtol=1e-12, atol=0)
+    assert np.allclose(plant.state(t_ns), want, rtol=1e-12, atol=0)  # states default to theta, omega
+
+
+def test_x0_sets_the_fmu_state_before_its_first_step():
+    # free response from theta0 = 1, omega0 = 2, u = 0: omega(t) = 2 exp(-a t), theta(t) = 1 + 2 (1 - exp(-a t)) / a
+    a = 2.0
+    plant = _plant({"parameters": {"a": a}})
+    plant.set_state([1.0, 2.0], 0)
+    t = 0.3
+    y = plant.output(int(t * 1e9))
+    assert np.allclose(y, [1 + 2 * (1 - math.exp(-a * t)) / a, 2 * math.exp(-a * t)], rtol=1e-12, atol=0)
+    with pytest.raises(netsim.errors.SimulationError, match="only before its first step"):
+        plant.set_state([0.0, 0.0])
+
+
+def test_an_fmu_archive_runs_as_its_folder(tmp_path):
+    # a .fmu (zip) holding the compiled library is unpacked into the cache and gives the same outputs
+    from netsim.plant.fmu_files import binary_folder, read_description
+
+    built = binary_folder(SOURCE_FMU, read_description(SOURCE_FMU))
+    archive = tmp_path / "dc_motor.fmu"
+    with zipfile.ZipFile(archive, "w") as z:
+        for p in built.rglob("*"):
+            if p.is_file():
+                z.write(p, p.relative_to(built).as_posix())
+    one = _plant({"outputs": ["theta"]})
+    two = _plant({"path": str(archive), "outputs": ["theta"]})
+    for p in (one, two):
+        p.set_input("u", 0.5, 0)
+    assert one.output(123_456_789)[0] == two.output(123_456_789)[0] != 0.0
+
+
+# ------------------------------------------------------------------------------------------------ permission
+def _problems(data: Any, **kw: Any) -> list[Any]:
+    return [p for p in check_scenario(data, **kw) if p.severity == "error"]
+
+
+def test_without_the_plugin_permission_validate_and_run_refuse_naming_allow_plugins(tmp_path, capsys):
+    code = main(["validate", str(SCENARIO)])
+    out = capsys.readouterr().out
+    assert code != 0
+    lines = [line for line in out.splitlines() if "plant.path" in line]
+    assert len(lines) == 1 and "--allow-plugins" in lines[0] and "loads code from the FMU" in lines[0]
+    code = main(["run", str(SCENARIO), "--out", str(tmp_path / "run"), "-q"])
+    assert code != 0 and "--allow-plugins" in capsys.readouterr().err
+    assert not (tmp_path / "run").exists()
+    # Python: allow_plugins=False refuses, True allows
+    assert [p.path for p in _problems(SCENARIO, allow_plugins=False)] == ["plant.path"]
+    assert _problems(SCENARIO, allow_plugins=True) == []
+
+
+def test_with_the_permission_the_shipped_scenario_validates_and_runs_from_any_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)  # the FMU path is relative to the scenario file, not the working folder
+    assert main(["validate", str(SCENARIO), "--allow-plugins"]) == 0, capsys.readouterr().err
+    assert main(["run", "dc_servo_fmu", "--allow-plugins", "--set", "duration=0.1 s", "--out", "run", "-q"]) == 0
+
+
+# ------------------------------------------------------------------------------------------------ bad input
+def _with_description(tmp_path: Path, edit: Any) -> Path:
+    folder = tmp_path / "edited"
+    shutil.copytree(SOURCE_FMU, folder)
+    md = folder / "modelDescription.xml"
+    md.write_text(edit(md.read_text(encoding="utf-8")), encoding="utf-8")
+    return folder
+
+
+@pytest.mark.parametrize(("where", "value", "path", "words"), [
+    ("path", "no/such/dc_motor.fmu", "plant.path", "FMU not found"),
+    ("inputs", ["v"], "plant.inputs", "no Real input 'v'; its inputs are ['u']"),
+    ("outputs", ["theta", "speed"], "plant.outputs", "no Real output 'speed'; its outputs are ['theta', 'omega']"),
+    ("states", ["x9"], "plant.states", "no Real variable 'x9'"),
+    ("parameters", {"J": 1.0}, "plant.parameters", "no Real parameter 'J'"),
+])
+def test_a_bad_fmu_field_is_one_problem_at_its_path(where, value, path, words):
+    data = _scenario()
+    data["plant"][where] = value
+    problems = _problems(data, allow_plugins=True)
+    assert [p.path for p in problems] == [path], problems
+    assert words in problems[0].message and "\n" not in problems[0].message
+
+
+@pytest.mark.parametrize(("edit", "words"), [
+    (lambda s: s.replace('fmiVersion="2.0"', 'fmiVersion="3.0"'), "FMI 3.0; the fmu plant runs FMI 2.0"),
+    (lambda s: s.replace("<CoSimulation", "<ModelExchange").replace("</CoSimulation>", "</ModelExchange>")
+     .replace('canHandleVariableCommunicationStepSize="true"', ""),
+     "model exchange only"),
+    (lambda s: s.replace("<ModelVariables>", "<ModelVariables"), "cannot read the FMU's modelDescription.xml"),
+])
+def test_a_wrong_kind_of_fmu_is_refused_at_plant_path(tmp_path, edit, words):
+    data = _scenario()
+    data["plant"]["path"] = str(_with_description(tmp_path, edit))
+    problems = _problems(data, allow_plugins=True)
+    assert [p.path for p in problems] == ["plant.path"], problems
+    assert words in problems[0].message
+
+
+def test_a_source_fmu_without_a_c_compiler_is_refused_by_validate_saying_so(tmp_path, monkeypatch):
+    from netsim.plant import fmu_files
+
+    monkeypatch.setenv("NETSIM_CACHE_DIR", str(tmp_path / "empty_cache"))
+    monkeypatch.setattr(fmu_files, "compiler", lambda: None)
+    problems = _problems(_scenario(), allow_plugins=True)
+    assert [p.path for p in problems] == ["plant.path"], problems
+    assert "no C compiler" in problems[0].message
+
+
+def test_state_noise_is_refused_by_an_fmu_plant():
+    data = _scenario()
+    data["plant"]["process_noise"] = {"states": ["omega"], "sigma": 0.1, "sample": "1 ms"}
+    problems = _problems(data, allow_plugins=True)
+    assert [p.path for p in problems] == ["plant.process_noise"], problems
+    assert "state noise" in problems[0].message
+
+
+# ------------------------------------------------------------------------------------------------ listing
+def test_netsim_list_plants_shows_fmu(capsys):
+    assert main(["list", "plant"]) == 0
+    out = capsys.readouterr().out
+    assert any(line.split()[:1] == ["fmu"] for line in out.splitlines()), out
