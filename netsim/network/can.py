@@ -59,7 +59,7 @@ def can_frame_bits(data_bits: int, frame_format: str = "standard", bit_stuffing:
 
 
 @register("network", "can", "CAN bus (CSMA/AMP): priority arbitration, non-preemptive frames")
-class CanBus(Network):
+class CanBus(Network["CanBus.Params"]):
     """A CAN bus (see the module docstring)."""
 
     class Params(NetworkParams):

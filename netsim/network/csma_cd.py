@@ -30,7 +30,7 @@ __all__ = ["CsmaCdBus"]
 
 
 @register("network", "csma_cd", "CSMA/CD (shared Ethernet): collisions and binary exponential backoff")
-class CsmaCdBus(Network):
+class CsmaCdBus(Network["CsmaCdBus.Params"]):
     """A CSMA/CD medium (see the module docstring)."""
 
     class Params(NetworkParams):

@@ -32,7 +32,7 @@ __all__ = ["SwitchedEthernet"]
 
 @register("network", "ethernet", "switched Ethernet: full duplex, store-and-forward switch with finite memory")
 @register("network", "switched_ethernet", "switched Ethernet (same as 'ethernet')")
-class SwitchedEthernet(Network):
+class SwitchedEthernet(Network["SwitchedEthernet.Params"]):
     """A switched Ethernet (see the module docstring)."""
 
     class Params(NetworkParams):

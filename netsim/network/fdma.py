@@ -22,7 +22,7 @@ __all__ = ["FdmaMedium"]
 
 
 @register("network", "fdma", "FDMA: fixed bandwidth shares per sender, no interference")
-class FdmaMedium(Network):
+class FdmaMedium(Network["FdmaMedium.Params"]):
     """An FDMA medium (see the module docstring)."""
 
     class Params(NetworkParams):

@@ -68,7 +68,7 @@ def _dynamic_id_message(node: str, fid: int, n_static: int, m: int) -> str:
 
 
 @register("network", "flexray", "FlexRay: static segment of TDMA slots, dynamic segment of minislots by frame ID")
-class FlexRayBus(Network):
+class FlexRayBus(Network["FlexRayBus.Params"]):
     """A FlexRay bus, one channel (see the module docstring)."""
 
     class Params(NetworkParams):
@@ -167,7 +167,7 @@ class FlexRayBus(Network):
         self._slots: dict[str, list[int]] = {n: [] for n in self.nodes}
         for i, owner in enumerate(p.static_schedule):
             if owner not in (None, ""):
-                self._slots[owner].append(i * self._slot)  # type: ignore[index]
+                self._slots[owner].append(i * self._slot)
         # dynamic turns in ID order: (frame ID, node)
         self._turns = sorted((fid, node) for node, fid in p.dynamic_ids.items())
         self._static_wake: dict[str, Any] = {}  # node -> its pending static-slot call

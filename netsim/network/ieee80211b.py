@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from pydantic import Field, model_validator
 
 from netsim.network.timing import Call, call_later
@@ -17,7 +15,7 @@ __all__ = ["Ieee80211b"]
 
 @register("network", "ieee80211b", "IEEE 802.11b radio: DCF (CSMA/CA with frozen backoff), path loss, ACK and retries")
 @register("network", "802.11b", "IEEE 802.11b radio (same as 'ieee80211b')")
-class Ieee80211b(WirelessMedium):
+class Ieee80211b(WirelessMedium["Ieee80211b.Params"]):
     """IEEE 802.11b (DSSS, long preamble defaults) with the DCF's basic access (see the module docstring)."""
 
     class Params(WirelessParams):
@@ -45,7 +43,7 @@ class Ieee80211b(WirelessMedium):
             return self
 
     def _mac_setup(self) -> None:
-        p: Any = self.params
+        p = self.params
         self._difs = int(p.sifs) + 2 * int(p.slot)
         self._slot = int(p.slot)
         self._cw = {n: p.cw_min for n in self.nodes}
@@ -58,7 +56,7 @@ class Ieee80211b(WirelessMedium):
         self._contending: set[str] = set()
 
     def _contend(self, node: str, first: bool) -> None:
-        p: Any = self.params
+        p = self.params
         now = self.sim.now
         idle = self._idle_since[node]
         if first and not self._post_backoff[node] and idle is not None and now - idle >= self._difs:
@@ -113,7 +111,7 @@ class Ieee80211b(WirelessMedium):
                 self._arm(n)
 
     def _after_attempt(self, node: str, done: bool) -> None:
-        p: Any = self.params
+        p = self.params
         if done:  # success or given up: CW resets and a post-transmission backoff starts
             self._cw[node] = p.cw_min
             self._post_backoff[node] = True

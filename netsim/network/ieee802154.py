@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from pydantic import Field, model_validator
 
 from netsim.network.timing import call_later
@@ -17,7 +15,7 @@ __all__ = ["Ieee802154"]
 
 @register("network", "ieee802154", "IEEE 802.15.4 radio: unslotted CSMA/CA, path loss, interference, ACK and retries")
 @register("network", "802.15.4", "IEEE 802.15.4 radio (same as 'ieee802154')")
-class Ieee802154(WirelessMedium):
+class Ieee802154(WirelessMedium["Ieee802154.Params"]):
     """IEEE 802.15.4 (2.4 GHz O-QPSK PHY defaults), unslotted CSMA/CA (see the module docstring)."""
 
     class Params(WirelessParams):
@@ -50,18 +48,18 @@ class Ieee802154(WirelessMedium):
         self.busy_ccas = 0
 
     def _contend(self, node: str, first: bool) -> None:
-        p: Any = self.params
+        p = self.params
         self._nb[node] = 0
         self._be[node] = p.min_be
         self._backoff(node)
 
     def _backoff(self, node: str) -> None:
-        p: Any = self.params
+        p = self.params
         slots = int(self._rng.integers(0, 1 << self._be[node]))
         call_later(self.sim, slots * int(p.unit_backoff) + int(p.cca_time), self._cca, node)
 
     def _cca(self, node: str) -> None:
-        p: Any = self.params
+        p = self.params
         if not self._sensed_busy(node):
             call_later(self.sim, int(p.turnaround), self._transmit, node)
             return

@@ -28,7 +28,7 @@ __all__ = ["Link"]
 
 @register("network", "link", "link with constant or random delay, Bernoulli/Gilbert-Elliott loss, reordering")
 @register("network", "ideal", "ideal link: zero delay, no loss (a link with its defaults)")
-class Link(Network):
+class Link(Network["Link.Params"]):
     """A delay/loss link (see the module docstring)."""
 
     class Params(NetworkParams):

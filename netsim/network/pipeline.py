@@ -27,7 +27,7 @@ import abc
 import logging
 from heapq import heappush
 from dataclasses import dataclass
-from typing import Any, Callable, ClassVar
+from typing import Any, Callable, ClassVar, Generic, TypeVar
 
 from netsim.env import ARBITRATE, NORMAL, SimEnv
 from netsim.errors import ConfigError
@@ -52,6 +52,9 @@ __all__ = ["Frame", "Network", "Transmitter"]
 log = logging.getLogger(__name__)
 
 Copy = tuple[Message, MessageRecord]
+
+#: The ``Params`` type of a medium: ``class CanBus(Network["CanBus.Params"])`` types ``self.params``.
+P = TypeVar("P", bound=NetworkParams)
 
 
 @dataclass(slots=True, eq=False)
@@ -89,7 +92,7 @@ class Frame:
     attempts: int = 0
 
 
-class Network(abc.ABC):
+class Network(abc.ABC, Generic[P]):
     """Base of every network model (see the module docstring for the pipeline).
 
     Parameters
@@ -99,7 +102,7 @@ class Network(abc.ABC):
     name
         Network name (scenario key); random streams are ``network.<name>.<purpose>``.
     params
-        A validated ``Params`` of the concrete class.
+        A validated ``Params`` of the concrete class (the class's type parameter ``P``).
 
     Attributes
     ----------
@@ -117,13 +120,13 @@ class Network(abc.ABC):
     #: Drop reasons this medium can produce (reported in the metrics even when zero).
     drop_reasons: ClassVar[tuple[str, ...]] = (DROP_QUEUE_FULL, DROP_LOST, DROP_STALE, DROP_NO_RECEIVER)
 
-    def __init__(self, env: SimEnv, name: str, params: NetworkParams) -> None:
+    def __init__(self, env: SimEnv, name: str, params: P) -> None:
         if not isinstance(params, self.Params):
             raise TypeError(f"{type(self).__name__} needs {self.Params.__qualname__}, got {type(params).__name__}")
         self.env = env
         self.sim = env.sim
         self.name = name
-        self.params = params
+        self.params: P = params
         self.nodes: list[str] = list(params.nodes)
         self._node_set = set(self.nodes)
         self._receivers: dict[str, Receiver] = {}
@@ -427,7 +430,7 @@ class Network(abc.ABC):
             msg, rec = copy
             msg.tx_start_ns = rec.tx_start_ns = start
             msg.tx_end_ns = rec.tx_end_ns = end
-            if loss is not None and loss.lost((sender, msg.receiver)):
+            if loss is not None and loss.lost((sender, msg.receiver)):  # type: ignore[arg-type]
                 self._drop_copy(copy, DROP_LOST)
                 continue
             d = post[msg.receiver]  # type: ignore[index]

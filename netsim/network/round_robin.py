@@ -22,7 +22,7 @@ __all__ = ["RoundRobinBus"]
 
 
 @register("network", "round_robin", "round robin (token bus): one frame per node per turn")
-class RoundRobinBus(Network):
+class RoundRobinBus(Network["RoundRobinBus.Params"]):
     """A token-passing medium (see the module docstring)."""
 
     class Params(NetworkParams):

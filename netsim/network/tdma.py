@@ -28,7 +28,7 @@ __all__ = ["TdmaBus"]
 
 
 @register("network", "tdma", "TDMA: cyclic slot schedule, unfinished frames resume in the owner's next slot")
-class TdmaBus(Network):
+class TdmaBus(Network["TdmaBus.Params"]):
     """A TDMA medium (see the module docstring)."""
 
     class Params(NetworkParams):
@@ -63,7 +63,7 @@ class TdmaBus(Network):
         for i, owner in enumerate(p.schedule):
             if owner in (None, ""):
                 continue
-            w = self._windows[owner]  # type: ignore[index]
+            w = self._windows[owner]
             s, e = i * self._slot, (i + 1) * self._slot
             if w and w[-1][1] == s:
                 w[-1] = (w[-1][0], e)

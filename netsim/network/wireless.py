@@ -73,7 +73,7 @@ from __future__ import annotations
 
 import abc
 import math
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 from pydantic import BaseModel, Field, ValidationError, field_validator, model_validator
 
@@ -191,6 +191,10 @@ class WirelessParams(NetworkParams, QuietDefaultsModel):
         return self
 
 
+#: The ``Params`` type of a wireless MAC (a :class:`WirelessParams`).
+W = TypeVar("W", bound=WirelessParams)
+
+
 class RadioClock:
     """The time one node's radio spent in each of :data:`RADIO_STATES` (ns), kept by its medium.
 
@@ -223,7 +227,7 @@ class RadioClock:
         return out
 
 
-class WirelessMedium(Network):
+class WirelessMedium(Network[W]):
     """The radio, acknowledgements and retries shared by the wireless MACs (see the module docstring).
 
     Subclasses implement the channel access: :meth:`_contend` (a frame is at the head of ``node``'s MAC),
@@ -236,7 +240,7 @@ class WirelessMedium(Network):
                     DROP_INTERFERENCE, DROP_NO_ACK, DROP_CHANNEL_ACCESS)
 
     def _setup(self) -> None:
-        p: Any = self.params
+        p = self.params
         self._meter = self.meters["channel"] = BusyMeter(p.utilization_bin)
         self._rng = self.env.rng(f"network.{self.name}.backoff")
         self._pos = {n: (float(x), float(y)) for n, (x, y) in p.positions.items()}
@@ -268,7 +272,7 @@ class WirelessMedium(Network):
         self._ack_wait: dict[str, Call | None] = {n: None for n in self.nodes}
         self._last_end: dict[str, int] = {}  # end of the last transmission of each node's current frame
         self._sending: set[str] = set()  # nodes whose current frame is on the air (from _send_frame to _frame_end)
-        self._seen: set[tuple[int, str]] = set()  # (msg_id, receiver) delivered: later copies are duplicates
+        self._seen: set[tuple[int, str | None]] = set()  # (msg_id, receiver) delivered: later copies are duplicates
         self.attempts = 0
         self.retransmissions = 0
         self.acks_sent = 0
@@ -352,10 +356,10 @@ class WirelessMedium(Network):
 
     # ------------------------------------------------------------------------------------------ framing
     def wire_bits(self, msg: Message) -> int:
-        return super().wire_bits(msg) + self.params.mac_overhead_bits  # type: ignore[attr-defined]
+        return super().wire_bits(msg) + self.params.mac_overhead_bits
 
     def _frame_time(self, wire_bits: int, sender: str) -> int:
-        return int(self.params.phy_overhead) + tx_time_ns(wire_bits, self.params.bitrate)  # type: ignore[attr-defined]
+        return int(self.params.phy_overhead) + tx_time_ns(wire_bits, self.params.bitrate)
 
     # ------------------------------------------------------------------------------------------ radio
     def _move(self) -> None:
@@ -372,10 +376,10 @@ class WirelessMedium(Network):
         g = self._gain.get((sender, receiver))
         if g is None:
             a, b = self._pos[sender], self._pos[receiver]
-            dbm = self._path_loss.received_dbm(self.params.transmit_power_dbm,  # type: ignore[attr-defined]
+            dbm = self._path_loss.received_dbm(self.params.transmit_power_dbm,
                                                math.hypot(a[0] - b[0], a[1] - b[1]), sender, receiver, (a, b))
             if not isinstance(dbm, (int, float)) or not math.isfinite(dbm) or dbm > 1000:
-                name = (self.params.path_loss or {}).get("type", "exponent")  # type: ignore[attr-defined]
+                name = (self.params.path_loss or {}).get("type", "exponent")
                 raise ConfigError(f"network '{self.name}': the path-loss model '{name}' gave {dbm!r} dBm from "
                                   f"'{sender}' to '{receiver}'; it must return a finite power in dBm: fix the model",
                                   path=f"networks.{self.name}.path_loss")
@@ -528,7 +532,7 @@ class WirelessMedium(Network):
             self._last_end[node] = now
             self._drop_held(node, now)
             return
-        p: Any = self.params
+        p = self.params
         pending = self._pending[node]
         loss = self._loss
         if loss is not None:  # the loss model erases a received copy of this attempt: not received, no ACK
@@ -590,7 +594,7 @@ class WirelessMedium(Network):
 
     def _ack_timed_out(self, node: str) -> None:
         self._ack_wait[node] = None
-        p: Any = self.params
+        p = self.params
         if self._retries[node] >= p.max_retries:
             frame = self._current[node]
             assert frame is not None
