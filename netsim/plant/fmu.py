@@ -51,7 +51,7 @@ from netsim.plant.disturbance import _Source
 from netsim.registry import register
 from netsim.units import StrictModel
 
-__all__ = ["FmuParams", "FmuPlant", "fmu_plant"]
+__all__ = ["FmuParams", "FmuPlant", "absolute_fmu_path", "fmu_plant"]
 
 _log = logging.getLogger(__name__)
 
@@ -316,6 +316,19 @@ def fmu_plant(params: FmuParams) -> FmuPlant:
         raise BuildError(exc.message, path="plant.path") from None
     ins, outs, states = params.port_names()
     return FmuPlant(folder, md, ins, outs, states, params.parameters, name=params.name)
+
+
+def absolute_fmu_path(raw: dict[str, Any], folder: Path) -> None:
+    """Write the FMU path of a raw scenario's ``fmu`` plant as an absolute path, relative paths taken from ``folder``
+    (a sweep's base scenario: its points are validated as mappings, in worker processes with their own working
+    folders)."""
+    plant = raw.get("plant")
+    if not isinstance(plant, dict) or "fmu" not in (plant.get("type"), plant.get("model")):
+        return
+    holder = plant.get("params") if isinstance(plant.get("params"), dict) and "path" in plant["params"] else plant
+    written = holder.get("path")
+    if isinstance(written, str) and written and not Path(written).expanduser().is_absolute():
+        holder["path"] = str((folder / written).resolve())
 
 
 def _fmu_ports(params: FmuParams) -> tuple[list[Any], list[Any]]:

@@ -462,6 +462,9 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
             # absolute: a worker elsewhere (a Dask worker's own working directory) finds them too (hashes unchanged)
             raw["plugins"] = [str((base_path.parent / p).absolute()) if isinstance(p, str) else p
                               for p in raw["plugins"]]
+        from netsim.plant.fmu import absolute_fmu_path
+
+        absolute_fmu_path(raw, base_path.parent)  # an fmu plant's file, for the same reason
     else:
         raw = base
     _check_paths(spec, raw, where)

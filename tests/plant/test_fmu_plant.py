@@ -164,6 +164,22 @@ def test_with_the_permission_the_shipped_scenario_validates_and_runs_from_any_fo
     assert main(["run", "dc_servo_fmu", "--allow-plugins", "--set", "duration=0.1 s", "--out", "run", "-q"]) == 0
 
 
+def test_a_sweep_over_an_fmu_scenario_finds_the_fmu_beside_its_base(tmp_path, monkeypatch, capsys):
+    # the points are validated as mappings in worker processes: the base's relative FMU path is made absolute
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.yaml").write_text(
+        f"sweep: fmu_k\nbase: {SCENARIO}\nmode: product\nfactors:\n"
+        "  k: {paths: [plant.parameters.k], values: [500, 1000]}\n"
+        "  duration: {paths: [duration], values: [0.1 s]}\n", encoding="utf-8")
+    code = main(["sweep", "s.yaml", "--allow-plugins", "--workers", "1", "--out", "out", "-q", "--no-progress"])
+    assert code == 0, capsys.readouterr()
+    import pandas as pd
+
+    summary = pd.read_csv(tmp_path / "out" / "summary.csv")
+    assert list(summary["status"]) == ["ok", "ok"]
+    assert summary["theta.IAE"].nunique() == 2  # k reached the FMU
+
+
 # ------------------------------------------------------------------------------------------------ bad input
 def _with_description(tmp_path: Path, edit: Any) -> Path:
     folder = tmp_path / "edited"
