@@ -9,7 +9,7 @@ One place for what every reproduction report needs besides its own study:
   (:func:`scenario_key`: the hash :func:`netsim.sweep.points.point_hash` gives a sweep's run), in a folder
   named by a fingerprint of the study's own code (:func:`code_fingerprint`);
 * :class:`Quotes` -- the numbers a report's prose quotes (``key, value, text, source``), each formatted once,
-  filling ``{key}`` templates (:meth:`Quotes.render`) or marked inline (:meth:`Quotes.mark`);
+  filling ``{key}`` templates (:meth:`Quotes.fill`) or marked inline (:meth:`Quotes.mark`);
 * :func:`fmt` -- the one number formatter (significant digits, text for a missing value).
 
 :func:`digits_outside_labels` is the check the reports' tests make on their templates: a template holds no
@@ -170,7 +170,7 @@ class Quotes:
         """``key -> text``."""
         return {k: t for k, (_v, t, _s) in self.rows.items()}
 
-    def render(self, template: str) -> str:
+    def fill(self, template: str) -> str:
         """``template`` (``{key}`` placeholders) filled with the quoted texts (:func:`fill`)."""
         return fill(template, self.texts())
 

@@ -46,12 +46,12 @@ def test_quotes_format_each_value_once_and_fill_templates():
     assert q.add("x", 0.012345, ".2g") == "0.012"
     assert q.add("y", 1 / 3) == "0.333"
     assert q.add("w", "rises", source="words") == "rises"
-    assert q.render("{n} runs, {x} / {y}: {w}") == "464 runs, 0.012 / 0.333: rises"
+    assert q.fill("{n} runs, {x} / {y}: {w}") == "464 runs, 0.012 / 0.333: rises"
     df = q.frame()
     assert df.columns.tolist() == ["key", "value", "text", "source"]
     assert df.key.tolist() == ["n", "x", "y", "w"] and math.isnan(df.value.iloc[3]) and df.source.iloc[0] == "paper"
     with pytest.raises(KeyError):
-        q.render("{missing}")
+        q.fill("{missing}")
 
 
 def test_marked_quotes_give_the_text_and_the_template():
