@@ -40,7 +40,7 @@ from __future__ import annotations
 import logging
 import weakref
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Literal, Sequence
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
@@ -92,15 +92,24 @@ def _variables(md: Any, causality: str | None = None) -> dict[str, Any]:
             if v.type == "Real" and (causality is None or v.causality == causality)}
 
 
+def _interface_of(md: Any, chosen: str | None) -> str:
+    if chosen is not None:
+        return chosen
+    return "co_simulation" if md.coSimulation is not None else "model_exchange"
+
+
 def _default_states(md: Any) -> list[str]:
     return [d.variable.derivative.name for d in md.derivatives if d.variable.derivative is not None]
 
 
 class FmuParams(StrictModel):
-    """An FMI 2.0 co-simulation FMU run by FMPy: inputs, outputs and states mapped by variable name."""
+    """An FMI 2.0 FMU run by FMPy (co-simulation or model exchange): inputs, outputs and states by variable name."""
 
     path: str = Field(min_length=1, description="the .fmu file or unpacked FMU folder, relative to the scenario "
                                                 "file (loaded only with --allow-plugins: an FMU is code)")
+    interface: Literal["co_simulation", "model_exchange"] | None = Field(
+        None, validate_default=True, description="co_simulation: the FMU steps itself (fmi2DoStep); model_exchange: netsim integrates its "
+                          "derivatives (plant.integrator); default: co-simulation when the FMU has it")
     inputs: list[str] | None = Field(None, description="FMU input variables, in plant input order (default: all)")
     outputs: list[str] | None = Field(None, description="FMU output variables, in plant output order (default: all)")
     states: list[str] | None = Field(None, description="FMU variables read as the plant state (default: the states "
@@ -123,6 +132,21 @@ class FmuParams(StrictModel):
             _description(path)
         except ConfigError as exc:
             raise ValueError(exc.message) from None
+        return value
+
+    @field_validator("interface")
+    @classmethod
+    def _interface(cls, value: str | None, info: ValidationInfo) -> str | None:
+        md = cls._md(info)
+        if md is None:
+            return value
+        if value is not None and (md.coSimulation if value == "co_simulation" else md.modelExchange) is None:
+            has = "co_simulation" if md.coSimulation is not None else "model_exchange"
+            raise ValueError(f"the FMU has no {value} interface; it has {has} only")
+        if _interface_of(md, value) == "model_exchange" and md.numberOfEventIndicators:
+            raise ValueError(f"the FMU's model exchange interface has {md.numberOfEventIndicators} event indicators; "
+                             "netsim integrates model-exchange FMUs without state events: use its co-simulation "
+                             "interface (interface: co_simulation) or an FMU without events")
         return value
 
     @staticmethod
@@ -155,6 +179,9 @@ class FmuParams(StrictModel):
         for name in value:
             if name not in known:
                 raise ValueError(f"the FMU has no Real variable '{name}'; its states are {_default_states(md)}")
+        if _interface_of(md, info.data.get("interface")) == "model_exchange" and value != _default_states(md):
+            raise ValueError(f"with model exchange the state is the FMU's continuous state {_default_states(md)}; "
+                             "omit states or list exactly these")
         return value
 
     @field_validator("parameters")
@@ -174,6 +201,10 @@ class FmuParams(StrictModel):
     def _remember(self) -> "FmuParams":
         self._file = _resolve(self.path)  # the scenario folder is known only while validating
         return self
+
+    def kind(self) -> str:
+        """The interface run: ``co_simulation`` or ``model_exchange``."""
+        return _interface_of(self.description(), self.interface)
 
     def file(self) -> Path:
         """The FMU's absolute path (resolved when validated)."""
@@ -303,18 +334,26 @@ class FmuPlant(Plant):
             self._slave.setReal(self._vr_x, [float(v) for v in x])
 
 
-@register("plant", "fmu", "an FMI 2.0 co-simulation FMU run by FMPy (needs --allow-plugins: an FMU is code)")
+@register("plant", "fmu", "an FMI 2.0 FMU run by FMPy, co-simulation or model exchange (needs --allow-plugins: an FMU "
+                          "is code)")
 def fmu_plant(params: FmuParams) -> FmuPlant:
-    """The plant of ``plant: {type: fmu, ...}``: the FMU unpacked (and a source FMU compiled) once, then loaded."""
+    """The plant of ``plant: {type: fmu, ...}``: the FMU unpacked (and a source FMU compiled) once, then loaded: an
+    :class:`FmuPlant` (co-simulation) or a :class:`~netsim.plant.nonlinear.NonlinearPlant` over the FMU's
+    derivatives (model exchange, :mod:`netsim.plant.fmu_exchange`)."""
     from netsim.errors import BuildError
     from netsim.plant.fmu_files import binary_folder
 
     md = params.description()
+    kind = params.kind()
     try:
-        folder = binary_folder(params.file(), md)
+        folder = binary_folder(params.file(), md, kind)
     except ConfigError as exc:
         raise BuildError(exc.message, path="plant.path") from None
     ins, outs, states = params.port_names()
+    if kind == "model_exchange":
+        from netsim.plant.fmu_exchange import exchange_plant
+
+        return exchange_plant(folder, md, ins, outs, params.parameters, name=params.name)
     return FmuPlant(folder, md, ins, outs, states, params.parameters, name=params.name)
 
 

@@ -29,7 +29,7 @@ from typing import Any
 
 from netsim.errors import ConfigError
 
-__all__ = ["NO_FMPY", "binary_folder", "cache_folder", "compiler", "has_binary", "read_description"]
+__all__ = ["NO_FMPY", "binary_folder", "cache_folder", "compiler", "has_binary", "identifier", "read_description"]
 
 _log = logging.getLogger(__name__)
 
@@ -53,14 +53,14 @@ def cache_folder() -> Path:
 
 
 def read_description(path: Path) -> Any:
-    """FMPy's ``ModelDescription`` of the FMI 2.0 co-simulation FMU at ``path`` (archive or folder), checked against
-    the FMI schema (FMPy's validation); reads XML only.
+    """FMPy's ``ModelDescription`` of the FMI 2.0 FMU at ``path`` (archive or folder), checked against the FMI
+    schema (FMPy's validation); reads XML only.
 
     Raises
     ------
     ConfigError
         When the file is missing, its description cannot be read (FMPy's reason, in one line), or it is not an
-        FMI 2.0 co-simulation FMU (FMI 1.0 or 3.0, model exchange only).
+        FMI 2.0 FMU (FMI 1.0 or 3.0).
     """
     fmpy = _fmpy()
     if not path.exists():
@@ -69,21 +69,20 @@ def read_description(path: Path) -> Any:
     if path.is_dir() and not (path / "modelDescription.xml").is_file():
         raise ConfigError(f"{path} is a folder without modelDescription.xml: not an unpacked FMU")
     try:
-        version, cosim = _kind(path)
-        if version == "2.0" and cosim:
+        version, interfaces = _kind(path)
+        if version == "2.0" and interfaces:
             return fmpy.read_model_description(str(path))  # with FMPy's checks against the FMI schema
     except Exception as exc:  # noqa: BLE001 - FMPy's reasons (bad zip, schema errors) reported in one line
         text = " ".join(str(exc).split())
         raise ConfigError(f"cannot read the FMU's modelDescription.xml ({path}): {text[:300]}") from None
     if version != "2.0":
-        raise ConfigError(f"the FMU {path.name} is FMI {version}; the fmu plant runs FMI 2.0 co-simulation FMUs "
-                          "(export the model as FMI 2.0)")
-    raise ConfigError(f"the FMU {path.name} has model exchange only; the fmu plant runs FMI 2.0 co-simulation FMUs "
-                      "(export the model with co-simulation)")
+        raise ConfigError(f"the FMU {path.name} is FMI {version}; the fmu plant runs FMI 2.0 FMUs (co-simulation or "
+                          "model exchange): export the model as FMI 2.0")
+    raise ConfigError(f"the FMU {path.name} declares neither co-simulation nor model exchange")
 
 
 def _kind(path: Path) -> tuple[str, bool]:
-    """``(fmiVersion, has a CoSimulation element)`` from the root of ``modelDescription.xml`` (archive or folder)."""
+    """``(fmiVersion, has a CoSimulation or ModelExchange element)`` from the root of ``modelDescription.xml``."""
     import zipfile
 
     from lxml import etree
@@ -93,14 +92,20 @@ def _kind(path: Path) -> tuple[str, bool]:
     else:
         with zipfile.ZipFile(path) as zf, zf.open("modelDescription.xml") as fh:
             root = etree.parse(fh).getroot()
-    return str(root.get("fmiVersion")), root.find("CoSimulation") is not None
+    return str(root.get("fmiVersion")), root.find("CoSimulation") is not None or root.find("ModelExchange") is not None
 
 
-def has_binary(folder: Path, description: Any) -> bool:
-    """True when the unpacked FMU ``folder`` holds the co-simulation library for this platform."""
+def identifier(description: Any, interface: str = "co_simulation") -> str:
+    """The model identifier (the library's name) of ``interface`` (``co_simulation`` or ``model_exchange``)."""
+    kind = description.coSimulation if interface == "co_simulation" else description.modelExchange
+    return str(kind.modelIdentifier)
+
+
+def has_binary(folder: Path, description: Any, interface: str = "co_simulation") -> bool:
+    """True when the unpacked FMU ``folder`` holds the library of ``interface`` for this platform."""
     fmpy = _fmpy()
     sub = fmpy.platform if description.fmiVersion == "2.0" else fmpy.platform_tuple
-    ident = description.coSimulation.modelIdentifier
+    ident = identifier(description, interface)
     return (folder / "binaries" / sub / f"{ident}{fmpy.sharedLibraryExtension}").is_file()
 
 
@@ -155,8 +160,8 @@ def _source_files(folder: Path) -> list[Path]:
     return sorted(p for p in (folder / "sources").rglob("*") if p.is_file())
 
 
-def binary_folder(path: Path, description: Any) -> Path:
-    """An unpacked FMU folder with the co-simulation library of ``path`` for this platform (see the module).
+def binary_folder(path: Path, description: Any, interface: str = "co_simulation") -> Path:
+    """An unpacked FMU folder with the library of ``path`` for ``interface`` and this platform (see the module).
 
     Raises
     ------
@@ -165,7 +170,7 @@ def binary_folder(path: Path, description: Any) -> Path:
         the build fails (the compiler's last lines).
     """
     folder = _unpacked(path) if path.is_file() else path
-    if has_binary(folder, description):
+    if has_binary(folder, description, interface):
         return folder
     sources = _source_files(folder) if (folder / "sources").is_dir() else []
     if not sources:
@@ -173,7 +178,7 @@ def binary_folder(path: Path, description: Any) -> Path:
         raise ConfigError(f"the FMU {path.name} has no binary for this platform ({fmpy.platform}) and no sources to "
                           "build one from")
     target = cache_folder() / f"build-{_digest([folder / 'modelDescription.xml', *sources])}"
-    if target.is_dir() and has_binary(target, description):
+    if target.is_dir() and has_binary(target, description, interface):
         return target
     if compiler() is None:
         raise ConfigError(f"the FMU {path.name} is a source FMU and this machine has no C compiler to build it "
@@ -186,7 +191,7 @@ def binary_folder(path: Path, description: Any) -> Path:
         if (folder / "resources").is_dir():
             shutil.copytree(folder / "resources", tmp / "resources")
         _compile(tmp, path)
-        if not has_binary(tmp, description):
+        if not has_binary(tmp, description, interface):
             raise ConfigError(f"building the source FMU {path.name} made no library for this platform")
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

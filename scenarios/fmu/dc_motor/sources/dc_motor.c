@@ -1,4 +1,5 @@
-/* A DC motor as an FMI 2.0 co-simulation FMU (source code; netsim builds the binary on first use).
+/* A DC motor as an FMI 2.0 FMU for co-simulation and model exchange (source code; netsim builds the binary on
+   first use).
 
    States theta (angle, rad) and omega (speed, rad/s), input u (V), parameters k (gain) and a (1/s):
 
@@ -13,7 +14,10 @@
 
    (the entries of the matrix exponential of [[A, B], [0, 0]] h), so a step equals the zero-order-hold
    discretisation of the same state-space model to rounding. phi1 and phi2 are summed as Taylor series for
-   |z| < 0.1, where the closed forms would cancel. */
+   |z| < 0.1, where the closed forms would cancel.
+
+   For model exchange the importer integrates the derivatives (fmi2GetDerivatives) itself; the model has no
+   events. */
 
 #include <math.h>
 #include <stdlib.h>
@@ -91,7 +95,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid, f
                               const fmi2CallbackFunctions *cb, fmi2Boolean visible, fmi2Boolean logging) {
     Motor *m;
     (void)resources; (void)visible; (void)logging;
-    if (type != fmi2CoSimulation || guid == NULL || strcmp(guid, "{netsim-dc-motor-1}") != 0) return NULL;
+    if ((type != fmi2CoSimulation && type != fmi2ModelExchange) || guid == NULL || strcmp(guid, "{netsim-dc-motor-1}") != 0) return NULL;
     m = (Motor *)calloc(1, sizeof(Motor));
     if (m == NULL) return NULL;
     memcpy(m->v, START, sizeof(START));
@@ -224,4 +228,67 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 }
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *v) {
     (void)c; (void)s; (void)v; return fmi2Discard;
+}
+
+/* ------------------------------------------------------------------ model exchange */
+fmi2Status fmi2EnterEventMode(fmi2Component c) { (void)c; return fmi2OK; }
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
+    (void)c;
+    info->newDiscreteStatesNeeded = fmi2False;
+    info->terminateSimulation = fmi2False;
+    info->nominalsOfContinuousStatesChanged = fmi2False;
+    info->valuesOfContinuousStatesChanged = fmi2False;
+    info->nextEventTimeDefined = fmi2False;
+    info->nextEventTime = 0.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) { (void)c; return fmi2OK; }
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetPrior, fmi2Boolean *enterEventMode,
+                                       fmi2Boolean *terminate) {
+    (void)c; (void)noSetPrior;
+    *enterEventMode = fmi2False;
+    *terminate = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real t) { ((Motor *)c)->time = t; return fmi2OK; }
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    Motor *m = (Motor *)c;
+    if (nx != 2) return fmi2Error;
+    m->v[VR_THETA] = x[0];
+    m->v[VR_OMEGA] = x[1];
+    derivatives(m);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
+    Motor *m = (Motor *)c;
+    if (nx != 2) return fmi2Error;
+    derivatives(m);
+    dx[0] = m->v[VR_DER_THETA];
+    dx[1] = m->v[VR_DER_OMEGA];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t nz) {
+    (void)c; (void)z; return nz == 0 ? fmi2OK : fmi2Error;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    Motor *m = (Motor *)c;
+    if (nx != 2) return fmi2Error;
+    x[0] = m->v[VR_THETA];
+    x[1] = m->v[VR_OMEGA];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    size_t i;
+    (void)c;
+    for (i = 0; i < nx; i++) x[i] = 1.0;
+    return fmi2OK;
 }
