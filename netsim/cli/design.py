@@ -2,7 +2,8 @@
 
 The scenario is loaded and validated as ``netsim run`` loads it (``--set`` applied), the plant and io channels
 are built as ``netsim validate`` builds them, and each task's model, estimator and law are made by the same code
-a run uses (:func:`netsim.programs.feedback_design.build_parts`). The summary is
+a run uses (:func:`netsim.programs.feedback_design.task_design`: the design the scenario's validation made, no
+Riccati equation solved again). The summary is
 :mod:`netsim.programs.design_summary`'s: the same data a run writes to ``design.json`` (``--json`` prints that
 file's text), or by default a table per task.
 """

@@ -1,7 +1,9 @@
 """What a ``state_feedback`` task was designed to be: gains, eigenvalues and delay margin as plain data.
 
 :func:`summarize` reads the built parts of one task (the :class:`~netsim.control.parts.Design`, the estimator
-and the law that :func:`~netsim.programs.feedback_design.build_parts` made) and returns a JSON-ready mapping:
+and the law of its :class:`~netsim.programs.feedback_design.TaskDesign`) and returns a JSON-ready mapping
+(:func:`summary_of` makes it once per design: validation's warning, the run's warning and ``design.json`` share
+it):
 
 ``model``
     ``A``, ``B``, ``C`` (measured rows) at the task period, the period, where the model came from, and ``Cr``.
@@ -311,7 +313,7 @@ def summarize(design: Any, estimator: Any, law: Any, fed_state: bool, *, rows: l
     Parameters
     ----------
     design, estimator, law, fed_state
-        What :func:`~netsim.programs.feedback_design.build_parts` returned.
+        What :func:`~netsim.programs.feedback_design.task_design` made.
     rows
         The plant outputs the task measures (the rows of ``design.C``).
     source
@@ -400,7 +402,7 @@ def _state_feedback_tasks(scenario: Any) -> list[tuple[str, int, Any]]:
 
 def static_designs(scenario: Any, plant: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a valid scenario, built as validation builds
-    them (:func:`~netsim.programs.feedback_design.build_parts`, nothing simulated)."""
+    them (:func:`~netsim.programs.feedback_design.task_design`: the designs validation made, nothing simulated)."""
     from netsim.programs.feedback_design import model_source, task_design
 
     out: dict[str, dict[str, Any]] = {}

@@ -384,6 +384,10 @@ def task_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: 
     pp = f"{path}.params"
     design, per, rows = _model(p, scenario, plant, period_ns, path, node)
     est_part = as_part("estimator", p.estimator, f"{pp}.estimator")
+    if est_part.needs_nonlinear_model and design.nonlinear is None:
+        raise ConfigError(f"type '{p.estimator.type}' filters the plant's own nonlinear model, and this plant has "
+                          "none (its model is linear or not given as f and h): use 'kalman' for a linear plant",
+                          path=f"{pp}.estimator")
     law_part = as_part("controller", p.law, f"{pp}.law")
     continuous = None
     if p.model is None and model_source(p, plant) == "zoh":  # the plant's continuous (A, B), for the input options

@@ -51,7 +51,8 @@ not; three options tell the estimator what the plant really gets (the law is unc
   :func:`~netsim.control.interface.zoh_split`; ``Gamma1 = 0`` when ``tau'`` is 0), the model of Astrom &
   Wittenmark's augmented state ``[x; u[k-d-1] ... u[k-1]]`` with the known delayed inputs taken out of the
   estimated state (:class:`~netsim.control.interface.InputDelayLine`). Any estimator whose ``build`` uses the
-  design's ``B`` (kalman, steady_state_kalman, luenberger, none, the registered ones that do); ``ekf``: whole
+  design's ``B`` (kalman, steady_state_kalman, luenberger, none, the registered ones that declare
+  ``input_delay = "any"``, :class:`~netsim.control.parts.EstimatorPart`); ``ekf``: whole
   periods only. A fraction of a period needs the plant's continuous linear model.
 * ``applied_input: {network, sender, tag}``: the actuator's reports (``actuator`` program, ``report:``) of each
   input it applied and when. The Kalman filter is built on ``x[k+1] = A x[k] + w[k]`` and fed the effect ``w[k]``
