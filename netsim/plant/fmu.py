@@ -1,10 +1,11 @@
-"""Plants from FMUs: ``plant: {type: fmu, path: ...}`` runs an FMI 2.0 co-simulation FMU with FMPy.
+"""Plants from FMUs: ``plant: {type: fmu, path: ...}`` runs an FMI 2.0 FMU with FMPy.
 
 A scenario writes::
 
     plant:
       type: fmu
       path: fmu/dc_motor          # a .fmu file or an unpacked FMU folder, relative to the scenario file
+      interface: co_simulation    # or model_exchange (default: co-simulation when the FMU has it)
       inputs: [u]                 # FMU input variables, in plant input order (default: all, as declared)
       outputs: [theta]            # FMU output variables, in plant output order (default: all)
       states: [theta, omega]      # variables read as the plant state (default: the states of the FMU's
@@ -19,20 +20,24 @@ The names are the FMU's variable names: ``io`` channels name them as they name a
 **An FMU is code.** Its library runs inside netsim, so an ``fmu`` plant is loaded only with the permission
 plugin files need (:mod:`netsim.trust`: ``--allow-plugins``, ``allow_plugins=True``, ``NETSIM_ALLOW_PLUGINS``
 or the user's config); without it ``netsim validate`` and ``netsim run`` refuse the scenario at ``plant.path``.
+A relative ``path`` is read from the scenario file's folder (the working folder for a scenario given as a
+mapping; a sweep writes its base scenario's FMU path as an absolute path, :func:`absolute_fmu_path`).
 
-**Stepping.** The plant is advanced lazily like every plant (:mod:`netsim.plant`): when anything samples or
-actuates it, one ``fmi2DoStep`` takes the FMU from the plant's time to that instant under the inputs held since
-the last change (zero-order hold), and ``fmi2SetReal`` writes an input when it changes. So the FMU is stepped
-exactly between the events that touch it. The recorder's ``record_grid`` samples are such events too: the plant
-steps to each record instant, so the recorded outputs are the FMU's own values there, not an interpolation
-(an FMU that integrates with a fixed internal step is therefore sampled on a grid of communication points that
-may not be multiples of that step: the FMU decides how it handles a short step). ``x0`` sets the state
-variables during initialisation (before the first step); setting the state later (state noise) is refused, and
-disturbances must be piecewise constant or held (no sinusoid, no continuous disturbance model).
+**Co-simulation: stepping.** The plant is advanced lazily like every plant (:mod:`netsim.plant`): when anything
+samples or actuates it, one ``fmi2DoStep`` takes the FMU from the plant's time to that instant under the inputs
+held since the last change (zero-order hold), and ``fmi2SetReal`` writes an input when it changes. So the FMU is
+stepped exactly between the events that touch it. The recorder's ``record_grid`` samples are such events too:
+the plant steps to each record instant, so the recorded outputs are the FMU's own values there, not an
+interpolation (an FMU that integrates with a fixed internal step is therefore asked for communication steps that
+need not be multiples of it: the FMU decides how it handles a short step). ``x0`` sets the state variables during
+initialisation (before the first step); setting the state later (state noise) is refused, and disturbances must
+be piecewise constant or held (no sinusoid, no continuous disturbance model).
 
-Only FMI 2.0 co-simulation is run. FMI 1.0 and 3.0 FMUs, and FMUs with model exchange only, are refused at
-``plant.path`` with what to give instead. The FMU's files are read, unpacked and (a source FMU) compiled by
-:mod:`netsim.plant.fmu_files`.
+**Model exchange.** netsim integrates the FMU's derivatives with the plant's integrator
+(:mod:`netsim.plant.fmu_exchange`); FMUs with event indicators (state events) are refused.
+
+FMI 1.0 and 3.0 FMUs are refused at ``plant.path``. The FMU's files are read, unpacked and (a source FMU)
+compiled by :mod:`netsim.plant.fmu_files`.
 """
 
 from __future__ import annotations
