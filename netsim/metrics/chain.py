@@ -27,7 +27,7 @@ import numpy as np
 
 from netsim.timebase import S
 
-__all__ = ["NO_TIME", "KEEP", "BATCH", "chain_walk", "ChainLatencyStream", "latency_values"]
+__all__ = ["NO_TIME", "KEEP", "BATCH", "chain_walk", "ChainLatencyStream", "latency_values", "unkept_tables"]
 
 _log = logging.getLogger(__name__)
 
@@ -78,6 +78,22 @@ def chain_walk(end: np.ndarray, release: np.ndarray, start: np.ndarray, links: S
             ok[:] = False
             probes.append((alive, cur_release, k, sent_at, j))
     return end - first_start, ok, probes
+
+
+def unkept_tables(fn: Any, index: int, kind: str, modes: Any) -> list[tuple[str, str]]:
+    """``(table, message)`` for each table the metric function ``fn`` (``metrics[index]``, type ``kind``) reads
+    row by row that the trace settings ``modes`` (``table -> mode``) do not keep in full; none for a metric that
+    streams its rows (``fn.stream``, :func:`netsim.results.traces.attach_streams`). ``netsim validate`` and the
+    runner both ask."""
+    if getattr(fn, "stream", None) is not None:  # streamed while the run goes when a table is not kept
+        return []
+    out = []
+    for table in getattr(fn, "tables", ()):
+        mode = modes.get(table, "full")
+        if mode != "full":
+            out.append((table, f"metrics[{index}] ({kind}) reads the {table} table row by row, but output.{table} "
+                               f"is '{mode}'; set output.{table}: full or remove the metric"))
+    return out
 
 
 def latency_values(name: str, count: int, total: int, low: int | None, high: int | None) -> dict[str, float]:

@@ -22,8 +22,8 @@ import math
 from collections.abc import Iterable, Iterator
 from typing import Any
 
-__all__ = ["QUANTILES", "TRACE_MODES", "JobSummary", "MessageSummary", "ObservedList", "QuantileSketch", "attach_streams",
-           "attach_traces", "trace_problems", "unkept_tables"]
+__all__ = ["QUANTILES", "TRACE_MODES", "JobSummary", "MessageSummary", "ObservedList", "QuantileSketch",
+           "attach_streams", "attach_traces", "trace_problems"]
 
 #: The percentiles a summary reports (``p50``, ``p95``, ``p99``).
 QUANTILES = (0.50, 0.95, 0.99)
@@ -332,7 +332,7 @@ def _streamed(spec: Any) -> tuple[Any, Any] | None:
 
     try:
         fn = lookup("metric", spec.type)
-    except ConfigError:
+    except ConfigError:  # an unknown metric: validation reports it, and nothing streams for it
         return None
     make = getattr(fn, "stream", None)
     if make is None:
@@ -373,21 +373,6 @@ def attach_streams(sim: Any) -> None:
     sim.metric_streams = streams
 
 
-def unkept_tables(fn: Any, index: int, kind: str, modes: Any) -> list[tuple[str, str]]:
-    """``(table, message)`` for each table the metric function ``fn`` (``metrics[index]``, type ``kind``) reads
-    row by row that the trace settings ``modes`` (``table -> mode``) do not keep in full; none for a metric that
-    streams its rows (``fn.stream``, :func:`attach_streams`). ``netsim validate`` and the runner both ask."""
-    if getattr(fn, "stream", None) is not None:  # streamed while the run goes when a table is not kept
-        return []
-    out = []
-    for table in getattr(fn, "tables", ()):
-        mode = modes.get(table, "full")
-        if mode != "full":
-            out.append((table, f"metrics[{index}] ({kind}) reads the {table} table row by row, but output.{table} "
-                               f"is '{mode}'; set output.{table}: full or remove the metric"))
-    return out
-
-
 def trace_problems(scenario: Any) -> list[str]:
     """What a scenario's metrics need that its ``output`` trace settings do not keep, one sentence each.
 
@@ -396,6 +381,7 @@ def trace_problems(scenario: Any) -> list[str]:
     ``stream`` attribute, as ``latency`` has: :func:`attach_streams`).
     """
     from netsim.errors import ConfigError
+    from netsim.metrics.chain import unkept_tables
     from netsim.registry import lookup
 
     output = scenario.output

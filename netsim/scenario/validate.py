@@ -610,7 +610,7 @@ class _Checker:
                         *((["metrics", i, "type"], n) for n in getattr(plugin, "reads_signals", ()))]
                 self.grid_outputs(str(metric.get("type")), values, refs, outputs)
                 self.metric_reads(plugin, str(metric.get("type")), ["metrics", i, "type"])
-                from netsim.results.traces import unkept_tables  # run refused these, validate passed them (issue 31)
+                from netsim.metrics.chain import unkept_tables  # run refused these, validate passed them (issue 31)
 
                 for table, message in unkept_tables(plugin, i, str(metric.get("type")), _d(self.raw.get("output"))):
                     self.error(["output", table], message)

@@ -458,10 +458,8 @@ def load_sweep(source: str | Path | dict[str, Any], *, base: dict[str, Any] | No
         raw = _read_yaml(base_path)
         if not isinstance(raw, dict):
             raise ConfigError(f"{where}: base scenario '{base_path}' is not a mapping")
-        if isinstance(raw.get("plugins"), list):  # plugin files are named relative to the base scenario file;
-            # absolute: a worker elsewhere (a Dask worker's own working directory) finds them too (hashes unchanged)
-            raw["plugins"] = [str((base_path.parent / p).absolute()) if isinstance(p, str) else p
-                              for p in raw["plugins"]]
+        if isinstance(raw.get("plugins"), list):  # named relative to the base file; absolute for workers elsewhere
+            raw["plugins"] = [str(base_path.parent.absolute() / f) if isinstance(f, str) else f for f in raw["plugins"]]
         from netsim.plant.fmu import absolute_fmu_path
 
         absolute_fmu_path(raw, base_path.parent)  # an fmu plant's file, for the same reason
