@@ -265,6 +265,18 @@ def test_a_source_fmu_without_a_c_compiler_is_refused_by_validate_saying_so(tmp_
     assert "no C compiler" in problems[0].message
 
 
+def test_without_fmpy_the_problem_names_the_extra_to_install(monkeypatch):
+    import sys
+
+    from netsim.plant import fmu
+
+    monkeypatch.setitem(sys.modules, "fmpy", None)  # import fmpy raises ImportError
+    monkeypatch.setattr(fmu, "_DESCRIPTIONS", {})
+    problems = _problems(_scenario(), allow_plugins=True)
+    assert [p.path for p in problems] == ["plant.path"], problems
+    assert "pip install 'netsim[fmu]'" in problems[0].message
+
+
 def test_state_noise_is_refused_by_an_fmu_plant():
     data = _scenario()
     data["plant"]["process_noise"] = {"states": ["omega"], "sigma": 0.1, "sample": "1 ms"}
