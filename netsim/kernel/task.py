@@ -19,7 +19,6 @@ import re
 from collections import deque
 from collections.abc import Callable, Iterable
 import dataclasses
-from dataclasses import dataclass
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, model_validator
@@ -29,7 +28,7 @@ from netsim.errors import BuildError, ConfigError
 from netsim.timebase import format_time
 from netsim.units import Duration, Time
 
-__all__ = ["RELEASE_KINDS", "SET_PERIOD_RULES", "CheckedTask", "SetPeriodRule", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
+__all__ = ["RELEASE_KINDS", "SET_PERIOD_RULES", "CheckedHandler", "CheckedTask", "SetPeriodRule", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
 
 
 def did_you_mean(name: str, known: Iterable[str]) -> str:
@@ -125,8 +124,6 @@ def _release(value: Any) -> Any:
     raise ValueError(f"release must be 'periodic', 'aperiodic', 'sporadic' or 'on_message:<network>', got {value!r}")
 
 
-_YAML: Any = object()  # the mark of a TaskSpec built from keywords only (validated)
-
 #: A handler reference of a task: a handler's name or, from Python, a callable ``fn(job)``.
 HandlerRef = Union[str, Callable[[Any], Any], None]
 
@@ -210,16 +207,11 @@ class TaskSpec(BaseModel):
 
     _checked: Any = PrivateAttr(default=None)
 
-    def __init__(self, name: Any = _YAML, /, **fields: Any) -> None:
-        if name is _YAML:  # keywords only: validated as YAML is (also how pydantic itself calls this)
+    def __init__(self, *args: Any, **fields: Any) -> None:
+        if not args:  # keywords only: validated as YAML is (also how pydantic itself calls this)
             super().__init__(**fields)
             return
-        unknown = sorted(set(fields) - set(type(self).model_fields))
-        if unknown:
-            raise TypeError(f"TaskSpec() got an unexpected keyword argument '{unknown[0]}'")
-        made = type(self).model_construct(name=name, **fields)  # Python: integer ns, checked by checked()
-        for attr in ("__dict__", "__pydantic_fields_set__", "__pydantic_extra__", "__pydantic_private__"):
-            object.__setattr__(self, attr, getattr(made, attr))
+        _python_init(self, args, fields)  # Python: integer ns, checked by checked()
 
     @model_validator(mode="after")
     def _defaults(self) -> TaskSpec:
@@ -367,9 +359,11 @@ def _distribution(node: str, task: str, field: str, value: Any) -> Any:
     return Distribution.constant(int(value))
 
 
-@dataclass(frozen=True)
-class HandlerSpec:
-    """The static description of an interrupt handler (the one definition; see :class:`TaskSpec`).
+class HandlerSpec(BaseModel):
+    """The static description of an interrupt handler (the one definition; see :class:`TaskSpec`): a scenario's
+    handler entry (:class:`netsim.scenario.schema.HandlerSpec`) is this model with its program and trigger added.
+
+    From Python: ``HandlerSpec("isr", priority, latency)`` in integer ns, checked by :meth:`checked`.
 
     Attributes
     ----------
@@ -381,12 +375,20 @@ class HandlerSpec:
         ISR entry latency in ns: CPU time consumed at each invocation before the body's code runs.
     """
 
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
     name: str
     priority: int | float = 0
-    latency: int = 0
+    latency: Time = 0
 
-    def checked(self, node: str) -> HandlerSpec:
-        """This description validated for node ``node``.
+    def __init__(self, *args: Any, **fields: Any) -> None:
+        if not args:  # keywords only: validated as YAML is (also how pydantic itself calls this)
+            super().__init__(**fields)
+            return
+        _python_init(self, args, fields)
+
+    def checked(self, node: str) -> CheckedHandler:
+        """This description validated for node ``node``: the :class:`CheckedHandler` the kernel runs from.
 
         Raises
         ------
@@ -398,7 +400,29 @@ class HandlerSpec:
             raise task_error(node, self.name, "priority", f"must be a number (lower = more urgent), got {priority!r}")
         latency_ns = check_time(node, self.name, "latency", self.latency)
         assert latency_ns is not None
-        return HandlerSpec(self.name, priority, latency_ns)
+        return CheckedHandler(name=self.name, priority=priority, latency=latency_ns)
+
+
+#: The checked form of a :class:`HandlerSpec` (read at every invocation; see :data:`CheckedTask`).
+CheckedHandler = dataclasses.make_dataclass(
+    "CheckedHandler", [(name, Any) for name in HandlerSpec.model_fields], frozen=True, slots=True,
+    namespace={"__module__": __name__, "__doc__": "A checked HandlerSpec (see HandlerSpec.checked)."})
+
+
+def _python_init(self: BaseModel, args: tuple[Any, ...], fields: dict[str, Any]) -> None:
+    """Fill a description from Python arguments (integer ns, in field order, then keywords), unvalidated."""
+    names = list(type(self).model_fields)
+    if len(args) > len(names):
+        raise TypeError(f"{type(self).__name__}() takes at most {len(names)} positional arguments")
+    given = dict(zip(names, args))
+    twice = sorted(set(given) & set(fields))
+    unknown = sorted(set(fields) - set(names))
+    if twice or unknown:
+        raise TypeError(f"{type(self).__name__}() got {'multiple values for' if twice else 'an unexpected keyword'} "
+                        f"argument '{(twice or unknown)[0]}'")
+    made = type(self).model_construct(**given, **fields)
+    for attr in ("__dict__", "__pydantic_fields_set__", "__pydantic_extra__", "__pydantic_private__"):
+        object.__setattr__(self, attr, getattr(made, attr))
 
 
 class Task:

@@ -69,7 +69,6 @@ instance, or the raw dict when the plugin declares no ``Params``).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import re
 from typing import Annotated, Any, ClassVar, Literal, Union
@@ -426,14 +425,14 @@ class SignalSpec(PluginSpec):
 
 
 # --------------------------------------------------------------------------------------------- nodes
-#: The kernel's handler description with every field at its default.
-_KHANDLER = KernelHandlerSpec("")
-_KHANDLER_FIELDS = tuple(f.name for f in dataclasses.fields(KernelHandlerSpec))
-
 #: The order of a task's keys in a resolved scenario (as written before the kernel's TaskSpec became the YAML task).
 _TASK_KEYS = ("name", "program", "params", "period", "offset", "deadline", "priority", "execution", "wcet", "release",
               "preemptible", "wcet_handler", "deadline_handler", "release_jitter", "min_interarrival",
               "extra_interarrival", "abort_on_miss", "set_period")
+
+
+#: The order of a handler's keys in a resolved scenario.
+_HANDLER_KEYS = ("name", "program", "params", "priority", "latency", "execution", "trigger")
 
 
 class TaskSpec(PluginSpec, KernelTaskSpec):
@@ -546,29 +545,29 @@ class HandlerTrigger(SpecModel):
         raise AssertionError("unreachable: validated trigger has one kind")
 
 
-class HandlerSpec(PluginSpec):
+class HandlerSpec(PluginSpec, KernelHandlerSpec):
     """An interrupt handler on a node: beats every task; lower ``priority`` value is more urgent.
 
-    ``priority`` and ``latency`` are the kernel's static description of a handler,
-    :class:`netsim.kernel.task.HandlerSpec` (which defines them and their defaults); :meth:`kernel_spec`
-    hands them to the kernel.
+    The kernel's own description of a handler (:class:`netsim.kernel.task.HandlerSpec`: ``priority``,
+    ``latency``, their units and defaults) with the program it runs, its execution time and its trigger; the
+    kernel takes it as it is (``Kernel.add_handler``).
     """
 
     plugin_kind: ClassVar[str] = "program"
     name: Name
     program: str = Field(min_length=1)
     params: dict[str, Any] = Field(default_factory=dict)
-    priority: int = _KHANDLER.priority  # type: ignore[assignment]
-    latency: Time = _KHANDLER.latency
+    priority: int = 0  # type: ignore[assignment]  # YAML priorities are integers (Python may pass floats)
     execution: Execution | None = None
     trigger: HandlerTrigger | None = None
 
+    @model_serializer(mode="wrap")
+    def _in_file_order(self, handler: Any) -> Any:
+        data = handler(self)
+        return {key: data[key] for key in _HANDLER_KEYS if key in data} if isinstance(data, dict) else data
+
     def plugin_name(self) -> str:
         return self.program
-
-    def kernel_spec(self) -> KernelHandlerSpec:
-        """The kernel's description of this handler (unchecked: ``Kernel.add_handler`` checks it)."""
-        return KernelHandlerSpec(**{name: getattr(self, name) for name in _KHANDLER_FIELDS})
 
     def execution_time(self) -> Distribution | None:
         """``execution`` as the distribution the handler's program draws from (None when not given)."""

@@ -2,7 +2,7 @@
 
 :func:`wire_kernels` creates one kernel per node (its policy by name, resolved by
 :func:`netsim.kernel.policies.find_policy`), adds each task and handler from its kernel description
-(a task entry is the kernel's ``TaskSpec``; ``HandlerSpec.kernel_spec()``) and creates the timers, external triggers and
+(a task or handler entry is the kernel's ``TaskSpec`` or ``HandlerSpec`` itself) and creates the timers, external triggers and
 periodic loads; :func:`build_networks` creates the networks and attaches them; :func:`bind_receivers` binds
 message receptions. ``netsim validate`` runs the same functions with placeholder bodies
 (:mod:`netsim.scenario.static_build`), so it refuses what the kernel would refuse, at the same YAML path.
@@ -10,7 +10,6 @@ message receptions. ``netsim validate`` runs the same functions with placeholder
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any, Callable
 
 from netsim.env import SimEnv
@@ -66,7 +65,7 @@ def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
             checked_call(create_sync, f"{npath}.sync", kernel, node, f"{npath}.sync")
         for i, h in enumerate(node.handlers):
             hpath = f"{npath}.handlers[{i}]"
-            checked_call(kernel.add_handler, hpath, h.kernel_spec(), body(h, kernel, node_name, hpath, None))
+            checked_call(kernel.add_handler, hpath, h, body(h, kernel, node_name, hpath, None))
         for i, t in enumerate(node.tasks):
             tpath = f"{npath}.tasks[{i}]"
             checked_call(kernel.add_task, tpath, t, body(t, kernel, node_name, tpath, t.period))
@@ -106,7 +105,7 @@ def bind_receivers(kernels: dict[str, Any], networks: dict[str, Any], bindings: 
 
 #: Task/handler fields a kernel error may name: the fields of the kernel's descriptions, keys of the scenario's
 #: task or handler.
-SPEC_FIELDS = frozenset([*TaskSpec.model_fields, *(f.name for f in dataclasses.fields(HandlerSpec))])
+SPEC_FIELDS = frozenset([*TaskSpec.model_fields, *HandlerSpec.model_fields])
 
 
 def checked_call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:
