@@ -678,7 +678,8 @@ class OutputSpec(SpecModel):
     per message copy: ``jobs.csv``, ``messages.csv``), ``summary`` (per task, per network: count, outcomes,
     mean, max and percentiles of the response time or delay, kept online in flat memory: ``jobs_summary.csv``,
     ``messages_summary.csv``) or ``off``; ``schedule`` (``on``/``off``) keeps the kernels' schedule trace (the
-    Gantt chart). Metrics that read the rows (``latency``, ``et_control``) need ``full``.
+    Gantt chart). ``et_control`` reads the message rows and needs ``full``; ``latency`` works in every mode
+    (without the tables it is streamed while the run goes: :mod:`netsim.metrics.chain`).
     """
 
     dir: Annotated[str | None, BeforeValidator(_output_dir)] = None
