@@ -17,6 +17,7 @@ fallen pendulum) is judged by :mod:`netsim.results.verdict`: ``unstable at t = .
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from typing import Any, Iterable
 
 import numpy as np
@@ -29,7 +30,8 @@ __all__ = ["DEFAULT_RATIO", "first_non_finite", "first_runaway_error", "find_div
 DEFAULT_RATIO = 1000.0
 
 
-def first_non_finite(times: dict[str, list[int]], values: dict[str, list[float]]) -> tuple[int, str] | None:
+def first_non_finite(times: Mapping[str, Sequence[int]], values: Mapping[str, Sequence[float]]
+                     ) -> tuple[int, str] | None:
     """The first recorded sample that is NaN or infinite, as ``(t_ns, signal name)``, or None."""
     best: tuple[int, str] | None = None
     for name, vals in values.items():

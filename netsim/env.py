@@ -137,7 +137,7 @@ import hashlib
 from array import array
 from dataclasses import dataclass, field
 from heapq import heappop, heappush
-from typing import Any, Callable, Final, Iterator, NamedTuple
+from typing import TYPE_CHECKING, Any, Callable, Final, Iterator, NamedTuple
 
 import numpy as np
 import simpy
@@ -221,6 +221,9 @@ class EventLoop(simpy.Environment):
     """
 
     now: int = 0  # shadows simpy's property: a plain instance attribute, set by the loop
+    #: simpy's heap, whose entries are ``(time, priority, id, item)`` with the item a simpy event or a call item
+    #: (simpy's annotation knows only events)
+    _queue: list[Any]
     #: The last instant (ns) the running :meth:`run_until` processes; -1 when it is not running (simpy's own
     #: ``run``/``step``): :meth:`advance_if_next` moves the clock only inside netsim's loop.
     horizon: int = -1
@@ -239,8 +242,11 @@ class EventLoop(simpy.Environment):
     def _now(self, t: int) -> None:
         self.now = t
 
-    def schedule(self, event: simpy.Event, priority: int = NORMAL, delay: int = 0) -> None:
-        """Schedule a simpy ``event`` ``delay`` ns from now with ``priority`` (simpy's extension point)."""
+    def schedule(self, event: simpy.Event, priority: int = NORMAL, delay: float = 0) -> None:
+        """Schedule a simpy ``event`` ``delay`` ns from now with ``priority`` (simpy's extension point).
+
+        netsim's delays are integers; a plain simpy process's ``timeout(delay)`` passes its own number.
+        """
         heappush(self._queue, (self.now + delay, priority, next(self._eid), event))
 
     def scheduler(self) -> Scheduler:
@@ -375,7 +381,13 @@ def stream_seed(seed: int, name: str) -> np.random.SeedSequence:
     return np.random.SeedSequence(entropy=int(seed), spawn_key=key)
 
 
-class Samples(array):
+if TYPE_CHECKING:
+    _SampleArray = array[Any]  # typeshed's array is generic; the runtime class is not subscriptable before 3.12
+else:
+    _SampleArray = array
+
+
+class Samples(_SampleArray):
     """A typed array of samples (``array('q')`` times, ``array('d')`` values) that compares equal to a list of
     the same numbers, as the lists it replaces did."""
 
@@ -384,9 +396,9 @@ class Samples(array):
     def __eq__(self, other: object) -> bool:
         if isinstance(other, list):
             return len(self) == len(other) and all(a == b for a, b in zip(self, other))
-        return bool(array.__eq__(self, other))  # type: ignore[operator]
+        return bool(array.__eq__(self, other))
 
-    __hash__ = None  # type: ignore[assignment]
+    __hash__ = None
 
 
 @dataclass
@@ -401,8 +413,8 @@ class Recorder:
     """
 
     enabled: set[str] | None = None  # None records everything
-    times: dict[str, list[int]] = field(default_factory=dict)
-    values: dict[str, list[float]] = field(default_factory=dict)
+    times: dict[str, Samples] = field(default_factory=dict)
+    values: dict[str, Samples] = field(default_factory=dict)
 
     def wants(self, name: str) -> bool:
         """True when ``name`` is to be recorded."""

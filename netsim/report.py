@@ -172,7 +172,7 @@ def utilization_table(runs: Iterable[Case]) -> pd.DataFrame:
 def _stats(values: np.ndarray) -> tuple[float, float, float, float, float]:
     v = values[np.isfinite(values)]
     if v.size == 0:
-        return (math.nan,) * 5  # type: ignore[return-value]
+        return math.nan, math.nan, math.nan, math.nan, math.nan
     return float(v.mean()), float(v.std(ddof=0)), float(v.min()), float(np.percentile(v, 95)), float(v.max())
 
 
@@ -196,7 +196,7 @@ def task_table(runs: Iterable[Case]) -> pd.DataFrame:
                 "cpu_util_ratio": cpu / duration if duration > 0 else math.nan,
                 "response_mean_s": mean, "response_std_s": std, "response_min_s": lo, "response_p95_s": p95,
                 "response_max_s": hi, "deadline_misses_count": counts["missed"] + counts["killed"],
-                "preemptions_count": int(pd.to_numeric(g.get("preemptions"), errors="coerce").fillna(0).sum())
+                "preemptions_count": int(pd.to_numeric(g["preemptions"], errors="coerce").fillna(0).sum())
                 if "preemptions" in g else 0,
                 "killed_count": counts["killed"], "pending_count": counts["pending"],
             })
@@ -295,7 +295,7 @@ def _sweep_heatmaps(folder: Path | SweepFolder, out: Path) -> Path | None:
         axes = [spec.surface.x, spec.surface.y]
     else:
         axes = [n for n in spec.factors
-                if pd.to_numeric(summary.get(n), errors="coerce").notna().all() and summary[n].nunique() > 1][:2]
+                if pd.to_numeric(summary[n], errors="coerce").notna().all() and summary[n].nunique() > 1][:2]
     if len(axes) < 2:
         return None
     given = [spec.surface.logx, spec.surface.logy] if spec.surface is not None else [None, None]

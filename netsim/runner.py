@@ -47,7 +47,7 @@ from functools import lru_cache
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping, cast
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
@@ -59,6 +59,9 @@ from netsim.results import Lazy, RunResult, check_out_dir  # noqa: E402
 from netsim.results.collect import collect  # noqa: E402
 from netsim.results.traces import attach_traces, trace_problems  # noqa: E402
 from netsim.timebase import S  # noqa: E402
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = [
     "run",
@@ -147,7 +150,7 @@ def _event_count(env: Any) -> int | None:
     return int(counted()) if counted is not None else None
 
 
-def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
+def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = None
              ) -> tuple[RunResult, Any, BaseException | None]:
     """Build and run ``scenario`` (validated); returns (result without metrics, simulation, exception or None).
 
@@ -218,7 +221,7 @@ def simulate(scenario: Any, progress: Callable[[int, int], None] | None = None
     return result, sim, failure
 
 
-def _unrecorded(scenario: Any, recorder: Any) -> list[str]:
+def _unrecorded(scenario: Scenario, recorder: Any) -> list[str]:
     """Warnings for ``record:`` names that nothing recorded during the run (a typo, most often)."""
     if not scenario.record:
         return []
@@ -241,7 +244,7 @@ class _WarningCapture(logging.Handler):
         self.texts.append(record.getMessage())
 
 
-def _metrics(result: RunResult, sim: Any, scenario: Any, baseline: RunResult | None) -> dict[str, float]:
+def _metrics(result: RunResult, sim: Any, scenario: Scenario, baseline: RunResult | None) -> dict[str, float]:
     """The run's metrics; warnings a metric logs (e.g. et_control's 'h is shorter than a packet gap') are also
     kept in ``result.meta["warnings"]``."""
     from netsim.metrics.runtime import compute_metrics, generic_metrics
@@ -385,7 +388,7 @@ def run(
         mode = result.traces.get("jobs", "full")  # 'never ran' is known from the rows or the summary, not when off
         rows = result._table_rows("jobs")  # the records' columns: no DataFrame built for the warnings
         ran = (result.jobs if rows is None else rows) if mode == "full" else result.job_summary
-        extra = load_warnings(result.metrics.to_dict(), ran, scenario.nodes if mode != "off" else {},
+        extra = load_warnings(cast(dict[str, float], result.metrics.to_dict()), ran, scenario.nodes if mode != "off" else {},
                               scenario.networks or {})
         for text in extra:
             log.warning("%s: %s", scenario.name, text)
@@ -437,7 +440,7 @@ def clear_baseline_cache() -> None:
     _BASELINES.clear()
 
 
-def _baseline_key(scenario: Any) -> str:
+def _baseline_key(scenario: Scenario) -> str:
     """Hash of the resolved scenario without ``output``/``seed``, inert program parameters reset."""
     from netsim.registry import lookup
 

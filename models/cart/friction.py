@@ -40,8 +40,8 @@ The friction acceleration opposes the motion: ``-F(p) sign(v)``; at rest the car
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any, Literal
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -101,6 +101,8 @@ class Friction:
     freqs: np.ndarray
     amps: np.ndarray
     phases: np.ndarray
+    if TYPE_CHECKING:  # set by __post_init__; at run time no field (out of __init__, repr and comparisons)
+        _one: tuple[float, ...] | None = field(init=False, default=None)
 
     @classmethod
     def draw(cls, params: FrictionParams, seed: int = 0) -> "Friction":

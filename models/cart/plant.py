@@ -240,7 +240,7 @@ def first_exit(p0: float, v0: float, u: float, f: float, fs: float, off: int, ti
     """
     if v0 == 0.0:
         if abs(u) <= fs:
-            pieces = ((0, n, p0, 0.0, 0.0, 0.0),)
+            pieces: tuple[tuple[int, int, float, float, float, float], ...] = ((0, n, p0, 0.0, 0.0, 0.0),)
         else:
             pieces = ((0, n, p0, 0.0, u - math.copysign(f, u), 0.0),)
     else:

@@ -25,7 +25,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Generator, Literal
+from typing import TYPE_CHECKING, Any, Generator, Literal
 
 from pydantic import Field
 
@@ -34,6 +34,9 @@ from netsim.models.cart.encoding import Quantizer, check_q
 from netsim.errors import BuildError
 from netsim.registry import register
 from netsim.units import StrictModel
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
 
 __all__ = ["CartEncoderIsr", "CartControllerProgram"]
 
@@ -115,7 +118,7 @@ class CartEncoderIsr:
         if self.p.record:
             self.ctx.record("cart.count", count, stamp)
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         if self.mode == "exact":
             c, d, s = job.data
             self._store(c, d, s)
@@ -162,7 +165,7 @@ class CartControllerProgram:
         ctx.record("cart.tfilter", self.ctrl.tuning.Tfilter, ctx.env.now)
         ctx.record("cart.vref", params.vref, ctx.env.now)
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         st, p = self.enc, self.p
         now = job.now
         if not self.stopped and p.stop_at is not None and st["count"] * st["delta"] >= p.stop_at:

@@ -275,7 +275,7 @@ def furuta_pendulum(params: PendulumParams | None = None, **kwargs: object):  # 
                            state_names=["theta", "theta_dot", "alpha", "alpha_dot"], name="pendulum",
                            divergence_bound=1e3)
     A, B = linearise(p)
-    plant.A, plant.B, plant.C, plant.D = A, B, C_MEAS.copy(), np.zeros((2, 1))  # type: ignore[attr-defined]
+    plant.A, plant.B, plant.C, plant.D = A, B, C_MEAS.copy(), np.zeros((2, 1))
     if p.disturbance_std > 0:
         dt_ns = int(round(p.disturbance_hold * 1e9))
         plant.add_disturbance("u", LTIDisturbance([[0.0]], [[1.0]], [[1.0]], dt_ns=dt_ns,

@@ -26,7 +26,7 @@ The names keep ``turn`` (the study's blackout is its turn).
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping, Union
+from typing import Any, Literal, Mapping, Union
 
 import numpy as np
 from pydantic import Field
@@ -51,7 +51,7 @@ class UnicycleMetricParams(StrictModel):
 
 #: What :func:`run_measures` takes as the blackout: ``(start_s, end_s)``, ``"turn"`` (the trajectory's turn
 #: phase) or ``None`` (no blackout).
-Blackout = Union[tuple[float, float], str, None]
+Blackout = Union[tuple[float, float], Literal["turn"], None]
 
 
 def blackout_window(scenario: Mapping[str, Any] | None) -> Blackout:
@@ -118,7 +118,7 @@ def run_measures(t: np.ndarray, truth: np.ndarray, xhat: np.ndarray, sd: np.ndar
     elif blackout is None:
         dark = None
     else:
-        a, b = blackout  # type: ignore[misc]
+        a, b = blackout
         dark = (t >= a - 1e-9) & ((t < b - 1e-9) if b < t[-1] + 1e-9 else np.ones_like(t, dtype=bool))
     if dark is not None and dark.any():
         idx = np.flatnonzero(dark)

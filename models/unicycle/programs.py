@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Generator, Mapping
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 from pydantic import Field, model_serializer, model_validator
@@ -46,6 +46,9 @@ from netsim.programs.basic import ProgramContext, _newest
 from netsim.programs.inbox import take_matching
 from netsim.registry import register
 from netsim.units import StrictModel, Time
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
 
 __all__ = ["IrSensor", "UnicycleEkf", "WheelDrive", "side_warning"]
 
@@ -75,7 +78,7 @@ class IrSensor:
         self.ctx, self.p = ctx, params
         self.sent = 0
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         t = int(job.now)
         if p.on is not None and not any(a <= t < b for a, b in p.on):
@@ -127,7 +130,7 @@ class _Phase(StrictModel):
 
 
 def _default_phases() -> list[_Phase]:
-    return [_Phase(duration=f"{p.duration:g} s", v=p.v, w=p.w, name=p.name) for p in PHASES]
+    return [_Phase.model_validate({"duration": f"{p.duration:g} s", "v": p.v, "w": p.w, "name": p.name}) for p in PHASES]
 
 
 def side_warning(plant: Any, side_model: str, where: str = "the unicycle_ekf task") -> str | None:
@@ -277,7 +280,7 @@ class UnicycleEkf:
                 earliest = min(earliest, k)
         return earliest
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         k_now = (int(job.release) - self.offset) // self.period
         while self.k < k_now:  # jobs that did not run: predicted with the held input
             self._advance()
@@ -362,7 +365,7 @@ class WheelDrive:
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx, self.p = ctx, params
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         msg = yield from _newest(job, self.p.network)
         if self.ctx.execution is not None:
             yield job.execute(self.ctx.execution)

@@ -11,10 +11,13 @@ files, for editors with a YAML language server (completion and errors while typi
 
 from __future__ import annotations
 
-from typing import Any, get_args
+from typing import TYPE_CHECKING, Any, get_args
 
 from netsim.cli.file_schema import json_schema
 from netsim.cli.model_fields import models_in as _models_in
+
+if TYPE_CHECKING:
+    from pydantic import BaseModel
 
 __all__ = ["scenario_reference", "json_schema", "KIND_TITLES"]
 
@@ -33,7 +36,7 @@ KIND_TITLES: dict[str, tuple[str, str]] = {
 }
 
 
-def _type_tag(model: type) -> str:
+def _type_tag(model: type[BaseModel]) -> str:
     """`` (type: adc)`` for a model that a ``type`` literal selects in a union, else empty."""
     field = model.model_fields.get("type")
     args = get_args(field.annotation) if field is not None else ()
@@ -48,7 +51,7 @@ def _table(rows: list[Any]) -> list[str]:
     return out
 
 
-def _model_rows(model: type, prefix: str, seen: set[type], depth: int = 0) -> list[Any]:
+def _model_rows(model: type[BaseModel], prefix: str, seen: set[type], depth: int = 0) -> list[Any]:
     """Rows of ``model`` (dotted, :func:`netsim.registry.param_rows`), each field followed by the rows of the
     models its dict, list and union values hold (``nodes.<name>.tasks[].period``)."""
     from netsim.registry import param_rows

@@ -23,7 +23,10 @@ the file does not declare, a matrix whose shape must match another) is left to `
 from __future__ import annotations
 
 import copy
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from pydantic import BaseModel
 
 __all__ = ["json_schema"]
 
@@ -48,11 +51,11 @@ _NAMED_PLUGINS: dict[str, str] = {"design": "controller"}
 _PATH_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.]*:[A-Za-z_][A-Za-z0-9_.]*$"
 
 
-def _reachable_models(roots: list[type]) -> list[type]:
+def _reachable_models(roots: list[type[BaseModel]]) -> list[type[BaseModel]]:
     """The pydantic models reachable from ``roots`` through field annotations (dict, list, union, nested)."""
     from netsim.cli.model_fields import models_in as _models_in
 
-    out: list[type] = []
+    out: list[type[BaseModel]] = []
     todo = list(roots)
     while todo:
         model = todo.pop(0)
@@ -114,7 +117,7 @@ def _widen_matrix(node: Any) -> Any:
     return {k: _widen_matrix(v) for k, v in node.items()}
 
 
-def _before_fields(model: type) -> set[str]:
+def _before_fields(model: type[BaseModel]) -> set[str]:
     """Fields of ``model`` with a ``mode="before"`` field validator (they read more than the annotation says)."""
     out: set[str] = set()
     for dec in model.__pydantic_decorators__.field_validators.values():
@@ -123,13 +126,13 @@ def _before_fields(model: type) -> set[str]:
     return out
 
 
-def _def_of(defs: dict[str, Any], refs: dict[Any, Any], model: type) -> dict[str, Any] | None:
+def _def_of(defs: dict[str, Any], refs: dict[Any, Any], model: type[BaseModel]) -> dict[str, Any] | None:
     ref = refs.get((model, "validation"))
     name = ref["$ref"].rsplit("/", 1)[1] if ref else model.__name__
     return defs.get(name)
 
 
-def _tighten_fields(defs: dict[str, Any], refs: dict[Any, Any], models: list[type]) -> None:
+def _tighten_fields(defs: dict[str, Any], refs: dict[Any, Any], models: list[type[BaseModel]]) -> None:
     """Unit fields take their text forms; matrices their 1-D and scalar forms."""
     from netsim.registry import param_rows
 

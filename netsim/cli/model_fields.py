@@ -5,12 +5,15 @@ Shared by the scenario reference (:mod:`netsim.cli.docs`) and the JSON Schema (:
 
 from __future__ import annotations
 
-from typing import Any, Union, get_args, get_origin
+from typing import TYPE_CHECKING, Any, Union, get_args, get_origin
+
+if TYPE_CHECKING:
+    from pydantic import BaseModel
 
 __all__ = ["models_in"]
 
 
-def models_in(tp: Any) -> list[tuple[str, type]]:
+def models_in(tp: Any) -> list[tuple[str, type[BaseModel]]]:
     """``(suffix, model)`` for the pydantic models a container field holds: ``.<name>`` for dict values,
     ``[]`` for list items; a union gives each member."""
     from pydantic import BaseModel

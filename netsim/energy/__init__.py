@@ -7,16 +7,19 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from netsim.energy.meter import EnergyMeter
 from netsim.energy.params import Battery, CpuPower, EnergyModel, RadioPower
 from netsim.errors import BuildError
 
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
+
 __all__ = ["EnergyModel", "CpuPower", "RadioPower", "Battery", "EnergyMeter", "attach_energy"]
 
 
-def attach_energy(scenario: Any, env: Any, kernels: dict[str, Any], networks: dict[str, Any]) -> dict[str, EnergyMeter]:
+def attach_energy(scenario: Scenario, env: Any, kernels: dict[str, Any], networks: dict[str, Any]) -> dict[str, EnergyMeter]:
     """An :class:`EnergyMeter` per node of ``scenario`` with ``energy:`` (in ``env.components["energy.<node>"]``).
 
     Raises

@@ -188,7 +188,7 @@ class Job(JobState):
     @property
     def now(self) -> int:
         """Current simulation time in ns."""
-        return self._ctx.sim.now  # type: ignore[no-any-return]
+        return self._ctx.sim.now
 
     @property
     def spec(self) -> Any:

@@ -176,7 +176,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
     @property
     def now(self) -> int:
         """Current simulation time in ns."""
-        return self._sim.now  # type: ignore[no-any-return]
+        return self._sim.now
 
     @property
     def running(self) -> str | None:
@@ -259,7 +259,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         if self.halted:
             return
         self.halted = True
-        for ent in (*self.handlers.values(), *self.tasks.values()):
+        entities: list[Handler | Task] = [*self.handlers.values(), *self.tasks.values()]
+        for ent in entities:
             for job in list(ent.queue):
                 self._kill(job)
             if ent.active is not None:

@@ -150,7 +150,7 @@ class Monitor:
             ceiling = self._ceiling_rank
             if ceiling is None:
                 ceiling = self._ceiling_rank = self._resolve_ceiling(kernel)
-            if job._own_rank < ceiling:  # type: ignore[operator]
+            if job._own_rank < ceiling:
                 raise SimulationError(
                     f"node '{kernel.name}', task '{job.task_name}': enters monitor '{self.name}' but is more "
                     f"urgent than its ceiling {ceiling[1]!r}; add '{job.task_name}' to the monitor's users")

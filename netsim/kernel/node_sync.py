@@ -125,19 +125,19 @@ class NodeSync:
 
     def mailbox(self, name: str) -> Mailbox:
         """The mailbox ``name`` (see :meth:`get`)."""
-        return self.get("mailboxes", name)  # type: ignore[no-any-return]
+        return self.get("mailboxes", name)
 
     def semaphore(self, name: str) -> Semaphore:
         """The semaphore ``name`` (see :meth:`get`)."""
-        return self.get("semaphores", name)  # type: ignore[no-any-return]
+        return self.get("semaphores", name)
 
     def event(self, name: str) -> Event:
         """The event ``name`` (see :meth:`get`)."""
-        return self.get("events", name)  # type: ignore[no-any-return]
+        return self.get("events", name)
 
     def monitor(self, name: str) -> Monitor:
         """The monitor ``name`` (see :meth:`get`)."""
-        return self.get("monitors", name)  # type: ignore[no-any-return]
+        return self.get("monitors", name)
 
     def __repr__(self) -> str:
         counts = ", ".join(f"{kind}={len(getattr(self, kind))}" for kind in SYNC_KINDS)

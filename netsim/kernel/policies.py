@@ -230,7 +230,7 @@ def resolve_policy(policy: "str | type[Policy] | Policy", node: str) -> Policy:
     if isinstance(policy, type) and issubclass(policy, Policy):
         return policy()
     try:
-        obj = find_policy(policy)  # type: ignore[arg-type]
+        obj = find_policy(policy)
     except ConfigError as exc:
         where = "scheduling policy: " if isinstance(policy, str) and ":" in policy else ""
         raise BuildError(f"node '{node}': {where}{exc.message}") from None

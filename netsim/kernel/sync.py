@@ -20,15 +20,18 @@ Semantics (TrueTime-like)
 from __future__ import annotations
 
 from collections import deque
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from netsim.errors import ConfigError
 from netsim.kernel.states import BLOCKED
 
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
+
 __all__ = ["Mailbox", "Semaphore", "Event"]
 
 
-def _live(job: Any, obj: Any) -> bool:
+def _live(job: Job, obj: Any) -> bool:
     """True when ``job`` is still blocked on ``obj`` (killed jobs are skipped lazily)."""
     return job._state == BLOCKED and job._blocked_on is obj
 

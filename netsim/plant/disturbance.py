@@ -102,8 +102,8 @@ class _Source:
     # piecewise sources: upcoming jumps from signal.breakpoints(t0, t1), fetched by growing windows
     def next_break_after(self, t: int) -> int:
         if self.kind == "lti_d":
-            dt = self.lti.dt_ns  # type: ignore[union-attr]
-            return (t // dt + 1) * dt
+            dt = self.lti.dt_ns  # type: ignore[union-attr]  # an lti_d source carries a discrete model
+            return (t // dt + 1) * dt  # type: ignore[operator]
         if self.kind == "state":
             dt = self.dt_ns  # type: ignore[attr-defined]
             return (t // dt + 1) * dt
@@ -130,7 +130,7 @@ class _Source:
         if self.kind in ("piecewise", "held"):
             self.value = float(self.signal(t))
         elif self.kind == "lti_d":
-            self.value = float((self.lti.C @ self.xd)[0])  # type: ignore[union-attr,operator]
+            self.value = float((self.lti.C @ self.xd)[0])  # type: ignore[union-attr]
         elif self.kind == "sine":
             self.value = float(self.signal(t))
 

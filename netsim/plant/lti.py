@@ -33,7 +33,7 @@ import numpy as np
 
 from netsim.errors import ConfigError
 from netsim.plant.base import Plant
-from netsim.plant.disturbance import _Source
+from netsim.plant.disturbance import _Source, _StateNoise
 from netsim.plant.noise import is_entry_form
 from netsim.plant.shared import NEVER, _vector, as_matrix, matvec, psd_factor
 from netsim.timebase import S
@@ -235,7 +235,7 @@ class LTIPlant(_LTIBase):
         """Append oscillators (sine disturbances) and continuous disturbance models to the state."""
         n, m = self.n_states, self.n_inputs
         blocks_A, z0, q_blocks = [], [x], []
-        couple = []  # (input index, row vector acting on the extra block)
+        couple: list[tuple[int | None, np.ndarray]] = []  # (input index, row vector acting on the extra block)
         t = self._t / S
         self._sine_bias = np.zeros(m)
         for src in self._sources:
@@ -250,16 +250,17 @@ class LTIPlant(_LTIBase):
                 self._sine_bias[src.index] += float(sig.bias)
             elif src.kind == "lti_c":
                 lti = src.lti
+                assert lti is not None  # an lti_c source carries its model
                 blocks_A.append(lti.A)
                 z0.append(lti.x0.copy())
                 couple.append((src.index, lti.C[0]))
                 q_blocks.append(lti.B @ lti.W @ lti.B.T)
-            elif src.kind == "state" and src.rate:  # type: ignore[attr-defined]
-                k = src.sd.size  # type: ignore[attr-defined]
+            elif isinstance(src, _StateNoise) and src.rate:  # kind "state"
+                k = src.sd.size
                 blocks_A.append(np.zeros((k, k)))  # held rates: constant between sample instants
-                z0.append(src.rates.copy())  # type: ignore[attr-defined]
+                z0.append(src.rates.copy())
                 E = np.zeros((n, k))
-                E[src.states, np.arange(k)] = 1.0  # type: ignore[attr-defined]
+                E[src.states, np.arange(k)] = 1.0
                 couple.append((None, E))
                 q_blocks.append(np.zeros((k, k)))
         nz = n + sum(b.shape[0] for b in blocks_A)
@@ -270,13 +271,13 @@ class LTIPlant(_LTIBase):
         Qf = np.zeros((nz, nz))
         Qf[:n, :n] = self.Qc
         k = n
-        rate_sources = iter([src for src in self._sources if src.kind == "state" and src.rate])  # type: ignore[attr-defined]
+        rate_sources = iter([src for src in self._sources if isinstance(src, _StateNoise) and src.rate])
         for blk, (idx, row), q in zip(blocks_A, couple, q_blocks):
             s = blk.shape[0]
             Af[k : k + s, k : k + s] = blk
             if idx is None:  # held rates on states: dx/dt += E r (no output feed-through)
                 Af[:n, k : k + s] = row
-                next(rate_sources).offset = k  # type: ignore[attr-defined]
+                next(rate_sources).offset = k
             else:
                 Af[:n, k : k + s] = np.outer(self.B[:, idx], row)
                 Cf[:, k : k + s] = np.outer(self.D[:, idx], row)

@@ -35,13 +35,17 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Annotated, Any, Callable, ClassVar, Generator
+from typing import TYPE_CHECKING, Annotated, Any, Callable, ClassVar, Generator
 
 from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from netsim.control.pid import PID, PIDParams
 from netsim.registry import register
 from netsim.units import QuietDefaultsModel, StrictModel, Time
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
+    from netsim.scenario.schema import Scenario
 
 __all__ = [
     "BROADCAST",
@@ -118,7 +122,7 @@ class ProgramContext:
     task: str
     execution: Any
     signals: dict[str, Callable[[int], float]] = field(default_factory=dict)
-    scenario: Any = None
+    scenario: Scenario | None = None
     period: int | None = None
     spec: Any = None
 
@@ -160,13 +164,13 @@ class ProgramContext:
 Body = Generator[Any, Any, None]
 
 
-def _run(ctx: ProgramContext, job: Any) -> Generator[Any, Any, None]:
+def _run(ctx: ProgramContext, job: Job) -> Generator[Any, Any, None]:
     """``execute`` the task's execution time, if it has one."""
     if ctx.execution is not None:
         yield job.execute(ctx.execution)
 
 
-def _newest(job: Any, network: str) -> Generator[Any, Any, Any]:
+def _newest(job: Job, network: str) -> Generator[Any, Any, Any]:
     """Drain the node's inbox on ``network``; return the newest message (or ``None``)."""
     newest = None
     while True:
@@ -193,7 +197,7 @@ class Idle:
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         yield from _run(self.ctx, job)
 
 
@@ -221,7 +225,7 @@ class Sampler:
         self.ctx = ctx
         self.p = params
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         y = yield job.analog_in(p.channel)
         if p.record_as:
@@ -277,7 +281,7 @@ class Controller:
         # measurement source: explicit channel, else inbox of input_network / network, else shared[key]
         self.in_net = params.input_network or (params.network if params.channel is None else None)
 
-    def _measure(self, job: Any) -> Generator[Any, Any, float]:
+    def _measure(self, job: Job) -> Generator[Any, Any, float]:
         p = self.p
         if p.channel is not None:
             return float((yield job.analog_in(p.channel)))
@@ -290,7 +294,7 @@ class Controller:
             return _value(msg)
         return float(job.shared.get(p.key, self.y_last))
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         y = yield from self._measure(job)
         self.y_last = y
@@ -299,8 +303,8 @@ class Controller:
         yield from _run(self.ctx, job)
         if p.output_channel is not None:
             yield job.analog_out(p.output_channel, u)
-        else:
-            yield job.send(p.network, _destination(p.to), u, p.bits, priority=p.priority, tag=p.tag)
+        else:  # Params requires a network when there is no output_channel
+            yield job.send(p.network, _destination(p.to), u, p.bits, priority=p.priority, tag=p.tag)  # type: ignore[arg-type]
         if p.record_as:
             self.ctx.record(p.record_as, u, job.now)
 
@@ -335,7 +339,7 @@ class Actuator:
         self.ctx = ctx
         self.p = params
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         msg = yield from _newest(job, self.p.network)
         yield from _run(self.ctx, job)
         if msg is None:
@@ -389,7 +393,7 @@ class Interference:
         self.p = params
         self.rng = ctx.env.rng(f"program.{ctx.node}.{ctx.task}")
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         if p.rate is None:
             yield from _newest(job, p.network)  # discard frames addressed to this node
@@ -425,7 +429,7 @@ class PeriodicController:
         self.pid = PID.from_params(params, ctx.period)
         self.ref = ctx.signal(params.reference) if params.reference else (lambda t: 0.0)
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         r = self.ref(job.now)
         y = yield job.analog_in(p.channel)

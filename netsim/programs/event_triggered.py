@@ -35,19 +35,23 @@ same arguments (``analog_in``, ``receive``, ``execute``) are built once (request
 from __future__ import annotations
 
 import logging
-from typing import Any, Generator, Literal
+from typing import TYPE_CHECKING, Any, Generator, Literal
 
 from pydantic import Field, model_validator
 
 from netsim.control.cascade import CascadeActions
 from netsim.control.controller_trigger import ControllerTrigger
 from netsim.control.packets import ControlPacket, PlayoutBuffer
-from netsim.control.triggers import AnyOf, MaxIntervalTrigger, MixedTrigger, ReferenceChangeTrigger, SendOnDelta, TimeTriggered
+from netsim.control.triggers import (AnyOf, MaxIntervalTrigger, MixedTrigger, ReferenceChangeTrigger, SendOnDelta,
+                                     SensorTrigger, TimeTriggered)
 from netsim.errors import BuildError, ConfigError
 from netsim.kernel import requests as rq
 from netsim.kernel.requests import Request
 from netsim.registry import lookup, register
 from netsim.units import Duration, StrictModel, Time
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
 
 __all__ = ["EtSensor", "EtController", "PlayoutActuator"]
 
@@ -96,13 +100,14 @@ class EtSensor:
     def __init__(self, ctx: Any, params: "EtSensor.Params") -> None:
         self.ctx = ctx
         self.p = p = params
+        base: SensorTrigger
         if p.trigger == "time":
             base = TimeTriggered()
         elif p.trigger == "pet":
             base = MixedTrigger(p.sigma_s, p.delta_s, p.norm)
         else:
             base = SendOnDelta(p.delta_s)
-        members = [base]
+        members: list[SensorTrigger] = [base]
         if p.k_max is not None:
             members.append(MaxIntervalTrigger(p.k_max))
         if p.reference_k_max is not None:
@@ -114,7 +119,7 @@ class EtSensor:
         self._read = Request(rq.ANALOG_IN, p.channel)  # job.analog_in(p.channel)
         self._exec = ctx.execute_request  # job.execute(ctx.execution), built once
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         now = job.now
         k = (now - p.offset) // p.period
@@ -203,7 +208,7 @@ class EtController:
         self.ctx.record("numre_h_violations", float(side.horizon_violations), t_end)
         self.ctx.record("numre_N_max", float(side.N_max), t_end)
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         if self.p.step_on == "every_period":
             yield from self._every_period(job)
             return
@@ -215,7 +220,7 @@ class EtController:
             k, y = int(payload["k"]), float(payload["y"])
             yield from self._decide(job, self.side.on_measurement(k, y))
 
-    def _every_period(self, job: Any) -> Body:
+    def _every_period(self, job: Job) -> Body:
         p = self.p
         while True:
             msg = yield self._receive
@@ -228,7 +233,7 @@ class EtController:
         k_y, y = self._last
         yield from self._decide(job, self.side.on_period(k, y, k_y))
 
-    def _decide(self, job: Any, dec: Any) -> Body:
+    def _decide(self, job: Job, dec: Any) -> Body:
         """Record the decision, execute, and send the packet when eq (22) lets it go."""
         p = self.p
         if p.record:
@@ -281,7 +286,7 @@ class PlayoutActuator:
         self._receive = None if params.network is None else Request(rq.RECEIVE, params.network)
         self._exec = ctx.execute_request  # job.execute(ctx.execution), built once
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         if p.mode == "receive":
             got = False

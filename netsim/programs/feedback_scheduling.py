@@ -26,7 +26,7 @@ CPU utilisation follows a set-point, and the controllers follow their new period
 
 from __future__ import annotations
 
-from typing import Any, Generator
+from typing import TYPE_CHECKING, Any, Generator
 
 from pydantic import Field, model_validator
 
@@ -34,6 +34,9 @@ from netsim.control.pid import PID, PIDParams
 from netsim.errors import SimulationError
 from netsim.registry import register
 from netsim.units import StrictModel
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
 
 __all__ = ["FeedbackScheduler", "AdaptivePID", "retune"]
 
@@ -70,7 +73,7 @@ class AdaptivePID:
         self.period = ctx.period
         self.ref = ctx.signal(params.reference) if params.reference else (lambda t: 0.0)
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         period = job.spec.period
         if period is not None and period != self.period and p.h is None:
@@ -151,7 +154,7 @@ class FeedbackScheduler:
         t0, self.t_last = self.t_last, now
         return None if t0 is None or now <= t0 else used / (now - t0)
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         now = job.now
         u = self._measure(now)
@@ -159,8 +162,9 @@ class FeedbackScheduler:
             self.samples.append((now, u))
             if p.record_as:
                 self.ctx.record(p.record_as, u, now)
-        if all(c is not None for c in self.estimate.values()):
-            u_nom = sum(c / self.nominal[n] for n, c in self.estimate.items())  # type: ignore[operator]
+        known = {n: c for n, c in self.estimate.items() if c is not None}
+        if len(known) == len(self.estimate):
+            u_nom = sum(c / self.nominal[n] for n, c in known.items())
             self.scale = min(max(u_nom / p.setpoint, p.min_scale), p.max_scale)
             for name, h in self.nominal.items():
                 job.kernel.set_period(name, max(1000, int(round(h * self.scale / 1000)) * 1000))  # whole us

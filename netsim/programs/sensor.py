@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Generator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from pydantic import Field, ValidationInfo, field_validator
@@ -16,6 +16,9 @@ from netsim.programs.basic import (
 )
 from netsim.registry import register
 from netsim.units import StrictModel, Time
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
 
 __all__ = ["Sensor"]
 
@@ -45,7 +48,7 @@ class Sensor:
         self.ctx = ctx
         self.p = params
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         t = job.now
         ys = []

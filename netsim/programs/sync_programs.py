@@ -23,13 +23,16 @@ own parameters so.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Generator
+from typing import TYPE_CHECKING, Any, Generator
 
 from netsim.control.pid import PID, PIDParams
 from netsim.kernel.node_sync import EventName, MailboxName, MonitorName, SemaphoreName
 from netsim.programs.basic import ProgramContext
 from netsim.registry import register
 from netsim.units import StrictModel, Time
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
 
 __all__ = ["SyncTiming", "MailboxSampler", "MailboxController", "CriticalSectionProgram"]
 
@@ -85,7 +88,7 @@ class MailboxSampler:
         #: Samples dropped because the mailbox was full (``blocking: false``).
         self.dropped = 0
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         y = float((yield job.analog_in(p.channel)))
         if p.record_as:
@@ -127,7 +130,7 @@ class MailboxController:
         self.mailbox = ctx.kernel.sync.mailbox(params.mailbox)
         self.monitor = None if params.monitor is None else ctx.kernel.sync.monitor(params.monitor)
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         y = float((yield job.fetch(self.mailbox)))
         if self.monitor is not None:
@@ -176,7 +179,7 @@ class CriticalSectionProgram:
         self.notify_event = None if params.notify_event is None else sync.event(params.notify_event)
         self.inside = ctx.execution if params.inside is None else params.inside
 
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         p = self.p
         if self.wait_event is not None:
             yield job.wait(self.wait_event)

@@ -9,7 +9,10 @@ a nested model's fields dotted after it. Units: a field declares its own with
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Annotated, Any, Literal, Union, get_args, get_origin
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Union, get_args, get_origin
+
+if TYPE_CHECKING:
+    from pydantic import BaseModel
 
 __all__ = ["TIME_UNIT", "ParamRow", "params_model", "param_rows"]
 
@@ -34,7 +37,7 @@ class ParamRow:
 TIME_UNIT = "ns|us|ms|s"
 
 
-def params_model(obj: Any) -> type | None:
+def params_model(obj: Any) -> type[BaseModel] | None:
     """The pydantic model in ``obj.Params`` (the plugin's parameters), or ``None`` when it declares none."""
     from pydantic import BaseModel
 
@@ -114,7 +117,7 @@ def _inner_unit_type(tp: Any) -> tuple[str, str] | None:
     return None
 
 
-def _nested_model(tp: Any) -> type | None:
+def _nested_model(tp: Any) -> type[BaseModel] | None:
     """The one pydantic model a field holds (``Model`` or ``Model | None``), whose fields are listed too."""
     from pydantic import BaseModel
 
@@ -125,7 +128,7 @@ def _nested_model(tp: Any) -> type | None:
     return None
 
 
-def param_rows(model: type, prefix: str = "", _depth: int = 0) -> list[ParamRow]:
+def param_rows(model: type[BaseModel], prefix: str = "", _depth: int = 0) -> list[ParamRow]:
     """The parameters of the pydantic ``model`` (a plugin's ``Params``), nested models' fields dotted.
 
     Parameters

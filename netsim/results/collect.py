@@ -27,7 +27,7 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
     schedule, built when first read."""
     rec = sim.env.recorder
     source = SignalSource(rec.times, rec.values, order=sim.scenario.record)
-    signals = Lazy(source.table)  # built when read; signals.csv and the metrics read the source window by window
+    signals: Any = Lazy(source.table)  # RunResult resolves a Lazy when read; signals.csv and the metrics read the source window by window
     output = sim.scenario.output
     job_stats = [row for k in sim.kernels.values() if isinstance(k.job_records, JobSummary)
                  for row in k.job_records.rows()]
@@ -35,9 +35,11 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
     full_kernels = [(name, k.job_records) for name, k in sim.kernels.items()
                     if not isinstance(k.job_records, JobSummary)]
     full_networks = [net.records for net in sim.networks.values() if not isinstance(net.records, MessageSummary)]
+    job_cols: Rows | None
+    msg_cols: Rows | None
     try:  # columns straight from the records; a DataFrame only when result.jobs / .messages is read
-        job_cols: Rows | None = job_rows(full_kernels, _arrival_columns(full_kernels))
-        msg_cols: Rows | None = message_rows(full_networks)
+        job_cols = job_rows(full_kernels, _arrival_columns(full_kernels))
+        msg_cols = message_rows(full_networks)
         jobs: Any = Lazy(job_cols.frame)
         messages: Any = Lazy(msg_cols.frame)
     except TypeError:  # records whose sort keys do not compare (mixed types): the tables through pandas
@@ -49,7 +51,7 @@ def collect(sim: Any, t_end_ns: int) -> RunResult:
         frames = [schedule_table(name, intervals) for name, intervals in traces_kept]
         return pd.concat(frames, ignore_index=True) if frames else schedule_table("", [])
 
-    schedule = Lazy(schedule_frame)
+    schedule: Any = Lazy(schedule_frame)
     traces = {"jobs": output.jobs, "messages": output.messages, "schedule": output.schedule}
     return RunResult(signals=signals, jobs=jobs, messages=messages, schedule=schedule, traces=traces,
                      _job_rows=job_cols, _message_rows=msg_cols, _signal_source=source, _schedule_source=traces_kept,

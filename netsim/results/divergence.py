@@ -68,7 +68,7 @@ def find_divergence_chunked(result: Any, recorder: Any, metric_specs: Iterable[A
         params = dict(spec.get("params") or {})
         ratio = params.get("diverged_above", DEFAULT_RATIO)
         out, ref = params.get("output"), params.get("reference")
-        if ratio is None or out not in names or (ref and ref not in names):
+        if ratio is None or not isinstance(out, str) or out not in names or (ref and ref not in names):
             continue
         wanted = [out, ref] if ref else [out]
 

@@ -32,7 +32,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 import pandas as pd
@@ -340,7 +340,7 @@ def read_summary(path: str | Path) -> pd.DataFrame:
 class SweepRun(NamedTuple):
     """One run of a sweep: its row of ``summary.csv`` and its folder."""
 
-    index: int
+    index: int  # type: ignore[assignment]  # a field named like tuple.index, which it shadows (an API name)
     replicate: int
     #: Factor name -> value (as ``summary.csv`` holds it).
     values: dict[str, Any]
@@ -442,7 +442,7 @@ class SweepFolder:
             if with_results and not run.has_results:
                 continue
             out.append(SweepRun(int(row["index"]), int(row["replicate"]), {f: row[f] for f in factors if f in row},
-                                run, row))
+                                run, cast(dict[str, Any], row)))  # summary.csv's columns are text
         return out
 
     def verify(self) -> None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -111,7 +111,7 @@ def _field(rec: Any, name: str, default: Any = None) -> Any:
 
 
 def signals_table(
-    times: dict[str, list[int]], values: dict[str, list[float]], order: Iterable[str] | None = None
+    times: Mapping[str, Sequence[int]], values: Mapping[str, Sequence[float]], order: Iterable[str] | None = None
 ) -> pd.DataFrame:
     """The wide signals table from per-signal sample lists.
 

@@ -43,12 +43,15 @@ import logging
 import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from netsim.scenario.schema_verdict import WINDOWS_PER_RUN, VerdictSettings
 from netsim.timebase import S
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["Finding", "settings_of", "window_envelope", "find_growth", "judge_signals", "judge_metrics",
            "apply_finding", "LONGER_WINDOWS"]
@@ -85,7 +88,7 @@ class Growth:
     e_end: float
 
 
-def settings_of(scenario: Any) -> VerdictSettings:
+def settings_of(scenario: Scenario) -> VerdictSettings:
     """The scenario's ``verdict:`` block, or the defaults when it has none."""
     got = getattr(scenario, "verdict", None)
     return got if isinstance(got, VerdictSettings) else VerdictSettings()
@@ -283,7 +286,7 @@ def _params_of(spec: Any) -> dict[str, Any]:
     return dict(params or {})
 
 
-def judge_signals(result: Any, scenario: Any, t_end_ns: int) -> tuple[Finding | None, list[str]]:
+def judge_signals(result: Any, scenario: Scenario, t_end_ns: int) -> tuple[Finding | None, list[str]]:
     """The growth and bound checks of a finished run: the earliest finding (or None) and warnings about
     ``verdict:`` names that nothing recorded.
 
@@ -328,7 +331,7 @@ def judge_signals(result: Any, scenario: Any, t_end_ns: int) -> tuple[Finding | 
     return (min(found, key=lambda f: f.t_s) if found else None), warnings
 
 
-def judge_metrics(result: Any, scenario: Any) -> Finding | None:
+def judge_metrics(result: Any, scenario: Scenario) -> Finding | None:
     """The earliest verdict of the scenario's metrics that carry one (a ``verdict`` attribute on the registered
     metric function), or None; nothing when ``verdict.metrics`` is false."""
     if not settings_of(scenario).metrics:
@@ -351,7 +354,7 @@ def judge_metrics(result: Any, scenario: Any) -> Finding | None:
     return min(found, key=lambda f: f.t_s) if found else None
 
 
-def apply_finding(meta: dict[str, Any], finding: Finding | None, scenario: Any) -> str | None:
+def apply_finding(meta: dict[str, Any], finding: Finding | None, scenario: Scenario) -> str | None:
     """Record ``finding`` in a run's ``meta``: status ``unstable at t = ... s`` and the text as ``error``
     (``verdict.action: fail``), or a warning (``warn``; the warning's text is returned). A run that is not ``ok``
     keeps its status."""

@@ -24,7 +24,7 @@ from __future__ import annotations
 import enum
 import logging
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 from pydantic import BaseModel
 
@@ -33,6 +33,9 @@ from netsim.scenario.paths import PathPart, format_path, get_path, parse_path, s
 from netsim.scenario.problems import Problem
 from netsim.scenario.python_values import plain_values
 from netsim.scenario.schema import PluginSpec
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["Applied", "apply_overrides", "shadowed_overrides"]
 
@@ -91,7 +94,7 @@ def apply_overrides(raw: dict[str, Any], overrides: Mapping[str, Any] | None) ->
     return applied, problems
 
 
-def shadowed_overrides(raw: dict[str, Any], scenario: Any, applied: list[Applied]) -> tuple[list[Problem], bool]:
+def shadowed_overrides(raw: dict[str, Any], scenario: Scenario, applied: list[Applied]) -> tuple[list[Problem], bool]:
     """The overrides of preset-like fields that siblings given in the scenario hide (see the module docstring).
 
     Parameters
@@ -198,7 +201,7 @@ def _show(value: Any) -> str:
     return repr(value) if isinstance(value, str) and (" " in value or not value) else str(value)
 
 
-def _model_at(scenario: Any, parts: tuple[PathPart, ...]) -> BaseModel | None:
+def _model_at(scenario: Scenario, parts: tuple[PathPart, ...]) -> BaseModel | None:
     """The validated parameter model at the raw path ``parts`` of ``scenario`` (None when there is none)."""
     node: Any = scenario
     for part in parts:

@@ -152,7 +152,8 @@ class _SafeConstructor(SafeConstructor):
         return own
 
 
-_SafeConstructor.add_constructor(_CORE + "int", _SafeConstructor.construct_yaml_int)
+# (types-PyYAML expects the constructor of a Loader class; this constructor is the loader's mixin)
+_SafeConstructor.add_constructor(_CORE + "int", _SafeConstructor.construct_yaml_int)  # type: ignore[type-var]
 
 
 def long_integer_placeholder(negative: bool) -> int:
@@ -167,7 +168,7 @@ def long_integer_placeholder(negative: bool) -> int:
     return (-1 if negative else 1) * 10 ** ((limit if limit > 0 else 4300) - 1)
 
 try:  # libyaml's parser when PyYAML was built with it
-    from yaml.cyaml import CParser as _Parser
+    from yaml._yaml import CParser as _Parser  # what yaml.cyaml re-exports
 
     def _parser_init(self: Any, stream: str) -> None:
         _Parser.__init__(self, stream)

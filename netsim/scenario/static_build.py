@@ -24,17 +24,21 @@ python-control, about 1.3 s, then ``netsim.models.hdd`` caches it; a second chec
 from __future__ import annotations
 
 import logging
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from netsim.errors import ConfigError
 from netsim.scenario.problems import WARNING, Problem
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["build_problems"]
 
 log = logging.getLogger(__name__)
 
 
-def _placeholder(job: Any) -> Any:
+def _placeholder(job: Job) -> Any:
     """A task body that does nothing (the kernel only checks that bodies are generator functions)."""
     return
     yield  # pragma: no cover - makes this a generator function
@@ -53,14 +57,14 @@ def _lookup(kind: str, name: str) -> Any:
         return None
 
 
-def _netsim_kernels(scenario: Any) -> bool:
+def _netsim_kernels(scenario: Scenario) -> bool:
     """True when every node policy is built into the kernel (a custom policy is not instantiated here)."""
     from netsim.kernel.policies import is_builtin_policy
 
     return all(is_builtin_policy(node.policy) for node in scenario.nodes.values())
 
 
-def _netsim_plant(scenario: Any) -> bool:
+def _netsim_plant(scenario: Scenario) -> bool:
     """True when the plant and every signal come from netsim's own plugin modules (then they are built)."""
     from netsim.registry import is_builtin
 
@@ -70,7 +74,7 @@ def _netsim_plant(scenario: Any) -> bool:
     return all(o is not None and is_builtin(o) for o in objs)
 
 
-def _netsim_networks(scenario: Any) -> bool:
+def _netsim_networks(scenario: Scenario) -> bool:
     """True when every network type is one of netsim's own :class:`~netsim.network.Network` classes."""
     from netsim.network.pipeline import Network
     from netsim.registry import is_builtin
@@ -90,7 +94,7 @@ def _message(exc: ConfigError) -> str:
     return exc.message
 
 
-def _design_checks(scenario: Any, plant: Any) -> None:
+def _design_checks(scenario: Scenario, plant: Any) -> None:
     """The control design of each task whose program (one of netsim's own) declares ``check_design``: e.g. the
     ``state_feedback`` program's model, estimator and law (shapes, weights, stabilisability, detectability,
     observer poles, MPC feasibility of ``plant.x0``), exactly as building the program checks them."""
@@ -105,7 +109,7 @@ def _design_checks(scenario: Any, plant: Any) -> None:
             check(scenario, node_name, i, task, plant)
 
 
-def build_problems(scenario: Any) -> list[Problem]:
+def build_problems(scenario: Scenario) -> list[Problem]:
     """The problem ``build`` would raise for ``scenario`` (a valid Scenario), as a list of at most one.
 
     Returns

@@ -206,7 +206,7 @@ def _short(text: str, limit: int = 30) -> str:
 
 def _check_tag(event: Any) -> None:
     tag = getattr(event, "tag", None)
-    if tag in _ALLOWED_TAGS:
+    if tag is None or tag in _ALLOWED_TAGS:
         if tag == _CORE + "int" and not _INT.match(event.value):
             raise YamlRefused(f"'{_short(event.value)}' is not an integer but is tagged !!int; remove the tag or "
                               "write an integer", _line(event))
