@@ -37,7 +37,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from netsim.control.interface import EstimatorBase, EstimatorCapabilities
 from netsim.control.pid import PIDParams
-from netsim.control.weights import Matrix, Weight
+from netsim.control.weights import MatrixField, WeightField
 from netsim.errors import ConfigError
 from netsim.registry import register
 from netsim.units import StrictModel
@@ -227,15 +227,15 @@ class LawPartBase:
 
 # --------------------------------------------------------------------------------------------- estimators
 class _KalmanParams(StrictModel):
-    Q: Weight = Field(description="covariance of the process noise w[k] of the discrete model at the task period, "
+    Q: WeightField = Field(description="covariance of the process noise w[k] of the discrete model at the task period, "
                                   "x[k+1] = A x[k] + B u[k] + w[k] (n x n, PSD, state units squared; a number: "
                                   "times I, a list: the diagonal)")
-    R: Weight = Field(description="covariance of the measurement noise v[k], y[k] = C x[k] + v[k] (p x p, positive "
-                                  "definite, measured outputs' units squared)")
+    R: WeightField = Field(description="covariance of the measurement noise v[k], y[k] = C x[k] + v[k] (p x p, "
+                                       "positive definite, measured outputs' units squared)")
     x0: list[float] | None = Field(None, description="initial estimate x_hat[0|-1], the prior of the first sample "
                                                      "(n numbers, state units; default zeros)")
-    P0: Weight | None = Field(None, description="covariance of x0 (n x n; default identity; ignored by steady_state_kalman, "
-                                         "which starts from the DARE prior)")
+    P0: WeightField | None = Field(None, description="covariance of x0 (n x n; default identity; ignored by "
+                                                     "steady_state_kalman, which starts from the DARE prior)")
     history: int = Field(20, ge=0, le=10_000,
                          description="samples back a delayed measurement is fused at its own sample time (re-filtered "
                                      "from the stored priors); older ones are stale")
@@ -360,15 +360,15 @@ def _weighted(params: Any) -> Any:
 
 
 class _LQRParams(_Limits):
-    Q: Weight | None = Field(None, description=_Q_TEXT)
-    Qy: Weight | None = Field(None, description=_QY_TEXT)
-    R: Weight = Field(description="input weight (m x m, positive definite, per input unit squared)")
-    N: Matrix | None = Field(None, description="cross weight N of the cost term 2 x' N u (n x m; default zero)")
+    Q: WeightField | None = Field(None, description=_Q_TEXT)
+    Qy: WeightField | None = Field(None, description=_QY_TEXT)
+    R: WeightField = Field(description="input weight (m x m, positive definite, per input unit squared)")
+    N: MatrixField | None = Field(None, description="cross weight N of the cost term 2 x' N u (n x m; default zero)")
     integral: bool = Field(False, description="integral action: z[k+1] = z[k] + r[k] - Cr x_hat[k|k] (the estimate, "
                                               "not y), u = ... - Ki z; Ki from the LQR of the model augmented "
                                               "with z (needs a reference)")
-    Qi: Weight | None = Field(None, description="weight of the integrator states z (q x q, one per tracked output; default "
-                                         "identity)")
+    Qi: WeightField | None = Field(None, description="weight of the integrator states z (q x q, one per tracked "
+                                                     "output; default identity)")
     feedforward: bool = Field(True, description="add the steady-state feed-forward of an output reference: "
                                                 "u = Nu r - K (x_hat - Nx r), with Cr Nx r = r at equilibrium")
 
@@ -391,11 +391,11 @@ class LQRPart(LawPartBase):
 
 
 class _StateFeedbackParams(_Limits):
-    K: Matrix = Field(description="state gain (m x n): u = u_ff(r) - K x_hat[k|k] (negative feedback, the sign of "
-                               "control.dlqr's K)")
-    Ki: Matrix | None = Field(None, description="integral gain (m x q): u = ... - Ki z, z[k+1] = z[k] + r[k] - Cr x_hat[k|k] "
-                                      "(needs a reference; the sign of the integrator block of control.dlqr's gain "
-                                      "on the model augmented with z)")
+    K: MatrixField = Field(description="state gain (m x n): u = u_ff(r) - K x_hat[k|k] (negative feedback, the "
+                                       "sign of control.dlqr's K)")
+    Ki: MatrixField | None = Field(None, description="integral gain (m x q): u = ... - Ki z, z[k+1] = z[k] + r[k] - "
+                                                     "Cr x_hat[k|k] (needs a reference; the sign of the integrator "
+                                                     "block of control.dlqr's gain on the model augmented with z)")
     feedforward: bool = Field(True, description="add the steady-state feed-forward of an output reference: "
                                                 "u = Nu r - K (x_hat - Nx r), with Cr Nx r = r at equilibrium")
 
@@ -417,11 +417,11 @@ class StateFeedbackPart(LawPartBase):
 class _MPCParams(_Limits):
     horizon: int = Field(ge=1, le=1000, description="prediction horizon N in samples of the task period (inputs "
                                                    "u_0 .. u_{N-1}, states x_1 .. x_N)")
-    Q: Weight | None = Field(None, description=_Q_TEXT)
-    Qy: Weight | None = Field(None, description=_QY_TEXT)
-    R: Weight = Field(description="input weight (m x m, positive definite, per input unit squared)")
-    P: Weight | None = Field(None, description="terminal weight on x_N - x_s (n x n, PSD; default: the LQR Riccati "
-                                        "solution of (A, B, Q + C' Qy C, R))")
+    Q: WeightField | None = Field(None, description=_Q_TEXT)
+    Qy: WeightField | None = Field(None, description=_QY_TEXT)
+    R: WeightField = Field(description="input weight (m x m, positive definite, per input unit squared)")
+    P: WeightField | None = Field(None, description="terminal weight on x_N - x_s (n x n, PSD; default: the LQR "
+                                                    "Riccati solution of (A, B, Q + C' Qy C, R))")
     du_min: float | list[float] | None = Field(None, description="lower limit of u_k - u_{k-1} per sample, in input "
                                                                  "units (one number, or one per input; <= 0)")
     du_max: float | list[float] | None = Field(None, description="upper limit of u_k - u_{k-1} per sample, in input "

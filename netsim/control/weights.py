@@ -1,6 +1,6 @@
 """Matrix parameters of the control parts as typed values: parsed once from YAML, converted once at design.
 
-``Q: [0, 0.01]`` in a scenario becomes a :class:`WeightValue` when the scenario is validated (the one parse:
+``Q: [0, 0.01]`` in a scenario becomes a :class:`Weight` when the scenario is validated (the one parse:
 numbers, at most two levels of lists, square); the estimator or law makes the one conversion to the matrix of
 the model's size where that size is known (:func:`~netsim.control.design_checks.check_weight`: a number times
 the identity, a list the diagonal; size, symmetry and definiteness checked with messages naming the parameter).
@@ -13,10 +13,10 @@ from typing import Annotated, Any, ClassVar
 import numpy as np
 from pydantic import PlainSerializer, PlainValidator, WithJsonSchema
 
-__all__ = ["Matrix", "MatrixValue", "Weight", "WeightValue"]
+__all__ = ["MatrixField", "Matrix", "WeightField", "Weight"]
 
 
-class MatrixValue:
+class Matrix:
     """A matrix parameter as parsed from YAML, once: a number, a list or a list of rows of finite floats.
 
     ``given`` is the value as written (what the resolved scenario shows), ``array`` the parsed float array
@@ -42,13 +42,13 @@ class MatrixValue:
         return f"{type(self).__name__}({self.given!r})"
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, MatrixValue) and self.given == other.given
+        return isinstance(other, Matrix) and self.given == other.given
 
     def __hash__(self) -> int:
         return hash(repr(self.given))
 
 
-class WeightValue(MatrixValue):
+class Weight(Matrix):
     """A weight or covariance as parsed: a number (times the identity), a list (the diagonal) or a square matrix."""
 
     __slots__ = ()
@@ -61,7 +61,7 @@ def _plain(value: Any) -> Any:
 
 
 def _parse_matrix(value: Any, square: bool) -> np.ndarray:
-    MatrixValue.parses += 1
+    Matrix.parses += 1
     if isinstance(value, bool) or (isinstance(value, (list, tuple)) and any(isinstance(v, bool) for v in value)):
         raise ValueError(f"expected numbers, got {str(value)[:60]!r}")
     what = "a number (times the identity), a list (the diagonal) or a square matrix" if square else "a matrix"
@@ -78,24 +78,24 @@ def _parse_matrix(value: Any, square: bool) -> np.ndarray:
     return arr
 
 
-def _weight(value: Any) -> WeightValue:
-    if isinstance(value, MatrixValue):
-        return WeightValue(value.given, value.array)
-    return WeightValue(_plain(value), _parse_matrix(value, square=True))
+def _weight(value: Any) -> Weight:
+    if isinstance(value, Matrix):
+        return Weight(value.given, value.array)
+    return Weight(_plain(value), _parse_matrix(value, square=True))
 
 
-def _matrix(value: Any) -> MatrixValue:
-    if isinstance(value, MatrixValue):
+def _matrix(value: Any) -> Matrix:
+    if isinstance(value, Matrix):
         return value
-    return MatrixValue(_plain(value), _parse_matrix(value, square=False))
+    return Matrix(_plain(value), _parse_matrix(value, square=False))
 
 
 _NUMBERS = {"type": "array", "items": {"type": "number"}}
 #: A weight or covariance: a number (times the identity), a list (the diagonal) or a square matrix (rows),
-#: parsed once into a :class:`WeightValue` (finite numbers, at most 2-D, square); its size and definiteness are
+#: parsed once into a :class:`Weight` (finite numbers, at most 2-D, square); its size and definiteness are
 #: checked where the model's size is known (:func:`~netsim.control.design_checks.check_weight`).
-Weight = Annotated[WeightValue, PlainValidator(_weight), PlainSerializer(lambda w: w.given),
+WeightField = Annotated[Weight, PlainValidator(_weight), PlainSerializer(lambda w: w.given),
                    WithJsonSchema({"anyOf": [{"type": "number"}, _NUMBERS, {"type": "array", "items": _NUMBERS}]})]
 #: A gain or cross weight: a number, a list (one row) or a matrix of finite numbers, parsed once.
-Matrix = Annotated[MatrixValue, PlainValidator(_matrix), PlainSerializer(lambda m: m.given),
+MatrixField = Annotated[Matrix, PlainValidator(_matrix), PlainSerializer(lambda m: m.given),
                    WithJsonSchema({"anyOf": [{"type": "number"}, _NUMBERS, {"type": "array", "items": _NUMBERS}]})]

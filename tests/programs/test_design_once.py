@@ -19,7 +19,7 @@ import pytest
 
 import netsim
 from netsim.control import kalman, lqr
-from netsim.control.weights import MatrixValue
+from netsim.control.weights import Matrix
 
 SCENARIO = Path(__file__).resolve().parents[2] / "scenarios" / "dc_servo_lqr_kalman.yaml"
 
@@ -50,11 +50,11 @@ def solves(monkeypatch: pytest.MonkeyPatch) -> Counter[str]:
 
 def test_a_run_solves_each_riccati_equation_once_and_parses_each_weight_once(solves: Counter[str],
                                                                              tmp_path: Path) -> None:
-    parses = MatrixValue.parses
+    parses = Matrix.parses
     netsim.run(str(SCENARIO), overrides={"duration": "0.1 s"}, out=tmp_path / "run")
     # the scenario's estimator {type: kalman, Q: [0, 0.01], R: 1.0e-6} and law {type: lqr, Q: [1, 0], R: 0.1}:
     # four weights, each parsed once by the one validation of the scenario
-    assert MatrixValue.parses - parses == 4
+    assert Matrix.parses - parses == 4
     # validate's dry run designs the loop, its unstable-loop check summarises it (the time-varying filter's
     # steady-state gain: the filter DARE), the run takes that design, its warning and design.json reuse the summary
     assert solves == {"filter DARE": 1, "LQR DARE": 1, "filter Q conversions": 1, "filter R conversions": 1}
