@@ -374,7 +374,7 @@ def _task_entry(node: str, index: int, spec: Any, summary: dict[str, Any], progr
              "period_ns": int(spec.period) if spec.period is not None else None,
              "estimator_type": str(p.estimator.type), "law_type": str(p.law.type)}
     entry.update(summary)
-    delay, applied = getattr(p, "input_delay", None), getattr(p, "applied_input", None) is not None
+    delay, applied = p.input_delay, p.applied_input is not None
     entry["input_delay_s"] = None if delay is None else int(delay) / 1e9
     entry["applied_input"] = applied
     if delay is not None or applied:  # the program's delay-aware prediction (issue 26 s5) is not in the loop above
