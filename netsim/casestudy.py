@@ -293,7 +293,7 @@ class RunCache:
     Parameters
     ----------
     folder
-        The cache folder (``None``: no cache, :meth:`get` finds nothing and :meth:`put` keeps nothing).
+        The cache folder (``None``: rows are kept in memory, for this object's life only).
     code
         The code's fingerprint (:func:`code_fingerprint`); another one starts an empty cache.
 
@@ -304,18 +304,21 @@ class RunCache:
     def __init__(self, folder: Path | None, code: str = "") -> None:
         self.folder = None if folder is None else Path(folder) / (code or "any")
         self.reused = 0
+        self._memory: dict[str, dict[str, Any]] = {}
 
     def _path(self, key: str) -> Path | None:
-        if self.folder is None:
-            return None
         if not re.fullmatch(r"[A-Za-z0-9_.-]+", key):
             raise ValueError(f"cache key {key!r}: use letters, digits, '_', '.' and '-'")
-        return self.folder / f"{key}.json"
+        return None if self.folder is None else self.folder / f"{key}.json"
 
     def get(self, key: str) -> dict[str, Any] | None:
         """The row kept under ``key``, or ``None``."""
         path = self._path(key)
-        if path is None or not path.is_file():
+        if path is None:
+            row = self._memory.get(key)
+            self.reused += row is not None
+            return None if row is None else dict(row)
+        if not path.is_file():
             return None
         try:
             row = json.loads(path.read_text(encoding="utf-8"))
@@ -329,6 +332,7 @@ class RunCache:
         """Keep ``row`` under ``key``."""
         path = self._path(key)
         if path is None:
+            self._memory[key] = dict(row)
             return
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(f".{os.getpid()}.tmp")

@@ -133,6 +133,10 @@ def test_run_cache_keeps_rows_per_key_and_code(tmp_path):
     row = again.get("abc")
     assert row["x"] == 0.1 and row["n"] == 3 and row["s"] == "ok" and math.isnan(row["m"]) and again.reused == 1
     assert RunCache(tmp_path, "other").get("abc") is None
+    memory = RunCache(None, "c0de")
+    assert memory.get("abc") is None
+    memory.put("abc", {"x": 1.0})
+    assert memory.get("abc") == {"x": 1.0} and memory.reused == 1  # in memory only
     assert RunCache(None, "c0de").get("abc") is None
     with pytest.raises(ValueError, match="cache key"):
         cache.put("../x", {})

@@ -166,7 +166,7 @@ def _run_pair(args: tuple[dict[str, Any], str]) -> dict[str, Any]:
 def _run_all(points: list[dict[str, Any]], engine: str, workers: int | None, progress: Progress | None = None,
              what: str = "runs", cache: RunCache | None = None) -> pd.DataFrame:
     """Run ``points`` (those not in ``cache``) on one pool; one row per point, in the order of ``points``."""
-    keys = [cache_key(p, engine) for p in points] if cache is not None and cache.folder else []
+    keys = [cache_key(p, engine) for p in points] if cache is not None else []
     rows: dict[int, dict[str, Any]] = {}
     for i, key in enumerate(keys):
         row = cache.get(key) if cache is not None else None
@@ -176,7 +176,7 @@ def _run_all(points: list[dict[str, Any]], engine: str, workers: int | None, pro
 
     def keep(j: int, row: dict[str, Any]) -> None:
         rows[todo[j]] = row
-        if keys and row.get("status") == "ok":  # a failed run is run again next time
+        if cache is not None and row.get("status") == "ok":  # a failed run is run again next time
             cache.put(keys[todo[j]], row)
 
     def report(done: int, total: int, label: str) -> None:
