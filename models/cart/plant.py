@@ -27,7 +27,7 @@ sweep runs in seconds or minutes.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from pydantic import Field
@@ -39,6 +39,9 @@ from netsim.errors import BuildError
 from netsim.plant import Plant
 from netsim.registry import register
 from netsim.units import Duration, StrictModel
+
+if TYPE_CHECKING:
+    from netsim.env import SimEnv
 
 __all__ = ["CartParams", "CartPlant", "cart", "first_exit"]
 
@@ -70,7 +73,7 @@ class CartPlant(Plant):
         self._u_acc = 0.0
 
     # -------------------------------------------------------------- hooks of Plant
-    def _bind_streams(self, env: Any) -> None:
+    def _bind_streams(self, env: SimEnv) -> None:
         if self.params.friction.realization is None:
             self.friction = Friction.from_rng(self.params.friction, env.rng(FRICTION_STREAM))
         env.components[FRICTION_STREAM] = self.friction

@@ -36,6 +36,7 @@ from netsim.registry import register
 from netsim.units import StrictModel
 
 if TYPE_CHECKING:
+    from netsim.programs.basic import ProgramContext
     from netsim.kernel.job import Job
 
 __all__ = ["CartEncoderIsr", "CartControllerProgram"]
@@ -43,7 +44,7 @@ __all__ = ["CartEncoderIsr", "CartControllerProgram"]
 Body = Generator[Any, Any, None]
 
 
-def _encoder_channel(ctx: Any, name: str) -> Any:
+def _encoder_channel(ctx: ProgramContext, name: str) -> Any:
     enc = ctx.env.components.get(f"io.{name}")
     if enc is None or not hasattr(enc, "tick_ns"):
         raise BuildError(f"'{name}' is not an encoder io channel; add io.{name} with type: encoder")
@@ -62,7 +63,7 @@ class CartEncoderIsr:
         isr_load: bool = Field(True, description="exact mode: account the ISR's CPU time at every tick (periodic "
                                "load of latency + execution per tick); false: only the edge runs take CPU")
 
-    def __init__(self, ctx: Any, params: "CartEncoderIsr.Params") -> None:
+    def __init__(self, ctx: ProgramContext, params: "CartEncoderIsr.Params") -> None:
         from netsim.io import Encoder
 
         self.ctx = ctx
@@ -95,7 +96,7 @@ class CartEncoderIsr:
             self.encoder.start(ctx.env, lambda c, d, s: kernel.invoke_handler(task, data=(c, d, s)))
 
     @staticmethod
-    def _register_load(ctx: Any, base: Any) -> None:
+    def _register_load(ctx: ProgramContext, base: Any) -> None:
         """The ISR's runs at every tick as a periodic load of ``latency + execution`` (exact mode)."""
         ex = ctx.execution
         if ex is not None and ex.const is None:
@@ -148,7 +149,7 @@ class CartControllerProgram:
         observer_variant: Literal["ti4", "ti2"] = "ti4"
         ti_floor: float | None = Field(3.0 / 80.0, description="lower bound of the reduced Ti (s); null: none")
 
-    def __init__(self, ctx: Any, params: "CartControllerProgram.Params") -> None:
+    def __init__(self, ctx: ProgramContext, params: "CartControllerProgram.Params") -> None:
         self.ctx = ctx
         self.p = params
         if ctx.period is None:

@@ -20,7 +20,7 @@ The pose is kept as three floats (the plant is stepped some 2000 times a run; nu
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field
@@ -34,6 +34,9 @@ from netsim.errors import BuildError
 from netsim.plant import Plant
 from netsim.registry import register
 from netsim.units import Duration, StrictModel
+
+if TYPE_CHECKING:
+    from netsim.env import SimEnv
 
 __all__ = ["UnicycleParams", "UnicyclePlant", "unicycle", "NOISE_BLOCK"]
 
@@ -82,7 +85,7 @@ class UnicyclePlant(Plant):
         self._front = Sensor(FRONT_OFFSET, WALL_FRONT, 1.0)
         self._side_sensor = Sensor(self._side, WALL_SIDE, 1.0)
 
-    def _bind_streams(self, env: Any) -> None:
+    def _bind_streams(self, env: SimEnv) -> None:
         var0 = np.array(self.p.pose0_var, dtype=float)
         if np.any(var0 > 0):
             x0 = np.array(self._x) + np.sqrt(var0) * env.rng(f"plant.{self.name}.initial").standard_normal(3)

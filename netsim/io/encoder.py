@@ -35,7 +35,7 @@ from netsim.errors import ConfigError
 
 __all__ = ["Encoder", "encoder_step"]
 
-EdgeCallback = Callable[[int, int, int], None]
+EdgeCallback = Callable[[int, int, int], object]  # what it returns is ignored
 
 
 def encoder_step(base_step: float, q: int = 0) -> float:

@@ -46,6 +46,9 @@ from netsim.kernel.states import BLOCKED, DONE, READY
 if TYPE_CHECKING:  # pragma: no cover
     from netsim.kernel.job import Job
 
+if TYPE_CHECKING:
+    from netsim.kernel.kernel import Kernel
+
 __all__ = ["Monitor", "PROTOCOLS", "refresh_rank", "monitor_killed"]
 
 #: :data:`netsim.kernel.dispatch.NP_RANK`, the rank of a started non-preemptible job (not imported: the
@@ -107,7 +110,7 @@ class Monitor:
         self._ceiling_rank: Any = None
 
     # ----------------------------------------------------------------- requests (called by the interpreter)
-    def enter(self, job: "Job", kernel: Any) -> bool:
+    def enter(self, job: "Job", kernel: Kernel) -> bool:
         """``job`` (running) asks for the monitor: True when it owns it now, False when it must block."""
         if job.is_handler:
             raise SimulationError(f"node '{kernel.name}', handler '{job.task_name}': enter(monitor "
@@ -132,7 +135,7 @@ class Monitor:
             _inherit(owner, job._base_rank)
         return False
 
-    def exit(self, job: "Job", kernel: Any) -> None:
+    def exit(self, job: "Job", kernel: Kernel) -> None:
         """``job`` (running) leaves the monitor: the most urgent waiter becomes the owner."""
         if self.owner is not job:
             holder = "nobody" if self.owner is None else f"'{self.owner.task_name}'"
@@ -142,7 +145,7 @@ class Monitor:
         refresh_rank(job)
 
     # ----------------------------------------------------------------- internals
-    def _take(self, job: "Job", kernel: Any) -> None:
+    def _take(self, job: "Job", kernel: Kernel) -> None:
         self.owner = job
         self.entries += 1
         job._held.append(self)  # type: ignore[union-attr]
@@ -178,7 +181,7 @@ class Monitor:
         best._rank = best._base_rank
         best._ctx.unblock(best, None)
 
-    def _resolve_ceiling(self, kernel: Any) -> tuple[int, Any]:
+    def _resolve_ceiling(self, kernel: Kernel) -> tuple[int, Any]:
         if self.ceiling is not None:
             return (1, self.ceiling)
         policy = kernel.policy
@@ -254,7 +257,7 @@ def refresh_rank(job: "Job") -> None:
             _requeue(job)
 
 
-def monitor_killed(kernel: Any, job: "Job") -> None:
+def monitor_killed(kernel: Kernel, job: "Job") -> None:
     """``job`` is being killed: release the monitors it owns and leave the waiters of the one it waits for."""
     on = job._blocked_on
     if job._state == BLOCKED and type(on) is Monitor:

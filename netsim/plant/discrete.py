@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -13,6 +13,9 @@ from netsim.plant.lti import _LTIBase, _noise_matrix
 from netsim.plant.noise import is_entry_form
 from netsim.plant.shared import NEVER, _vector, matvec, psd_factor
 from netsim.timebase import from_seconds
+
+if TYPE_CHECKING:
+    from netsim.env import SimEnv
 
 __all__ = ["DiscretePlant"]
 
@@ -101,7 +104,7 @@ class DiscretePlant(_LTIBase):
                 "give the LTIDisturbance a dt_ns"
             )
 
-    def _bind_streams(self, env: Any) -> None:
+    def _bind_streams(self, env: SimEnv) -> None:
         self._rng = env.rng(f"plant.{self.name}.process")
 
     def _start(self) -> None:

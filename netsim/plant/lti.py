@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -37,6 +37,9 @@ from netsim.plant.disturbance import _Source, _StateNoise
 from netsim.plant.noise import is_entry_form
 from netsim.plant.shared import NEVER, _vector, as_matrix, matvec, psd_factor
 from netsim.timebase import S
+
+if TYPE_CHECKING:
+    from netsim.env import SimEnv
 
 __all__ = ["LTIPlant", "zoh_transition", "van_loan"]
 
@@ -298,7 +301,7 @@ class LTIPlant(_LTIBase):
         self._y = None  # the state was rebuilt
         self._update_effective_input(self._t)
 
-    def _bind_streams(self, env: Any) -> None:
+    def _bind_streams(self, env: SimEnv) -> None:
         self._rng = env.rng(f"plant.{self.name}.process")
 
     def _state_rates_changed(self) -> None:

@@ -44,7 +44,9 @@ from netsim.registry import register
 from netsim.units import QuietDefaultsModel, StrictModel, Time
 
 if TYPE_CHECKING:
+    from netsim.env import SimEnv
     from netsim.kernel.job import Job
+    from netsim.kernel.kernel import Kernel
     from netsim.scenario.schema import Scenario
 
 __all__ = [
@@ -108,7 +110,7 @@ class ProgramContext:
         The task's ``execution:`` from YAML (programs pass it to ``job.execute``).
     signals : dict
         Scenario signals (references, disturbances) by name: ``t_ns -> float``.
-    scenario : Any
+    scenario : Scenario | None
         The validated scenario (read-only).
     period : int | None
         The task's period in ns (``None`` for aperiodic tasks and handlers).
@@ -116,8 +118,8 @@ class ProgramContext:
         The task's or handler's own validated YAML entry.
     """
 
-    env: Any
-    kernel: Any
+    env: SimEnv
+    kernel: Kernel
     node: str
     task: str
     execution: Any

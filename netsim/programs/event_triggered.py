@@ -51,6 +51,7 @@ from netsim.registry import lookup, register
 from netsim.units import Duration, StrictModel, Time
 
 if TYPE_CHECKING:
+    from netsim.programs.basic import ProgramContext
     from netsim.kernel.job import Job
 
 __all__ = ["EtSensor", "EtController", "PlayoutActuator"]
@@ -97,7 +98,7 @@ class EtSensor:
                 params[key] = defaults[key]
         return params
 
-    def __init__(self, ctx: Any, params: "EtSensor.Params") -> None:
+    def __init__(self, ctx: ProgramContext, params: "EtSensor.Params") -> None:
         self.ctx = ctx
         self.p = p = params
         base: SensorTrigger
@@ -184,7 +185,7 @@ class EtController:
                 params["norm"] = "squared"
         return params
 
-    def __init__(self, ctx: Any, params: "EtController.Params") -> None:
+    def __init__(self, ctx: ProgramContext, params: "EtController.Params") -> None:
         self.ctx = ctx
         self.p = p = params
         factory = lookup("controller", p.design)
@@ -274,7 +275,7 @@ class PlayoutActuator:
                 raise ValueError("mode 'receive' needs 'network': add the network its packets arrive on")
             return self
 
-    def __init__(self, ctx: Any, params: "PlayoutActuator.Params") -> None:
+    def __init__(self, ctx: ProgramContext, params: "PlayoutActuator.Params") -> None:
         self.ctx = ctx
         self.p = params
         if params.mode == "receive" and not params.network:

@@ -36,6 +36,7 @@ from netsim.registry import register
 from netsim.units import StrictModel
 
 if TYPE_CHECKING:
+    from netsim.programs.basic import ProgramContext
     from netsim.kernel.job import Job
 
 __all__ = ["FeedbackScheduler", "AdaptivePID", "retune"]
@@ -66,7 +67,7 @@ class AdaptivePID:
 
     Params = _AdaptivePIDParams
 
-    def __init__(self, ctx: Any, params: _AdaptivePIDParams) -> None:
+    def __init__(self, ctx: ProgramContext, params: _AdaptivePIDParams) -> None:
         self.ctx = ctx
         self.p = params
         self.pid = PID.from_params(params, ctx.period)
@@ -112,7 +113,7 @@ class FeedbackScheduler:
                                  "repeats")
             return self
 
-    def __init__(self, ctx: Any, params: Params) -> None:
+    def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
         self.p = params
         self.nominal: dict[str, int] = {}  # the tasks' periods at the first job (netsim validate checked the names)

@@ -23,13 +23,16 @@ most urgent priority of its users: the tasks whose parameters name it, plus any 
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BeforeValidator, ConfigDict, Field, StringConstraints, model_validator
 
 from netsim.errors import BuildError
 from netsim.scenario.problems import Problem
 from netsim.units import StrictModel
+
+if TYPE_CHECKING:
+    from netsim.kernel.kernel import Kernel
 
 __all__ = ["MailboxDecl", "SemaphoreDecl", "EventDecl", "MonitorDecl", "SyncSpec", "create_sync",
            "sync_ref_problems"]
@@ -116,7 +119,7 @@ def _task_refs(node: Any) -> list[tuple[str, str, str, list[Any]]]:
     return out
 
 
-def create_sync(kernel: Any, node: Any, path: str) -> None:
+def create_sync(kernel: Kernel, node: Any, path: str) -> None:
     """Create the node's declared sync objects on ``kernel.sync`` (``node``: a validated ``NodeSpec``).
 
     Raises

@@ -30,6 +30,7 @@ from netsim.errors import ConfigError
 from netsim.scenario.problems import WARNING, Problem
 
 if TYPE_CHECKING:
+    from netsim.kernel.kernel import Kernel
     from netsim.kernel.job import Job
     from netsim.scenario.schema import Scenario
 
@@ -44,7 +45,7 @@ def _placeholder(job: Job) -> Any:
     yield  # pragma: no cover - makes this a generator function
 
 
-def _body(spec: Any, kernel: Any, node: str, path: str, period: int | None) -> Any:
+def _body(spec: Any, kernel: Kernel, node: str, path: str, period: int | None) -> Any:
     return _placeholder
 
 
