@@ -198,7 +198,10 @@ def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = N
             error = hit[1]
     from netsim.programs.design_summary import run_warnings as design_warnings  # D's hook (issue 26 s4)
 
-    warnings = design_warnings(sim) + _unrecorded(scenario, sim.env.recorder)
+    # the unstable-nominal-loop warnings go to meta.json only: loading the scenario logged them already
+    # (validate's static check, netsim.scenario.static_build), and the console showed each twice
+    said = design_warnings(sim)
+    warnings = _unrecorded(scenario, sim.env.recorder)
     # a program's own warnings about its setting (e.g. netsim.models.unicycle's filter and plant disagreeing)
     warnings += [w for prog in getattr(sim, "programs", {}).values() for w in getattr(prog, "build_warnings", ())]
     from netsim.results.verdict import apply_finding, judge_signals  # is the loop stable?
@@ -206,6 +209,7 @@ def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = N
     warnings += notes  # the loop's growth and verdict.bound
     for text in warnings:
         log.warning("%s: %s", scenario.name, text)
+    warnings = said + warnings
     result.meta.update(
         {
             "status": status,
