@@ -44,7 +44,8 @@ class Link(Network["Link.Params"]):
         p = self.params
         self._rate = p.bitrate
         self._draw = make_delay_sampler(p.delay, self.env.rng(f"network.{self.name}.delay"))
-        self._constant = p.delay.value if isinstance(p.delay, ConstantDelay) else None
+        delay: object = p.delay  # (DelaySpec is an alias the checker cannot narrow; a plain object it can)
+        self._constant = delay.value if isinstance(delay, ConstantDelay) else None
         self._reorder = bool(p.reorder)
         self._last_arrival: dict[tuple[str, str | None], int] = {}
         self._tx: dict[str, Transmitter] = {}
