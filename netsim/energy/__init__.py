@@ -14,12 +14,13 @@ from netsim.energy.params import Battery, CpuPower, EnergyModel, RadioPower
 from netsim.errors import BuildError
 
 if TYPE_CHECKING:
+    from netsim.env import SimEnv
     from netsim.scenario.schema import Scenario
 
 __all__ = ["EnergyModel", "CpuPower", "RadioPower", "Battery", "EnergyMeter", "attach_energy"]
 
 
-def attach_energy(scenario: Scenario, env: Any, kernels: dict[str, Any], networks: dict[str, Any]) -> dict[str, EnergyMeter]:
+def attach_energy(scenario: Scenario, env: SimEnv, kernels: dict[str, Any], networks: dict[str, Any]) -> dict[str, EnergyMeter]:
     """An :class:`EnergyMeter` per node of ``scenario`` with ``energy:`` (in ``env.components["energy.<node>"]``).
 
     Raises

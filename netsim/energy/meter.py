@@ -19,10 +19,14 @@ A node without a battery costs no event at all: its energy is read once, after t
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from netsim.energy.params import EnergyModel
 from netsim.timebase import MAX_TIME, S
+
+if TYPE_CHECKING:
+    from netsim.kernel.kernel import Kernel
+    from netsim.env import SimEnv
 
 __all__ = ["EnergyMeter"]
 
@@ -51,7 +55,7 @@ class EnergyMeter:
         Battery checks run (events on the loop).
     """
 
-    def __init__(self, env: Any, node: str, kernel: Any, model: EnergyModel, media: list[Any]) -> None:
+    def __init__(self, env: SimEnv, node: str, kernel: Kernel, model: EnergyModel, media: list[Any]) -> None:
         self.env = env
         self.node = node
         self.kernel = kernel

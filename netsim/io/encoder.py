@@ -28,10 +28,13 @@ from __future__ import annotations
 
 import math
 from heapq import heappush
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from netsim.env import NORMAL
 from netsim.errors import ConfigError
+
+if TYPE_CHECKING:
+    from netsim.env import SimEnv
 
 __all__ = ["Encoder", "encoder_step"]
 
@@ -153,7 +156,7 @@ class Encoder:
             self._on_edge(count, self.direction, t)
 
     # ---------------------------------------------------------------- life cycle
-    def start(self, env: Any, on_edge: EdgeCallback | None = None) -> "Encoder":
+    def start(self, env: SimEnv, on_edge: EdgeCallback | None = None) -> "Encoder":
         """Read the initial count now and start detecting edges; ``on_edge(count, direction, stamp_ns)``."""
         self.env = env
         self._sim = env.sim
