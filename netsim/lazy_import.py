@@ -3,7 +3,14 @@
 ``pd = lazy_module("pandas")`` at the top of a module reads like ``import pandas as pd``, but pandas is
 imported only when an attribute of ``pd`` is first read (a case-study report module is imported by
 ``netsim list`` and ``netsim docs``, which never build a table; issue 19: nothing imported that a command
-does not use). Annotations are unaffected under ``from __future__ import annotations``.
+does not use). Annotations are unaffected under ``from __future__ import annotations``; for the type checker
+(.ci/mypy), which cannot take ``pd.DataFrame`` in an annotation from a variable, import the real module for it
+alone::
+
+    if TYPE_CHECKING:
+        import pandas as pd
+    else:
+        pd = lazy_module("pandas")
 """
 
 from __future__ import annotations
