@@ -266,9 +266,11 @@ def _scenario_value(case: int, path: str) -> Any:
     return node
 
 
-def _run_gpi(workers: int | None, sweep: str = "hdd_gpi_sweep", folder: str = "gpi") -> tuple[pd.DataFrame, dict]:
-    """Run (or resume, in ``reports/hdd/runs/<folder>``) a GPI sweep; return its summary and run facts."""
-    res = run_study_sweep(shipped_scenarios() / f"{sweep}.yaml", Path("reports") / "hdd" / "runs" / folder,
+def _run_gpi(workers: int | None, sweep: str = "hdd_gpi_sweep", folder: str = "gpi",
+             runs: Path = Path("reports") / "hdd" / "runs") -> tuple[pd.DataFrame, dict]:
+    """Run (or resume, in ``<runs>/<folder>``: the report's own ``runs/``) a GPI sweep; return its summary and
+    run facts."""
+    res = run_study_sweep(shipped_scenarios() / f"{sweep}.yaml", Path(runs) / folder,
                           workers=workers, complete=False)  # a point without a result: NaN on the surface
     summ = res.summary
     keep = [c for c in ("sigma_s", "sigma_c", "et.GPI", "et.Uc", "et.Ua", "et.NE", "et.Nsc", "et.Nca", "et.N_max",
@@ -544,17 +546,19 @@ def _readme(table: pd.DataFrame, readings: pd.DataFrame, texts: dict[str, str], 
     return "\n".join(lines) + "\n"
 
 
-def collect(names=None, *, gpi: bool = True, workers: int | None = 2):
+def collect(names=None, *, gpi: bool = True, workers: int | None = 2,
+            runs: Path = Path("reports") / "hdd" / "runs"):
     """Run the variants (default: all) and the GPI sweeps; return ``(results, rows, sweeps)``.
 
-    ``sweeps`` maps ``"gpi"`` (Case 3 base) and ``"gpi4"`` (Case 4 base) to ``(summary, run facts)``.
+    ``sweeps`` maps ``"gpi"`` (Case 3 base) and ``"gpi4"`` (Case 4 base) to ``(summary, run facts)``; the sweeps'
+    run folders are kept (and resumed) under ``runs``.
     """
     results = _run_variants(list(VARIANTS) if names is None else names)
     rows = {k: _row(r) for k, r in results.items()}
     sweeps = {}
     if gpi:
-        sweeps["gpi"] = _run_gpi(workers)
-        sweeps["gpi4"] = _run_gpi(workers, "hdd_gpi_sweep_case4", "gpi_case4")
+        sweeps["gpi"] = _run_gpi(workers, runs=runs)
+        sweeps["gpi4"] = _run_gpi(workers, "hdd_gpi_sweep_case4", "gpi_case4", runs=runs)
     return results, rows, sweeps
 
 
@@ -565,7 +569,7 @@ def hdd_report(out_dir: Path | None = None, plots: bool = True) -> dict[str, pd.
 
     out = Path(out_dir) if out_dir is not None else Path("reports") / "hdd"
     out.mkdir(parents=True, exist_ok=True)
-    results, rows, sweeps = collect()
+    results, rows, sweeps = collect(runs=out / "runs")  # with --out, the sweeps' runs go there too
     gdf, gmeta = sweeps.get("gpi", (None, {}))
     g4, g4meta = sweeps.get("gpi4", (None, {}))
     q = _quote(rows, gdf, gmeta, g4, g4meta)
