@@ -112,6 +112,24 @@ def test_a_model_exchange_fmu_integrated_by_netsim_follows_the_same_ss_plant(tmp
         assert err <= 1e-6 * scale, (name, err, scale)
 
 
+def test_a_step_disturbance_on_the_fmu_input_switches_exactly_as_on_the_ss_plant(tmp_path):
+    # a load step at 0.3037 s (between the record instants and the controller's samples) added to u: the plant
+    # splits its doStep at the jump, as the LTI plant splits its matrix exponential
+    data = _scenario()
+    data["duration"] = "0.6 s"
+    data["signals"]["d"] = {"type": "step", "at": "303.7 ms", "value": -0.25}
+    data["plant"]["disturbances"] = {"u": "d"}
+    fmu = netsim.run(data, out=tmp_path / "fmu", allow_plugins=True)
+    twin = _ss_twin(data, 1000.0, 1.0)
+    twin["plant"]["disturbances"] = {"u": "d"}
+    lti = netsim.run(twin, out=tmp_path / "ss")
+    y_fmu, y_ss = fmu.signal("theta").to_numpy(), lti.signal("theta").to_numpy()
+    assert float(np.nanmax(np.abs(y_fmu - y_ss))) <= 1e-9 * float(np.nanmax(np.abs(y_ss)))
+    no_step = netsim.run({**data, "plant": {**data["plant"], "disturbances": {}}}, out=tmp_path / "none",
+                         allow_plugins=True)
+    assert float(np.nanmax(np.abs(no_step.signal("theta").to_numpy() - y_fmu))) > 1e-3  # the step mattered
+
+
 def test_the_step_response_is_the_hand_computed_solution_at_uneven_steps():
     # theta' = omega, omega' = -a omega + k u from rest under u = 1 (the solution by hand):
     #   omega(t) = (k / a) (1 - exp(-a t)),  theta(t) = (k / a) (t - (1 - exp(-a t)) / a)
