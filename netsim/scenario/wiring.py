@@ -10,11 +10,14 @@ message receptions. ``netsim validate`` runs the same functions with placeholder
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from netsim.env import SimEnv
 from netsim.errors import BuildError, ConfigError, NetsimError
 from netsim.kernel.task import HandlerSpec, TaskSpec
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["BodyFn", "wire_kernels", "bind_receivers", "build_networks", "checked_call", "SPEC_FIELDS"]
 
@@ -22,7 +25,7 @@ __all__ = ["BodyFn", "wire_kernels", "bind_receivers", "build_networks", "checke
 BodyFn = Callable[[Any, Any, str, str, "int | None"], Any]
 
 
-def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
+def wire_kernels(scenario: Scenario, env: SimEnv, body: BodyFn,
                  attach: Callable[[Any], None] | None = None) -> tuple[dict[str, Any], list[tuple[str, str, str]]]:
     """One kernel per node with its handlers, tasks and triggers, exactly as
     :func:`~netsim.scenario.builder.build` creates them.
@@ -77,19 +80,19 @@ def wire_kernels(scenario: Any, env: SimEnv, body: BodyFn,
             trig = h.trigger
             if trig is None:
                 continue
-            if trig.kind == "timer":
+            if trig.timer is not None:  # exactly one of the four is given (HandlerTrigger)
                 checked_call(kernel.create_timer, f"{hpath}.trigger", f"{h.name}_timer", h.name,
                       period=trig.timer.period, start=trig.timer.start)
-            elif trig.kind == "external":
+            elif trig.external is not None:
                 checked_call(kernel.create_trigger, f"{hpath}.trigger", h.name, h.name,
                       min_interarrival=trig.external.min_interarrival)
-            elif trig.kind == "periodic_load":
+            elif trig.periodic_load is not None:
                 # the validator made sure the execution time is constant (an int of ns, or {dist: constant})
                 execution = h.execution if isinstance(h.execution, int) else getattr(h.execution, "value", 0)
                 checked_call(kernel.create_periodic_load, f"{hpath}.trigger", h.name,
                       period=trig.periodic_load.period, execution=h.latency + int(execution or 0),
                       start=trig.periodic_load.start, handler=h.name)
-            else:
+            elif trig.on_message is not None:
                 bindings.append((node_name, trig.on_message, h.name))
     return kernels, bindings
 
@@ -129,7 +132,7 @@ def checked_call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -
         raise BuildError(str(exc), path=path) from exc
 
 
-def build_networks(scenario: Any, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:
+def build_networks(scenario: Scenario, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:
     """The scenario's networks (``make_network``), each attached to its nodes' kernels."""
     if not scenario.networks:
         return {}
