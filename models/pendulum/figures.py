@@ -10,13 +10,16 @@ from the report's own data (the three closed-loop runs again, ``delay_cost.csv``
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from netsim.lazy_import import lazy_module
 
-pd = lazy_module("pandas")
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")
 
 __all__ = ["ESTIMATOR_NAMES", "closed_loop_lqr_figure", "delay_cost_figure", "closed_loop_figure", "delay_figure"]
 
