@@ -29,13 +29,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from netsim.casestudy import fmt
 from netsim.lazy_import import lazy_module
 
-pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = [
     "OSC_THRESHOLD",
@@ -260,7 +264,7 @@ def _claim_tracking(f2: pd.DataFrame) -> dict[str, str]:
     ctrls = sorted(f2.controller.unique())
     parts, verdict_by = [], {}
     for w in (40, 80):
-        best = {col: min(ctrls, key=lambda c, col=col: _mean(f2, col, controller=c, wc=w))
+        best = {col: min(ctrls, key=lambda c: _mean(f2, col, controller=c, wc=w))
                 for col in ("Ev_jmap", "Ev", "Ev_jmap0")}
         verdict_by[w] = best
         parts.append(f"wc={w}: best by JMAP Ev {best['Ev_jmap']} "
@@ -318,7 +322,7 @@ def _claims_quant(fq: pd.DataFrame) -> list[dict[str, str]]:
             "integral gain than the Pure PI, and in our model it reacts to each quantization step at least "
             "as strongly; the paper may have used the Ti/2, 2 Tfilter variant for this experiment."))
     qs = sorted(int(q) for q in fq.q.unique())
-    am = {c: min(qs, key=lambda qq, c=c: sq(c, qq)) for c in ("position_prediction", "full_event")}
+    am = {c: min(qs, key=lambda qq: sq(c, qq)) for c in ("position_prediction", "full_event")}
     ok6 = am["full_event"] in (4, 5, 6) and am["position_prediction"] in (3, 4, 5)
     evs = {qq: sq("full_event", qq, "Ev_jmap") for qq in qs}
     ev5 = evs.get(5, math.nan) / min(evs.values())

@@ -22,7 +22,7 @@ import math
 import os
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,7 +35,10 @@ from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import scenario_path
 
-pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["cart_report", "run_point", "fig2_points", "quant_points", "sensitivity_points", "instability_points",
            "FRICTIONS", "SEEDS_INSTABILITY", "run_cache", "NUMERIC_MODULES"]
@@ -115,8 +118,9 @@ def _overrides(point: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"unknown friction label '{label}'; use one of {', '.join(FRICTIONS)}")
     ov = {f"{CTRL}.controller": point["controller"], f"{CTRL}.wc": point["wc"], f"{CTRL}.vref": point["vref"],
           f"{ISR}.q": point["q"], "duration": f"{duration} s"}
-    if FRICTIONS[label]:
-        ov["plant.params.friction"] = dict(FRICTIONS[label])
+    friction = FRICTIONS[label]
+    if friction:
+        ov["plant.params.friction"] = dict(friction)
     return ov
 
 
@@ -146,15 +150,15 @@ def _run_point(point: dict[str, Any], engine: str) -> dict[str, Any]:
         duration = DURATION_FIG2 if point["vref"] >= 0.6 else DURATION_QUANT
         ctrl = make_controller(point["controller"], point["wc"], Quantizer.from_bits(point["q"], rounding="floor"))
         fp = FrictionParams.model_validate(ov.get("plant.params.friction", {}))
-        run = simulate(ctrl, Friction.draw(fp, seed=point["seed"]), vref=point["vref"], q=point["q"],
+        sim = simulate(ctrl, Friction.draw(fp, seed=point["seed"]), vref=point["vref"], q=point["q"],
                        duration=duration, tail=duration, delay_ns=CONTROL_DELAY_NS, rounding="floor")
-        m = cart_metrics(run.t, run.p, run.v, run.u, point["vref"], v_hat=run.v_hat, edge_times=run.edge_times,
-                         tfilter=ctrl.tuning.Tfilter, counts_full=np.floor(run.p / 5e-5 + 0.5))
+        m = cart_metrics(sim.t, sim.p, sim.v, sim.u, point["vref"], v_hat=sim.v_hat, edge_times=sim.edge_times,
+                         tfilter=ctrl.tuning.Tfilter, counts_full=np.floor(sim.p / 5e-5 + 0.5))
         return {**point, **m, "status": "ok"}
     from netsim.runner import run
 
     res = run(str(SCENARIO), write=False, seed=point["seed"], overrides=ov)
-    m = {k[5:]: float(v) for k, v in res.metrics.items() if k.startswith("cart.")}
+    m = {str(k)[5:]: float(v) for k, v in res.metrics.items() if str(k).startswith("cart.")}  # names are str
     m["cpu_utilization"] = float(res.metrics.get("cpu.cart.utilization", math.nan))
     return {**point, **m, "status": res.status}
 
@@ -326,8 +330,8 @@ def _readme(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, claims: list[dict[str
         "| claim | verdict | numbers | why not / remark |",
         "|---|---|---|---|",
     ]
-    for c in claims:
-        lines.append(f"| {c['claim']} | **{c['verdict']}** | {c['numbers']} | {c['why']} |")
+    for cl in claims:
+        lines.append(f"| {cl['claim']} | **{cl['verdict']}** | {cl['numbers']} | {cl['why']} |")
     if not sens.empty:
         lines += ["", "## Sensitivity to the friction model (wc = 20, 40, 80; seeds " + ", ".join(map(str, seeds))
                   + ")", "", "| friction | runs | " + " | ".join(t for _, t in _SENS_COLS) + " |",
