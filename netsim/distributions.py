@@ -37,7 +37,7 @@ from __future__ import annotations
 import csv
 import difflib
 from pathlib import Path
-from typing import Annotated, Any, Callable, Literal, Sequence
+from typing import Annotated, Any, Callable, Literal, Sequence, Union, get_args
 
 import numpy as np
 from pydantic import (
@@ -395,22 +395,23 @@ def dist_tag(value: Any) -> str | None:
     return f"{TAG_MARK}{dist}" if dist in DISTS else None
 
 
-#: The members of the family that YAML can name, each under its tag.
-MEMBERS = (
-    Annotated[Constant, Tag(f"{TAG_MARK}constant")],
-    Annotated[Uniform, Tag(f"{TAG_MARK}uniform")],
-    Annotated[Normal, Tag(f"{TAG_MARK}normal")],
-    Annotated[Exponential, Tag(f"{TAG_MARK}exponential")],
-    Annotated[ShiftedGamma, Tag(f"{TAG_MARK}shifted_gamma")],
-    Annotated[Empirical, Tag(f"{TAG_MARK}empirical")],
-)
-
-#: A random time as a scenario writes it: a time (constant) or ``{dist: ...}`` (see the module notes).
-DistributionSpec = Annotated[  # type: ignore[misc]
-    MEMBERS[0] | MEMBERS[1] | MEMBERS[2] | MEMBERS[3] | MEMBERS[4] | MEMBERS[5],  # type: ignore[valid-type]
+#: A random time as a scenario writes it: a time (constant) or ``{dist: ...}`` (see the module notes). The members
+#: are spelt out here (not built from a tuple) so that the type checker reads the alias as a union of the classes.
+DistributionSpec = Annotated[
+    Union[
+        Annotated[Constant, Tag(f"{TAG_MARK}constant")],
+        Annotated[Uniform, Tag(f"{TAG_MARK}uniform")],
+        Annotated[Normal, Tag(f"{TAG_MARK}normal")],
+        Annotated[Exponential, Tag(f"{TAG_MARK}exponential")],
+        Annotated[ShiftedGamma, Tag(f"{TAG_MARK}shifted_gamma")],
+        Annotated[Empirical, Tag(f"{TAG_MARK}empirical")],
+    ],
     Discriminator(dist_tag, custom_error_type="time_distribution", custom_error_message="bad time distribution"),
     BeforeValidator(shorthand),
 ]
+
+#: The members of the family that YAML can name, each under its tag (the union of :data:`DistributionSpec`).
+MEMBERS: tuple[Any, ...] = get_args(get_args(DistributionSpec)[0])
 
 _ADAPTER: TypeAdapter[Any] = TypeAdapter(DistributionSpec)
 
@@ -425,7 +426,7 @@ def _first_error(exc: ValidationError, spec: Any) -> str:
     if kind == "missing":
         return f"execution time dist '{dist}' needs '{loc[-1]}'"
     if kind == "extra_forbidden":
-        allowed = [k for k in type(_member(dist)).model_fields if k != "dist"]
+        allowed = [k for k in _member(dist).model_fields if k != "dist"]
         close = difflib.get_close_matches(loc[-1], allowed, n=1)
         hint = f"; did you mean '{close[0]}'?" if close else f" (allowed: {', '.join(allowed)})"
         return f"execution time dist '{dist}' has no key '{loc[-1]}'{hint}"
@@ -436,10 +437,12 @@ def _first_error(exc: ValidationError, spec: Any) -> str:
     return f"execution time {where}: {msg}".replace("time : ", "time: ")
 
 
-def _member(dist: Any) -> Distribution:
-    cls = {"constant": Constant, "uniform": Uniform, "normal": Normal, "exponential": Exponential,
-           "shifted_gamma": ShiftedGamma, "gamma": ShiftedGamma, "empirical": Empirical}.get(dist, Constant)
-    return cls.model_construct()
+def _member(dist: Any) -> type[Distribution]:
+    """The class of the member named ``dist`` (:class:`Constant` for an unknown name)."""
+    classes: dict[str, type[Distribution]] = {
+        "constant": Constant, "uniform": Uniform, "normal": Normal, "exponential": Exponential,
+        "shifted_gamma": ShiftedGamma, "gamma": ShiftedGamma, "empirical": Empirical}
+    return classes.get(dist, Constant)
 
 
 def load_delays_csv(path: str | Path, column: str | int = 0, unit: str = "s") -> np.ndarray:

@@ -105,6 +105,7 @@ class Arrivals:
             gap = spec.period
         else:
             extra = spec.extra_interarrival
+            assert spec.min_interarrival is not None  # no period: a sporadic task, which has one (TaskSpec.checked)
             gap = spec.min_interarrival + (0 if extra is None else extra.draw(task.rng))
         heappush(self._queue, (now + gap, NORMAL, next(self._eid), (self._on_timed_release, task)))
         jitter = spec.release_jitter

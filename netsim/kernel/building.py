@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING, Any, Callable
 from netsim.errors import BuildError
 from netsim.kernel.events import NORMAL, schedule_call
 from netsim.kernel.load import PeriodicLoad
-from netsim.kernel.task import (Handler, HandlerSpec, Task, TaskSpec, check_body, check_time, did_you_mean,
-                                task_error)
+from netsim.kernel.task import (CheckedTask, Handler, HandlerSpec, Task, TaskSpec, check_body, check_time,
+                                did_you_mean, task_error)
 from netsim.kernel.timers import Timer, Trigger
 from netsim.timebase import format_time
 
@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["KernelBuilder", "task_spec"]
 
 
-def task_spec(node: str, name: str, **fields: Any) -> TaskSpec:
+def task_spec(node: str, name: str, **fields: Any) -> CheckedTask:
     """``TaskSpec(name, **fields).checked(node)``: the checked description of a task, as
     :meth:`KernelBuilder.create_task` makes it (fields in integer ns; a scenario's task is checked as it is).
 
@@ -114,11 +114,11 @@ class KernelBuilder:
         if name in self.tasks or name in self.handlers:
             raise task_error(node, name, "name", "is already used by another task or handler on this node")
         check_body(node, name, body)
-        spec = spec.checked(node)
-        self.policy.check(node, spec)
-        task = Task(spec, body, data)
+        checked = spec.checked(node)
+        self.policy.check(node, checked)
+        task = Task(checked, body, data)
         self.tasks[name] = task
-        if spec.self_released:
+        if checked.self_released:
             self._schedule_first_release(task)
         return task
 

@@ -37,7 +37,7 @@ import math
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from netsim.errors import BuildError, ConfigError
-from netsim.kernel.task import TaskSpec, task_error
+from netsim.kernel.task import CheckedTask, task_error
 from netsim.registry import entries, lookup, register
 from netsim.timebase import format_time
 
@@ -76,7 +76,7 @@ class Policy(abc.ABC):
     preemptive: ClassVar[bool] = True
     static: ClassVar[bool] = False
 
-    def check(self, node: str, spec: TaskSpec) -> None:
+    def check(self, node: str, spec: CheckedTask) -> None:
         """Reject a task this policy cannot schedule (raise via :func:`~netsim.kernel.task.task_error`)."""
 
     @abc.abstractmethod
@@ -97,7 +97,7 @@ class FixedPriority(Policy):
     name = "fp"
     static = True
 
-    def check(self, node: str, spec: TaskSpec) -> None:
+    def check(self, node: str, spec: CheckedTask) -> None:
         if spec.priority is None:
             raise task_error(node, spec.name, "priority",
                              f"is required under policy '{self.name}'; add e.g. 'priority: 1' (lower is more "
@@ -110,7 +110,7 @@ class FixedPriority(Policy):
 class _Constrained(Policy):
     """Shared check: relative deadline must not exceed the period (the policy's optimality assumption)."""
 
-    def check(self, node: str, spec: TaskSpec) -> None:
+    def check(self, node: str, spec: CheckedTask) -> None:
         period = spec.period if spec.period is not None else spec.min_interarrival  # sporadic: the minimum gap
         if period is not None and spec.deadline is not None and spec.deadline > period:
             what = "period" if spec.period is not None else "min_interarrival"

@@ -19,7 +19,7 @@ import re
 from collections import deque
 from collections.abc import Callable, Iterable
 import dataclasses
-from typing import Annotated, Any, Literal, Union
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, PrivateAttr, model_validator
 
@@ -27,6 +27,9 @@ from netsim.distributions import Distribution, DistributionSpec, Empirical
 from netsim.errors import BuildError, ConfigError
 from netsim.timebase import format_time
 from netsim.units import Duration, Time
+
+if TYPE_CHECKING:  # the classes made below, as the type checker reads them
+    from netsim.kernel.checked import CheckedHandler, CheckedTask
 
 __all__ = ["RELEASE_KINDS", "SET_PERIOD_RULES", "CheckedHandler", "CheckedTask", "SetPeriodRule", "Handler", "HandlerSpec", "Task", "TaskSpec", "check_body", "check_time", "did_you_mean", "task_error"]
 
@@ -330,14 +333,14 @@ def _replaced(self: Any, **changes: Any) -> Any:
 
 
 #: The checked form of a :class:`TaskSpec` (:meth:`TaskSpec.checked`): the same fields, integer ns, defaults filled,
-#: as a frozen slotted record. The kernel reads it at every release; a pydantic model's attribute reads cost
-#: about 4x a slot's (its ``__getattr__`` hook keeps CPython from specialising them), which the kernel benchmark
-#: showed. Made only by ``checked`` (its fields are TaskSpec's, not a second list).
-CheckedTask = dataclasses.make_dataclass(
-    "CheckedTask", [(name, Any) for name in TaskSpec.model_fields], frozen=True, slots=True,
-    namespace={"__module__": __name__, "__doc__": "A checked TaskSpec (see TaskSpec.checked).",
-               "release_kind": TaskSpec.release_kind, "release_network": TaskSpec.release_network,
-               "self_released": TaskSpec.self_released, "replaced": _replaced})
+#: as a frozen slotted record, read at every release (a pydantic model's attribute reads cost about 4x a slot's:
+#: kernel benchmark). Made by ``checked`` from TaskSpec's fields; the type checker reads :mod:`netsim.kernel.checked`.
+if not TYPE_CHECKING:
+    CheckedTask = dataclasses.make_dataclass(
+        "CheckedTask", [(name, Any) for name in TaskSpec.model_fields], frozen=True, slots=True,
+        namespace={"__module__": __name__, "__doc__": "A checked TaskSpec (see TaskSpec.checked).",
+                   "release_kind": TaskSpec.release_kind, "release_network": TaskSpec.release_network,
+                   "self_released": TaskSpec.self_released, "replaced": _replaced})
 
 
 def _distribution(node: str, task: str, field: str, value: Any) -> Any:
@@ -404,9 +407,10 @@ class HandlerSpec(BaseModel):
 
 
 #: The checked form of a :class:`HandlerSpec` (read at every invocation; see :data:`CheckedTask`).
-CheckedHandler = dataclasses.make_dataclass(
-    "CheckedHandler", [(name, Any) for name in HandlerSpec.model_fields], frozen=True, slots=True,
-    namespace={"__module__": __name__, "__doc__": "A checked HandlerSpec (see HandlerSpec.checked)."})
+if not TYPE_CHECKING:
+    CheckedHandler = dataclasses.make_dataclass(
+        "CheckedHandler", [(name, Any) for name in HandlerSpec.model_fields], frozen=True, slots=True,
+        namespace={"__module__": __name__, "__doc__": "A checked HandlerSpec (see HandlerSpec.checked)."})
 
 
 def _python_init(self: BaseModel, args: tuple[Any, ...], fields: dict[str, Any]) -> None:
@@ -447,7 +451,7 @@ class Task:
         "wcet_handler",
     )
 
-    def __init__(self, spec: TaskSpec, body: Callable[[Any], Any], data: Any) -> None:
+    def __init__(self, spec: CheckedTask, body: Callable[[Any], Any], data: Any) -> None:
         self.spec = spec
         self.name = spec.name
         self.body = body
@@ -482,7 +486,7 @@ class Handler:
         "trace_state",
     )
 
-    def __init__(self, spec: HandlerSpec, body: Callable[[Any], Any], data: Any) -> None:
+    def __init__(self, spec: CheckedHandler, body: Callable[[Any], Any], data: Any) -> None:
         self.spec = spec
         self.name = spec.name
         self.body = body
