@@ -223,8 +223,8 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
     smoother = r5["rough_y_straight"] < b["rough_y_straight"]
     slower = r5["rmse_y_6to7"] > b["rmse_y_6to7"]
     dbias = r5["bias_y_turn"] - b["bias_y_turn"]
-    se = math.hypot(r5["bias_se_y_turn"], b["bias_se_y_turn"])
-    biased = abs(dbias) > 2 * se
+    se_d = math.hypot(r5["bias_se_y_turn"], b["bias_se_y_turn"])
+    biased = abs(dbias) > 2 * se_d
 
     def _same(key: str) -> str:
         vals = {w: v[key] for w, v in verdicts.items()}
@@ -244,7 +244,7 @@ def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:
           f"{'yes' if smoother else 'no'} (roughness y {_f(r5['rough_y_straight'] * 1e3)} mm; {_same('smoother')}). "
           f"Slower after the turn: {'yes' if slower else 'no'} (RMS y in the first second "
           f"{_f(r5['rmse_y_6to7'] * 1e3)} mm; {_same('slower')}). Bias of y in the "
-          f"turn differs from the baseline's by {_f(dbias * 1e3)} +- {_f(2 * se * 1e3, 2)} mm (two standard errors): "
+          f"turn differs from the baseline's by {_f(dbias * 1e3)} +- {_f(2 * se_d * 1e3, 2)} mm (two standard errors): "
           f"{'a bias' if biased else 'no bias beyond the Monte-Carlo error'}. In the blackout no filter corrects "
           "anything, so R cannot create a bias there; 5R leaves more of the initial error when the sensors go off "
           "(RMS y straight above).",

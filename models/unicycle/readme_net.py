@@ -497,8 +497,8 @@ def delay_aware_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
     # where the loop with the told filter still holds: is its estimate better (theta band coverage)?
     better = total = 0
     for (net, sens), g in d.groupby(["network", "sensors"], sort=True):
-        lim = stability_limits(g[g["filter"] == "told the delay"])["lost_ms"]
-        for ms, h in g[(g["_ms"] > 0) & ((g["_ms"] < lim) if not math.isnan(lim) else True)].groupby("_ms"):
+        lost_ms = stability_limits(g[g["filter"] == "told the delay"])["lost_ms"]
+        for ms, h in g[(g["_ms"] > 0) & ((g["_ms"] < lost_ms) if not math.isnan(lost_ms) else True)].groupby("_ms"):
             cov = h.groupby("filter")["unicycle.cover_theta_all"].mean()
             if len(cov) == 2:
                 total += 1

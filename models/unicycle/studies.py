@@ -16,9 +16,10 @@ import numpy as np
 
 from netsim.casestudy import run_all
 from netsim.models.unicycle.design import LQR_Q, LQR_R, PHASES, Phase, Trajectory, cart_frame_error, error_model, lqr_gain
+from netsim.models.unicycle.design import Law
 from netsim.models.unicycle.metrics import run_measures
 from netsim.models.unicycle.model import (
-    FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, SIDE_PRINTED, WALL_FRONT, WALL_SIDE, jac_A, measure,
+    FRONT_OFFSET, P0, Q_REPORT, R_REPORT, SIDE_DERIVED, SIDE_PRINTED, WALL_FRONT, WALL_SIDE, Side, jac_A, measure,
     measure_jacobian,
 )
 from netsim.models.unicycle.reference import simulate
@@ -108,9 +109,9 @@ def observability(phase: Phase, theta: float, side: str = "derived") -> dict[str
             "sigma_min_O": float(sv[min(2, len(sv) - 1)] if len(sv) >= 3 else 0.0)}
 
 
-def lqr_facts() -> dict[str, Any]:
+def lqr_facts() -> dict[float, dict[str, Any]]:
     """Gains, closed-loop eigenvalues and the printed-sign design for each ``v_ref`` of the trajectory."""
-    out: dict[str, Any] = {}
+    out: dict[float, dict[str, Any]] = {}
     for v in sorted({p.v for p in PHASES}, reverse=True):
         K = lqr_gain(v)
         A, B = error_model(v)
@@ -120,7 +121,7 @@ def lqr_facts() -> dict[str, Any]:
     return out
 
 
-def lqr_noise_free(law: str = "lqr", a_sign: str = "derived") -> dict[str, float]:
+def lqr_noise_free(law: Law = "lqr", a_sign: Side = "derived") -> dict[str, float]:
     """The tracking law on the noise-free cart with a perfect initial estimate (numpy loop): cart-frame errors."""
     o = simulate(0, law=law, a_sign=a_sign, Q_true=np.zeros((3, 3)), R_true=np.zeros(2), P0_=P0 * 1e-12,
                  Q_filter=Q_REPORT, R_filter=R_REPORT)
