@@ -102,6 +102,7 @@ class _Cascade:
             return
         side = self.side
         est, ctrl, dob, ref = side.est, side.ctrl, side.dob, side.reference
+        assert est is not None  # a cascade is made only with an estimator (ControlSide._estimated)
         xs, cs, ds, ups = self.xs, self.cs, self.ds, self.ups
         ctrl.restore(cs[-1])
         if dob is not None:
@@ -263,6 +264,7 @@ class ControlSide:
     def _state_at(self, k: int) -> tuple[np.ndarray, int]:
         """Prior at ``k`` (and leave controller/DOB states as they were at ``k``)."""
         est = self.est
+        assert est is not None  # the estimated mode (on_measurement)
         if self.k_ls is None:  # first measurement: the initial guess propagated with the initial action
             x = self._x0.copy()
             for j in range(k):
@@ -270,6 +272,7 @@ class ControlSide:
             return x, 1
         N = k - self.k_ls
         casc = self._casc
+        assert casc is not None  # set with k_ls by _estimated
         L = casc.h + 1
         i = min(N, L)
         # everything that may compute (older) cascades first: they use the shared controller and DOB
@@ -301,11 +304,12 @@ class ControlSide:
         after the next arrival has taken its prior.
         """
         xs = self._traj_x
+        casc, est = self._casc, self.est
+        assert casc is not None and est is not None  # called by _state_at, after the first arrival
         if xs is None:
-            return self._casc.state(i)[0]
+            return casc.state(i)[0]
         if i >= len(xs):
-            est = self.est
-            A, b, value, k0 = est.A, est._b, self.mirror.value, self._casc.k
+            A, b, value, k0 = est.A, est._b, self.mirror.value, casc.k
             x = xs[-1]
             for l in range(len(xs) - 1, i):
                 x = A @ x + b * value(k0 + l)
@@ -319,6 +323,7 @@ class ControlSide:
 
     def _estimated(self, k: int, y: float) -> Decision:
         est = self.est
+        assert est is not None  # on_measurement's estimated branch
         prior, N = self._state_at(k)
         if self.k_ls is not None and N > self.h:
             self.horizon_violations += 1

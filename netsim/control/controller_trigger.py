@@ -32,7 +32,7 @@ class ControllerTrigger:
         self.delta = float(delta)
         self.norm: Norm = norm
         self.enabled = bool(enabled)
-        self.u_bar = None
+        self.u_bar: np.ndarray | None = None
 
     def reset(self) -> None:
         self.u_bar = None

@@ -218,12 +218,12 @@ class KalmanFilter(EstimatorBase):
             When the Riccati equation has no stabilising solution (:func:`steady_state_prior`).
         """
         if self.steady_state:
-            return self.M_ss  # type: ignore[no-any-return]
+            return self.M_ss
         got = self.__dict__.get("_dare_prior")
         if got is None:
             got = steady_state_prior(self.A, self.C, self.Q, self.R)
             self._dare_prior = got
-        return got  # type: ignore[no-any-return]
+        return got
 
     @property
     def gain(self) -> np.ndarray:
@@ -350,7 +350,9 @@ class KalmanFilter(EstimatorBase):
         x, P = recs[0].x_prior, recs[0].P_prior
         for i, rec in enumerate(recs):
             if i > 0:
-                x, P = self._propagate(x, P, recs[i - 1].u)
+                u = recs[i - 1].u
+                assert u is not None  # every sample before the last was propagated with its input
+                x, P = self._propagate(x, P, u)
                 rec.x_prior, rec.P_prior = x, P
             for rr, yy in rec.ys:
                 x, P = self._fuse(x, P, yy, rr)

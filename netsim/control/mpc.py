@@ -190,7 +190,11 @@ class LinearMPC(LawBase):
         NM = N * m
 
         def add(Gb, lo, hi, Lx, Lu):
-            rows_G.append(Gb), rows_lo.append(lo), rows_hi.append(hi), rows_Lx.append(Lx), rows_Lu.append(Lu)
+            rows_G.append(Gb)
+            rows_lo.append(lo)
+            rows_hi.append(hi)
+            rows_Lx.append(Lx)
+            rows_Lu.append(Lu)
 
         if self.u_min is not None or self.u_max is not None:
             lo = np.tile(self.u_min if self.u_min is not None else np.full(m, -np.inf), N)

@@ -17,6 +17,7 @@ A :class:`ControlPacket` carries the current action ``u_k`` and ``h`` future one
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,7 +30,7 @@ class ControlPacket:
     """Current and future control actions from fast instant ``k`` on: ``values[l] = u_{k+l}``."""
 
     k: int
-    values: tuple[float, ...]
+    values: Sequence[float]  # a tuple, or the lazily computed CascadeActions of netsim.control.cascade
 
     def __post_init__(self) -> None:
         if len(self.values) == 0:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
-from typing import Annotated, Any, ClassVar, Literal, Union
+from typing import Annotated, Any, ClassVar, Literal, Union, cast
 
 from pydantic import (
     BaseModel,
@@ -81,8 +81,9 @@ class RegisteredPartSpec:
 
 def _spec_model(kind: str, name: str, part: Any) -> type[PartSpec]:
     title = kind.capitalize() + "".join(w.capitalize() for w in name.split("_"))  # EstimatorSteadyStateKalman
-    model = create_model(title, __base__=(part.Params, PartSpec), __module__=__name__,
-                         type=(Literal[name], Field(description=f"'{name}'")))
+    type_field: Any = (Literal[name], Field(description=f"'{name}'"))  # a Literal of a run-time name
+    model = cast("type[PartSpec]", create_model(title, __base__=(part.Params, PartSpec), __module__=__name__,
+                                                type=type_field))
     model.part = part
     return model
 

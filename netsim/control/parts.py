@@ -112,6 +112,10 @@ class DirectState(EstimatorBase):
     """The state is measured (``C`` square and invertible): ``x_hat = C^-1 y``; without a measurement the
     estimate is the model prediction ``A x_hat + B u``."""
 
+    _u_prev: np.ndarray | None  # the last input (None before the first predict)
+    _prev_fused: bool
+    _fused: bool
+
     @property
     def capabilities(self) -> EstimatorCapabilities:
         """No history: a measurement of the previous sample is fused one step late (``correct_previous``)."""
@@ -151,7 +155,7 @@ class DirectState(EstimatorBase):
 
     def reset(self) -> None:
         self.x = np.zeros(self.A.shape[0])
-        self._u_prev: np.ndarray | None = None
+        self._u_prev = None
         self._prev_fused = self._fused = False
 
 

@@ -130,7 +130,7 @@ class _Clarabel(Backend):
         s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = tol
         s.presolve_enable = False  # keeps the constraint rows fixed so data updates are allowed
         self.settings = s
-        self.solver = None
+        self.solver: Any = None  # a clarabel.DefaultSolver (untyped), made at the first solve
 
     def solve(self, g, lo, hi, warm):  # noqa: D102
         b = np.concatenate([hi[self.hi_rows], -lo[self.lo_rows]])

@@ -65,9 +65,12 @@ def simulate_loop(A, B, C, control: ControlSide, sensor_trigger, n_steps: int, *
     c = np.asarray(C, float).reshape(-1)
     x = np.zeros(A.shape[0]) if x0 is None else np.asarray(x0, float).copy()
     d = np.zeros(n_steps) if disturbance is None else np.asarray(disturbance, float)
-    if noise_std > 0 and rng is None:
-        raise ValueError("simulate_loop: noise_std > 0 needs an rng")
-    noise = rng.standard_normal(n_steps) * noise_std if noise_std > 0 else np.zeros(n_steps)
+    if noise_std > 0:
+        if rng is None:
+            raise ValueError("simulate_loop: noise_std > 0 needs an rng")
+        noise = rng.standard_normal(n_steps) * noise_std
+    else:
+        noise = np.zeros(n_steps)
     buf = PlayoutBuffer()
     ys = np.empty(n_steps); ym = np.empty(n_steps); us = np.empty(n_steps); rs = np.empty(n_steps)
     ssc = np.zeros(n_steps, bool); sca = np.zeros(n_steps, bool); Ns = np.zeros(n_steps, int)

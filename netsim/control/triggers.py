@@ -72,7 +72,7 @@ class SensorTrigger(Protocol):
 
 class _Base(abc.ABC):
     def __init__(self) -> None:
-        self.last_y = None
+        self.last_y: np.ndarray | None = None
         self.last_k: int | None = None
 
     def reset(self) -> None:
