@@ -8,14 +8,17 @@ from __future__ import annotations
 
 from pathlib import Path
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from netsim.lazy_import import lazy_module
 from netsim.models.hdd import T_HDD as T
 
-pd = lazy_module("pandas")
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")
 
 __all__ = ["case_figure", "case_figures", "gpi_figure", "save_gpi_figure"]
 
@@ -86,7 +89,7 @@ def gpi_figure(gpi: pd.DataFrame, paper_opt: Mapping[str, float] | None = None) 
     fig.colorbar(mesh, ax=ax, label="GPI (eq 29)")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    best = gpi.loc[gpi["et.GPI"].idxmin()]
+    best = gpi.iloc[gpi["et.GPI"].argmin()]  # the row of the smallest GPI (NaN skipped)
     ax.plot([best["sigma_s"]], [best["sigma_c"]], "*", color="white", mec="k", mew=0.5, ms=9, clip_on=False,
             label="our minimum")
     if paper_opt is not None:

@@ -25,7 +25,7 @@ import logging
 import re
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,7 +35,10 @@ from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
 
-pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["PAPER", "TEXT", "LABEL_PATTERNS", "Quoted", "hdd_report", "render", "overshoot_pct", "VARIANTS"]
 
@@ -363,7 +366,7 @@ def _quote(rows: dict[str, dict], gpi: pd.DataFrame | None, gpi_meta: dict, gpi4
     q.add("jumbo_bits", _scenario_value(3, "networks.net.max_frame_bits"), "d", "hdd_case3.yaml")
     q.add("std_bits", STD_FRAMES_1G["networks.net.max_frame_bits"], "d", "netsim/network/ethernet.py default")
     q.add("c3_rate", float(str(_scenario_value(3, "networks.net.bitrate")).split()[0]), "g", "hdd_case3.yaml")
-    q.add("slow_rate", float(JUMBO_1G["networks.net.bitrate"].split()[0]), "g", "case3_jumbo1g overrides")
+    q.add("slow_rate", float(str(JUMBO_1G["networks.net.bitrate"]).split()[0]), "g", "case3_jumbo1g overrides")
     q.add("T_us", T * 1e6, "g", "T")
     # Cases 4-5
     q.add("noise_std", _scenario_value(4, "io.ys.noise_std"), "g", "hdd_case4.yaml")
@@ -403,7 +406,7 @@ def _quote(rows: dict[str, dict], gpi: pd.DataFrame | None, gpi_meta: dict, gpi4
     if gpi is not None:
         _quote_gpi(q, gpi, gpi_meta)
     if gpi4 is not None:
-        _quote_gpi(q, gpi4, gpi4_meta, "gpi4")
+        _quote_gpi(q, gpi4, gpi4_meta or {}, "gpi4")
     return q
 
 
@@ -412,7 +415,7 @@ def _quote_gpi(q: Quoted, gpi: pd.DataFrame, meta: dict, pre: str = "gpi") -> No
 
     ok = gpi.dropna(subset=["et.GPI"])
     xs, ys = np.sort(ok["sigma_s"].unique()), np.sort(ok["sigma_c"].unique())
-    best = ok.loc[ok["et.GPI"].idxmin()]
+    best = ok.iloc[ok["et.GPI"].argmin()]  # the row of the smallest GPI (its index is unique)
     i, j = int(np.searchsorted(xs, best["sigma_s"])), int(np.searchsorted(ys, best["sigma_c"]))
     q.add(f"{pre}_n", len(gpi), "d", f"{pre}.csv rows")
     q.add(f"{pre}_wall", meta.get("wall_s", float("nan")), ".0f", "wall time of the sweep in this report run")
@@ -437,7 +440,7 @@ def _quote_gpi(q: Quoted, gpi: pd.DataFrame, meta: dict, pre: str = "gpi") -> No
     q.add(f"{pre}_t1", terms["W1 Uc"], ".3g", "0.45 x et.Uc at the minimum")
     q.add(f"{pre}_t2", terms["W2 Ua"], ".3g", "0.45 x et.Ua at the minimum")
     q.add(f"{pre}_t3", terms["W3 NE"], ".3g", "0.1 x et.NE at the minimum")
-    q.add(f"{pre}_dom", max(terms, key=terms.get), source="largest term")
+    q.add(f"{pre}_dom", max(terms, key=terms.__getitem__), source="largest term")
     q.add("w3", w[2], "g", "hdd_gpi_sweep.yaml weights")
     ne_share = float(w[2] * ok["et.NE"].max() / max(best["et.GPI"], 1e-300))
     if "et.played_past_packet" in ok.columns:
