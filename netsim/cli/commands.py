@@ -349,10 +349,10 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.dask_dashboard and not args.dask_local:
         raise ConfigError("--dask-dashboard needs --dask-local (a scheduler you start has its own: "
                           "`dask scheduler --dashboard-address ADDR`)")
-    if (args.scheduler or args.dask_local) and not _dask_installed():
-        option = "--scheduler" if args.scheduler else "--dask-local"
-        raise ConfigError(f"{option} needs Dask's distributed scheduler, which is not installed: "
-                          "pip install 'netsim[dask]' (or leave the option out to run in local processes)")
+    if args.scheduler or args.dask_local:  # before anything runs
+        from netsim.sweep.executor import require_dask
+
+        require_dask("--scheduler" if args.scheduler else "--dask-local")
     args.file = _scenario_file(args.file)
     if not Path(args.file).exists():
         raise ConfigError(f"file not found: {args.file}")
@@ -379,13 +379,6 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     elif counts.not_ok:
         _err(f"{counts.describe('sweep run')} (see summary.csv)")
     return counts.exit_code(result.interrupted)
-
-
-def _dask_installed() -> bool:
-    """Whether the optional ``[dask]`` extra (dask.distributed) is installed, without importing it."""
-    import importlib.util
-
-    return importlib.util.find_spec("distributed") is not None
 
 
 def _cmd_report(args: argparse.Namespace) -> int:

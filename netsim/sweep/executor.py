@@ -339,6 +339,24 @@ def _probe_scheduler(address: str, timeout: float) -> None:
         raise SchedulerUnreachable(f"'{address}' answered but is not a Dask scheduler ({ident!r:.80})")
 
 
+def require_dask(option: str) -> None:
+    """Refuse ``option`` (``--scheduler``, ``--dask-local``, ``scheduler=``...) when the optional ``[dask]`` extra
+    (dask.distributed) is not installed, with the command that installs it (it is not imported here).
+
+    Raises
+    ------
+    ConfigError
+        When ``distributed`` cannot be found.
+    """
+    import importlib.util
+
+    from netsim.errors import ConfigError
+
+    if importlib.util.find_spec("distributed") is None:
+        raise ConfigError(f"{option} needs Dask's distributed scheduler, which is not installed: "
+                          "pip install 'netsim[dask]' (or leave the option out to run in local processes)")
+
+
 @contextlib.contextmanager
 def open_executor(
     *,
@@ -376,6 +394,7 @@ def open_executor(
     """
     os.environ.update(_SINGLE_THREAD_ENV)  # inherited by workers started from here
     if scheduler or local_dask:
+        require_dask("scheduler=" if scheduler else "local_dask=True")
         with _quiet_dask_logs():
             from distributed import Client
 

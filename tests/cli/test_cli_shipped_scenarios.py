@@ -86,12 +86,30 @@ def test_scenario_path_names_the_closest_shipped_scenario_for_a_typo():
         shipped.scenario_path("../setup")  # a path is not a name
 
 
-def test_sweep_on_dask_without_the_dask_extra_names_the_extra(tmp_path, monkeypatch, capsys):
-    import netsim.cli.commands as commands
+def _without_dask(monkeypatch):
+    """Make ``distributed`` unfindable, as in an install without netsim[dask]."""
+    import importlib.util
 
-    monkeypatch.setattr(commands, "_dask_installed", lambda: False)  # as in an install without netsim[dask]
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a, **k: None if name == "distributed" else real(name, *a, **k))
+
+
+def test_sweep_on_dask_without_the_dask_extra_names_the_extra(tmp_path, monkeypatch, capsys):
+    _without_dask(monkeypatch)
     monkeypatch.chdir(tmp_path)
     assert main(["sweep", "hdd_gpi_sweep_case4", "--dask-local"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "pip install 'netsim[dask]'" in err
     assert not (tmp_path / "reports").exists()  # refused before anything ran
+
+
+def test_run_sweep_from_python_on_dask_without_the_extra_names_it(tmp_path, monkeypatch):
+    # the Python API gave a bare ModuleNotFoundError for 'distributed'; it now says which extra to install
+    import netsim
+    from netsim.errors import ConfigError
+
+    _without_dask(monkeypatch)
+    sweep = shipped.scenario_path("hdd_gpi_sweep_case4")
+    with pytest.raises(ConfigError, match=r"pip install 'netsim\[dask\]'"):
+        netsim.run_sweep(sweep, out=tmp_path / "s", local_dask=True)
