@@ -48,7 +48,7 @@ import numpy as np
 
 __all__ = ["ControlLaw", "StateEstimator", "OutputFeedback", "sample_index", "zoh_split", "InputDelayLine",
            "AppliedInputTimeline", "first_measurement_estimate", "EstimatorCapabilities", "EstimatorBase",
-           "LawBase", "capabilities_of"]
+           "LawBase", "SolverReport", "capabilities_of"]
 
 
 def sample_index(t_ns: int, period_ns: int, start_ns: int = 0) -> int:
@@ -150,6 +150,16 @@ class LawBase:
     """
 
     reports_solver: ClassVar[bool] = False
+
+
+class SolverReport(Protocol):
+    """What a law with :attr:`LawBase.reports_solver` set has (for the type checker)."""
+
+    last_iterations: int
+    last_solve_time_s: float
+
+    def metrics(self) -> dict[str, float]:
+        """``fallbacks``, ``solver_calls``, ``solver_iterations`` among others."""
 
 
 def capabilities_of(estimator: Any) -> EstimatorCapabilities:

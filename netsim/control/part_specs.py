@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
-from typing import Annotated, Any, ClassVar, Literal, Union, cast
+from typing import TYPE_CHECKING, Annotated, Any, ClassVar, Literal, TypeAlias, Union, cast
 
 from pydantic import (
     BaseModel,
@@ -133,7 +133,11 @@ def _part_union(kind: str, field: str, example: str, builtins: dict[str, Any]) -
                      WithJsonSchema({"type": "object"})]
 
 
-#: ``estimator: {type: NAME, ...}``: one of :data:`BUILTIN_ESTIMATORS` or a registered estimator, typed.
-EstimatorSpec = _part_union("estimator", "estimator", "kalman", BUILTIN_ESTIMATORS)
-#: ``law: {type: NAME, ...}``: one of :data:`BUILTIN_LAWS` or a registered controller, typed.
-LawSpec = _part_union("controller", "law", "lqr", BUILTIN_LAWS)
+if TYPE_CHECKING:  # the unions are built at run time; what they validate into is one of these
+    EstimatorSpec: TypeAlias = Union[PartSpec, RegisteredPartSpec]
+    LawSpec: TypeAlias = Union[PartSpec, RegisteredPartSpec]
+else:
+    #: ``estimator: {type: NAME, ...}``: one of :data:`BUILTIN_ESTIMATORS` or a registered estimator, typed.
+    EstimatorSpec = _part_union("estimator", "estimator", "kalman", BUILTIN_ESTIMATORS)
+    #: ``law: {type: NAME, ...}``: one of :data:`BUILTIN_LAWS` or a registered controller, typed.
+    LawSpec = _part_union("controller", "law", "lqr", BUILTIN_LAWS)

@@ -98,8 +98,8 @@ def _eigs(M: np.ndarray) -> np.ndarray:
     if M.size == 0:
         return np.zeros(0, dtype=complex)
     ev = np.linalg.eigvals(M).astype(complex)
-    order = sorted(range(ev.size), key=lambda i: (-round(abs(ev[i]), 12), round(ev[i].real, 12),
-                                                   round(ev[i].imag, 12)))
+    order = sorted(range(ev.size), key=lambda i: (-np.round(abs(ev[i]), 12), np.round(ev[i].real, 12),
+                                                   np.round(ev[i].imag, 12)))
     return ev[order]
 
 
@@ -219,6 +219,7 @@ def _law(law: Any, design: Any) -> tuple[dict[str, Any], Any]:
     if Ki is None:
         Acl = A - B @ K
     else:
+        assert Cr is not None  # an integral gain needs Cr (StateFeedback refuses Ki without it)
         q = Ki.shape[1]
         Acl = np.block([[A - B @ K, -B @ Ki], [-Cr, np.eye(q)]])
     out.update(_spectrum(Acl))
@@ -282,7 +283,7 @@ def delay_margin(plant: Any, rows: list[int], period_s: float, ctrl: LinearContr
 
     method = (f"netsim.analysis.lqg.lqg_cost: spectral radius of the sampled loop under a constant delay, on "
               f"{_GRID + 1} delays over one period, refined by {_BISECT} bisection steps")
-    out = {"seconds": None, "stable_up_to_s": None, "method": method, "reason": None}
+    out: dict[str, Any] = {"seconds": None, "stable_up_to_s": None, "method": method, "reason": None}
     if not stable(0.0):
         out["reason"] = "the loop is unstable without delay"
         return out
@@ -365,7 +366,7 @@ def summary_of(made: Any, plant: Any, source: str | None, *, margin: bool = True
         got = summarize(made.design, made.estimator, made.law, made.fed_state, rows=made.rows, source=source,
                         plant=plant, margin=margin)
         made.summaries[margin] = got
-    return copy.deepcopy(got)  # type: ignore[no-any-return]
+    return copy.deepcopy(got)
 
 
 def _task_entry(node: str, index: int, spec: Any, summary: dict[str, Any], program: Any = None) -> dict[str, Any]:

@@ -397,7 +397,7 @@ def task_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: 
     cache = p.design_cache()
     made = cache.get(key)
     if made is not None:
-        return made  # type: ignore[no-any-return]
+        return made
     rng = _design_rng(scenario, path)
     estimator = _build("estimator", "estimator", p.estimator, est_part, est_design, rng, pp,
                        *(wrap or (None, None)))

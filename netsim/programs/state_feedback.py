@@ -93,7 +93,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, cast
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
@@ -105,7 +105,7 @@ from netsim.programs.basic import (
     _destination,
     _destination_given,
 )
-from netsim.control.interface import LawBase, capabilities_of
+from netsim.control.interface import LawBase, SolverReport, capabilities_of
 from netsim.control.part_specs import EstimatorSpec, LawSpec
 from netsim.programs.feedback_design import claim_design, task_design
 from netsim.programs.inbox import take_matching
@@ -281,7 +281,8 @@ class StateFeedbackProgram:
         self.caps = capabilities_of(self.estimator)  # declared by the estimator (issue 28: no probing here)
         self.takes_k = self.caps.fuses_at_sample
         self.history = self.caps.history
-        self.solver = self.law if isinstance(self.law, LawBase) and self.law.reports_solver else None
+        reports = isinstance(self.law, LawBase) and self.law.reports_solver
+        self.solver = cast(SolverReport, self.law) if reports else None
         self.p_rows = len(self.rows)
         # where each source's values go in y (positions in the measured rows)
         self.slots = [[self.rows.index(r) for r in rows] for rows in self.per_source]
@@ -321,15 +322,15 @@ class StateFeedbackProgram:
                 raise SimulationError(f"{self.ctx.node}.{self.ctx.task}: applied_input: a report from "
                                       f"{msg.sender} is not {{value, t_ns}} (set the actuator's 'report')")
             t = int(payload["t_ns"])
-            tl.report(t, payload.get("value"))  # type: ignore[union-attr]
+            tl.report(t, payload.get("value"))
             self.counts["inputs_reported"] += 1
             first = t if first is None else min(first, t)
         if first is None:
             return
         est = self.estimator
         j0 = max((first - self.offset) // self.period, est.k - self.history, 0)  # type: ignore[operator]
-        self.counts["inputs_revised"] += est.revise_inputs({j: tl.effect(j) for j in range(j0, est.k)})  # type: ignore[union-attr]
-        tl.forget_before(self.offset + (est.k - self.history - 1) * self.period)  # type: ignore[union-attr, operator]
+        self.counts["inputs_revised"] += est.revise_inputs({j: tl.effect(j) for j in range(j0, est.k)})
+        tl.forget_before(self.offset + (est.k - self.history - 1) * self.period)
 
     def _start(self, y: np.ndarray, k: int, rows: Any = None) -> None:
         """``x0_hat: first_measurement``: start the estimate from the first measurement fused."""

@@ -113,7 +113,8 @@ def input_plan(p: Any, part: Any, design: Any, continuous: tuple[np.ndarray, np.
                                   f"the period (e.g. {lo} or {hi})", path=where)
             return design, InputPlan("delayed_first", d), None
         if rest:
-            _, G0, G1 = zoh_split(*continuous, period_ns * 1e-9, rest * 1e-9)  # type: ignore[misc]
+            assert continuous is not None  # refused above
+            _, G0, G1 = zoh_split(*continuous, period_ns * 1e-9, rest * 1e-9)
         else:
             G0, G1 = design.B, np.zeros_like(design.B)
         return (dataclasses.replace(design, B=np.hstack([G0, G1])), InputPlan("delayed", d),
