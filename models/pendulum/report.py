@@ -36,7 +36,7 @@ import os
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
@@ -45,7 +45,10 @@ from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
 
-pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
+if TYPE_CHECKING:
+    import pandas as pd
+else:
+    pd = lazy_module("pandas")  # imported at first use: `netsim list` and `netsim docs` import this module too
 
 __all__ = ["pendulum_report", "render_readme", "run_case", "closed_loop_cases", "TEXT", "render", "LABEL_PATTERNS", "ESTIMATORS"]
 
@@ -231,9 +234,10 @@ def make_table(runs: pd.DataFrame) -> pd.DataFrame:
     cl = runs[runs.kind.isin(["closed_loop", "mpc_vs_lqr"])]
     rows = []
     for (e, c), g in cl.groupby(["estimator", "controller"], sort=False):
+        e = str(e)  # an estimator name
         r: dict[str, Any] = {"estimator": e, "controller": c, "seed_count": len(g),
-                             "theta_dot_noise": float(hs.loc[e, "theta_dot_noise"]),
-                             "alpha_dot_noise": float(hs.loc[e, "alpha_dot_noise"])}
+                             "theta_dot_noise": float(hs.theta_dot_noise[e]),
+                             "alpha_dot_noise": float(hs.alpha_dot_noise[e])}
         for col in ("u_std", "saturated_share", "rms_theta", "rms_alpha", "lqg_cost_per_step", "lqg_cost_after_1s"):
             r[col] = float(g[col].mean())
         r["stable_share"] = float(g["stable"].mean())
@@ -281,6 +285,7 @@ def delay_table(runs: pd.DataFrame, noise_margins: dict[str, tuple[float, float]
 
     rows = []
     for e, g in runs[runs.kind == "delay"].groupby("estimator", sort=False):
+        e = str(e)  # an estimator name
         ok, fail = bracket(g)
         pred = delay_margin(e, d)
         steps = 0
@@ -570,16 +575,16 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     pts = dc[dc.stable_share >= 1.0]
     add("dc_points", len(pts), "delay_cost: points with every seed stable", str(len(pts)))
     add("dc_inside", pts.analytic_inside_ci.sum(), "delay_cost: analytic_inside_ci", str(int(pts.analytic_inside_ci.sum())))
-    worst = pts.loc[pts.rel_diff.abs().idxmax()]
+    worst = pts.iloc[pts.rel_diff.abs().argmax()]  # by position: pandas-stubs type idxmax() as Hashable
     add("dc_max_rel", 100 * abs(worst.rel_diff), "delay_cost: max |rel_diff|", f"{100 * abs(worst.rel_diff):.2g}")
     add("dc_max_rel_where", 0.0, "delay_cost: argmax |rel_diff|", f"{worst.estimator} at {fmt(worst.total_delay_ms)} ms")
     # the orderings the study rests on, with their measured margins
     hsi = hs.set_index("estimator")
-    add("ord_noise_lp_lu", hsi.loc["fd_lowpass", "alpha_dot_sim"] / hsi.loc["luenberger", "alpha_dot_sim"], "hold_still")
-    add("ord_noise_lu_kal", hsi.loc["luenberger", "alpha_dot_sim"] / hsi.loc["kalman", "alpha_dot_sim"], "hold_still")
-    add("ord_chat_lp_lu", t.loc[("fd_lowpass", "lqr"), "u_std_min"] / t.loc[("luenberger", "lqr"), "u_std_max"],
+    add("ord_noise_lp_lu", hsi.alpha_dot_sim["fd_lowpass"] / hsi.alpha_dot_sim["luenberger"], "hold_still")
+    add("ord_noise_lu_kal", hsi.alpha_dot_sim["luenberger"] / hsi.alpha_dot_sim["kalman"], "hold_still")
+    add("ord_chat_lp_lu", t.u_std_min[("fd_lowpass", "lqr")] / t.u_std_max[("luenberger", "lqr")],
         "table: u_std_min / u_std_max")
-    add("ord_chat_lu_kal", t.loc[("luenberger", "lqr"), "u_std_min"] / t.loc[("kalman", "lqr"), "u_std_max"],
+    add("ord_chat_lu_kal", t.u_std_min[("luenberger", "lqr")] / t.u_std_max[("kalman", "lqr")],
         "table: u_std_min / u_std_max")
     add("ord_kal_whole", lq["kalman"] / lq.min(), "table: lqg_cost_per_step kalman / lowest")
     lqr_t = table[table.controller == "lqr"].set_index("estimator")
@@ -613,13 +618,13 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
         "report: LOSSES (stationary share of the bad state)")
     mt = runs[runs.kind == "mpc_timing"].set_index("timing")
     add("mpt_fast", _ms(MPC_TIMINGS["h20_0.1ms"]["per_iteration"]), "report: MPC_TIMINGS")
-    add("mpt_fast_resp", 1e3 * mt.loc["h20_0.1ms", "max_response_s"], "mpc_timing")
+    add("mpt_fast_resp", 1e3 * mt.max_response_s["h20_0.1ms"], "mpc_timing")
     add("mpt_slow", _ms(MPC_TIMINGS["h20_3ms"]["per_iteration"]), "report: MPC_TIMINGS")
-    add("mpt_slow_resp", 1e3 * mt.loc["h20_3ms", "max_response_s"], "mpc_timing")
-    add("mpt_slow_miss", mt.loc["h20_3ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h20_3ms", "deadline_misses"])))
+    add("mpt_slow_resp", 1e3 * mt.max_response_s["h20_3ms"], "mpc_timing")
+    add("mpt_slow_miss", mt.loc["h20_3ms", "deadline_misses"], "mpc_timing", str(int(mt.deadline_misses["h20_3ms"])))
     add("mpt_short_h", MPC_TIMINGS["h5_3ms"]["horizon"], "report: MPC_TIMINGS", str(MPC_TIMINGS["h5_3ms"]["horizon"]))
-    add("mpt_short_resp", 1e3 * mt.loc["h5_3ms", "max_response_s"], "mpc_timing")
-    add("mpt_short_miss", mt.loc["h5_3ms", "deadline_misses"], "mpc_timing", str(int(mt.loc["h5_3ms", "deadline_misses"])))
+    add("mpt_short_resp", 1e3 * mt.max_response_s["h5_3ms"], "mpc_timing")
+    add("mpt_short_miss", mt.loc["h5_3ms", "deadline_misses"], "mpc_timing", str(int(mt.deadline_misses["h5_3ms"])))
     for key, lab in (("mpt_fast_rms", "h20_0.1ms"), ("mpt_slow_rms", "h20_3ms"), ("mpt_short_rms", "h5_3ms")):
         add(key, mt.loc[lab, "rms_alpha_after_1s"], f"mpc_timing:{lab}")
     from netsim.models.pendulum.report_sweeps import equal_ratio_gain_difference
@@ -639,10 +644,10 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
                          ("rho", "error_radius"), ("tau", "error_tau_ms"), ("cost", "lqg_cost_per_step"),
                          ("cost1", "lqg_cost_after_1s")):
             add(f"sw_{tag}_{key}", g[col].mean(), f"tuning: Qn/Rn = {ratio:g}, mean over its grid points")
-    add("sw_best_cost", 0.0, "tuning: argmin lqg_cost_per_step", str(k.loc[k.lqg_cost_per_step.idxmin(), "setting"]))
-    add("sw_best_cost1", 0.0, "tuning: argmin lqg_cost_after_1s", str(k.loc[k.lqg_cost_after_1s.idxmin(), "setting"]))
+    add("sw_best_cost", 0.0, "tuning: argmin lqg_cost_per_step", str(k.setting.iloc[k.lqg_cost_per_step.argmin()]))
+    add("sw_best_cost1", 0.0, "tuning: argmin lqg_cost_after_1s", str(k.setting.iloc[k.lqg_cost_after_1s.argmin()]))
     ps = sw[sw.sweep == "poles"]
-    for tag, row in (("pf", ps.loc[ps.error_radius.idxmin()]), ("ps", ps.loc[ps.error_radius.idxmax()])):
+    for tag, row in (("pf", ps.iloc[ps.error_radius.argmin()]), ("ps", ps.iloc[ps.error_radius.argmax()])):
         for key, col in (("noise", "alpha_dot_noise_lyap"), ("u", "u_std"), ("conv", "est_converged_s"),
                          ("rho", "error_radius"), ("cost", "lqg_cost_per_step"), ("cost1", "lqg_cost_after_1s")):
             add(f"sw_{tag}_{key}", row[col], f"tuning: {row.setting}")
@@ -723,7 +728,7 @@ def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame)
     m = margins.set_index(["estimator", "estimation"])
     for tag, e in (("kal", "kalman"), ("lu", "luenberger")):
         for how, name in (("unaware", "unaware"), ("input_delay", "aware")):
-            r = m.loc[(e, how)]
+            r = cast("pd.Series", m.loc[(e, how)])  # one row: (estimator, estimation) is unique
             src = f"delay_aware_margins:{e} {how}"
             add(f"da_{tag}_{name}_ok", r.stable_up_to_ms, src)
             if math.isfinite(r.fails_at_ms):
