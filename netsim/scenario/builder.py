@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from collections.abc import Generator
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -37,6 +38,9 @@ from netsim.env import SimEnv, run_events
 from netsim.errors import BuildError, ConfigError, NetsimError
 from netsim.scenario.wiring import bind_receivers, build_networks, checked_call, wire_kernels
 from netsim.timebase import MS
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["Simulation", "build", "make_plant", "wire_kernels", "build_networks", "bind_receivers", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
 
@@ -69,7 +73,7 @@ class Simulation:
         Simulated time in ns.
     """
 
-    scenario: Any
+    scenario: Scenario
     env: SimEnv
     plant: Any = None
     signals: dict[str, Callable[[int], float]] = field(default_factory=dict)
@@ -142,11 +146,11 @@ def _run_sliced(env: SimEnv, t_end: int, progress: ProgressFn, slices: int = PRO
 
 
 # --------------------------------------------------------------------------------------------- pieces
-def _record_filter(scenario: Any) -> set[str] | None:
+def _record_filter(scenario: Scenario) -> set[str] | None:
     return None if scenario.record is None else set(scenario.record)
 
 
-def _make_signals(scenario: Any) -> dict[str, Callable[[int], float]]:
+def _make_signals(scenario: Scenario) -> dict[str, Callable[[int], float]]:
     out: dict[str, Callable[[int], float]] = {}
     for name, spec in scenario.signals.items():
         cls = spec.plugin()
@@ -178,7 +182,7 @@ def make_plant(model: str, factory: Any, params: Any) -> Any:
         raise BuildError(f"cannot build plant '{model}': {exc}", path="plant") from exc
 
 
-def _build_plant(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> Any:
+def _build_plant(scenario: Scenario, env: SimEnv, signals: dict[str, Any]) -> Any:
     """The plant from its factory, with disturbances (exact at jumps), bound to ``env``, then ``x0``."""
     spec = scenario.plant
     if spec is None:
@@ -226,7 +230,7 @@ def _schedule_signal(env: SimEnv, sig: Callable[[int], float], t_end: int, grid:
     else:
         instants = list(range(grid, t_end + 1, grid))
 
-    def proc():  # type: ignore[no-untyped-def]
+    def proc() -> Generator[Any, Any, None]:
         action(0, sig(0))
         for t in instants:
             yield env.timeout(t - env.now)
@@ -235,7 +239,7 @@ def _schedule_signal(env: SimEnv, sig: Callable[[int], float], t_end: int, grid:
     env.process(proc())
 
 
-def _build_io(scenario: Any, env: SimEnv, plant: Any) -> dict[str, Any]:
+def _build_io(scenario: Scenario, env: SimEnv, plant: Any) -> dict[str, Any]:
     if not scenario.io:
         return {}
     if plant is None:
@@ -274,7 +278,7 @@ def _encoder_reader(enc: Any, plant: Any, output: Any, step: float) -> Callable[
     return quantized
 
 
-def _attach_io(kernel: Any, scenario: Any, channels: dict[str, Any], plant: Any, env: SimEnv) -> None:
+def _attach_io(kernel: Any, scenario: Scenario, channels: dict[str, Any], plant: Any, env: SimEnv) -> None:
     """Give the kernel its analog channels; a channel named in ``record:`` is recorded at every read/write."""
     recorder = env.recorder
     for name, ch in scenario.io.items():
@@ -285,7 +289,10 @@ def _attach_io(kernel: Any, scenario: Any, channels: dict[str, Any], plant: Any,
             # '<name>.command' what the program asked for (issue 21: u read +-600 with saturation [-1, 1])
             write = obj.write
             if wanted:
-                write = _recording_write(recorder, name, write, lambda value, dac=obj: dac.last)
+                def dac_output(value: Any, dac: Any = obj) -> Any:
+                    return dac.last
+
+                write = _recording_write(recorder, name, write, dac_output)
             if recorder.wants(f"{name}.command"):
                 write = _recording_write(recorder, f"{name}.command", write)
             kernel.attach_analog_out(name, write)
@@ -342,7 +349,7 @@ def _program(spec: Any, ctx: Any, path: str) -> Any:
     return body
 
 
-def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels: dict[str, Any],
+def _build_kernels(scenario: Scenario, env: SimEnv, signals: dict[str, Any], channels: dict[str, Any],
                    plant: Any) -> tuple[dict[str, Any], dict[str, Any], list[tuple[str, str, str]]]:
     """Kernels with their tasks and handlers; returns also the (node, network, target) receive bindings."""
     if not scenario.nodes:
@@ -366,13 +373,16 @@ def _build_kernels(scenario: Any, env: SimEnv, signals: dict[str, Any], channels
     return kernels, programs, bindings
 
 
-def _record_signals(scenario: Any, env: SimEnv, signals: dict[str, Any]) -> None:
+def _record_signals(scenario: Scenario, env: SimEnv, signals: dict[str, Any]) -> None:
     wanted = scenario.record
     grid = (scenario.plant.record_grid if scenario.plant is not None else None) or DEFAULT_SIGNAL_GRID
     for name, sig in signals.items():
         if wanted is not None and name not in wanted:
             continue
-        _schedule_signal(env, sig, scenario.duration, grid, lambda t, v, n=name: env.record(n, v, t))
+        def record(t: int, v: float, n: str = name) -> None:
+            env.record(n, v, t)
+
+        _schedule_signal(env, sig, scenario.duration, grid, record)
 
 
 # --------------------------------------------------------------------------------------------- build
@@ -390,7 +400,7 @@ class _SeedWatchEnv(SimEnv):
         super().__init__(seed, record)
         self.seed_read = False  # SimEnv.__init__ itself does not count
 
-    @property  # type: ignore[override]
+    @property
     def seed(self) -> int:
         if not self._in_rng:
             self.seed_read = True
@@ -418,7 +428,7 @@ class _SeedWatchEnv(SimEnv):
         return any(gen.bit_generator.state != self._initial.get(name) for name, gen in self._streams.items())
 
 
-def build(scenario: Any) -> Simulation:
+def build(scenario: Scenario) -> Simulation:
     """Create and connect every runtime object of a validated :class:`~netsim.scenario.schema.Scenario`.
 
     To build from a file, a dict or a python-control system, use :func:`netsim.scenario.build`, which loads and

@@ -267,9 +267,9 @@ def limit_problems(raw: dict[str, Any], line_of: LineOf | None = None,
                 problems.append(Problem(format_path(list(parts)), msg, supersedes=True))
     problems += _name_problems(raw)
     problems += _structure_problems(raw, line_of)
-    total, parts = expected_events(raw, tasks)
+    total, heaviest = expected_events(raw, tasks)
     if total > EVENTS_WARN:
-        top = ", ".join(f"{path}: {count:.3g}" for path, count in parts[:3])
+        top = ", ".join(f"{path}: {count:.3g}" for path, count in heaviest[:3])
         problems.append(Problem("duration", f"this run simulates at least {total:.3g} events (duration / period "
                                             f"summed: {top}); it may take very long: shorten 'duration' or lengthen "
                                             "those periods if that was not meant", severity=WARNING))

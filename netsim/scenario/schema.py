@@ -154,7 +154,7 @@ def _plant_port(value: Any) -> int | str:
 PlantPort = Annotated[Union[int, str], BeforeValidator(_plant_port)]
 
 
-def _range(value: Any) -> tuple[float, float]:
+def _range(value: Any) -> Any:  # before the tuple[float, float] check: floats, or the value limits.py refuses
     if isinstance(value, (list, tuple)) and len(value) == 2:
         lo, hi = value
         if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (lo, hi)):
@@ -464,9 +464,9 @@ class TaskSpec(PluginSpec, KernelTaskSpec):
     program: str = Field(min_length=1)
     params: dict[str, Any] = Field(default_factory=dict)
     execution: Execution | None = None
-    priority: int | None = None  # type: ignore[assignment]  # YAML priorities are integers (Python may pass floats)
-    wcet_handler: Name | None = None  # type: ignore[assignment]  # YAML names a handler (Python may pass a callable)
-    deadline_handler: Name | None = None  # type: ignore[assignment]
+    priority: int | None = None  # YAML priorities are integers (Python may pass floats)
+    wcet_handler: Name | None = None  # YAML names a handler (Python may pass a callable)
+    deadline_handler: Name | None = None
 
     @model_serializer(mode="wrap")
     def _without_unused_arrivals(self, handler: Any) -> Any:
@@ -557,7 +557,7 @@ class HandlerSpec(PluginSpec, KernelHandlerSpec):
     name: Name
     program: str = Field(min_length=1)
     params: dict[str, Any] = Field(default_factory=dict)
-    priority: int = 0  # type: ignore[assignment]  # YAML priorities are integers (Python may pass floats)
+    priority: int = 0  # YAML priorities are integers (Python may pass floats)
     execution: Execution | None = None
     trigger: HandlerTrigger | None = None
 
@@ -771,10 +771,10 @@ class Scenario(SpecModel):
             elif parts[0] == "signals":
                 data["signals"][parts[1]] = {"type": spec.plugin_name(), **params}
             else:
-                node: Any = data
+                target: Any = data
                 for part in parts:
-                    node = node[part]
-                node["params"] = params
+                    target = target[part]
+                target["params"] = params
         return data
 
     def baseline_scenario(self) -> Scenario | None:

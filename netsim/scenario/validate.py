@@ -63,7 +63,7 @@ from netsim.scenario.messages import problems_from_validation_error
 from netsim.scenario.paths import PathPart, did_you_mean, format_path, parse_path
 from netsim.scenario.problems import WARNING, Problem, ScenarioError
 from netsim.scenario.schema_sync import sync_ref_problems
-from netsim.kernel.policies import find_policy, is_builtin_policy
+from netsim.kernel.policies import find_policy, is_builtin_policy, resolve_policy
 from netsim.timebase import TimeParseError, format_time, parse_time
 
 __all__ = ["validate_params", "check_raw", "plugin_load_problems"]
@@ -444,7 +444,7 @@ class _Checker:
         try:
             spec = model.checked(node_name)
             if is_builtin_policy(policy_name):
-                find_policy(policy_name)().check(node_name, spec)
+                resolve_policy(policy_name, node_name).check(node_name, spec)
         except BuildError as exc:
             field = getattr(exc, "field", None)
             prefix = f"node '{node_name}', task '{name}', field '{field}': "
@@ -606,8 +606,9 @@ class _Checker:
             if plugin is not None:
                 values = _values(model) if model is not None else _d(raw)
                 self.metric_signals(str(metric.get("type")), values, ["metrics", i, "params"])
+                type_path: list[str | int] = ["metrics", i, "type"]
                 refs = [*_signal_refs(values, ["metrics", i, "params"]),
-                        *((["metrics", i, "type"], n) for n in getattr(plugin, "reads_signals", ()))]
+                        *((list(type_path), n) for n in getattr(plugin, "reads_signals", ()))]
                 self.grid_outputs(str(metric.get("type")), values, refs, outputs)
                 self.metric_reads(plugin, str(metric.get("type")), ["metrics", i, "type"])
                 from netsim.metrics.chain import unkept_tables  # run refused these, validate passed them (issue 31)
@@ -705,7 +706,7 @@ class _Checker:
             self.error(at, f"unknown node '{node}'{did_you_mean(node, self.nodes, what='nodes')}")
             return
         spec = _d(_d(self.raw.get("nodes")).get(node))
-        names = [item.get("name") for kind in ("tasks", "handlers") for item in _l(spec.get(kind))
+        names = [str(item["name"]) for kind in ("tasks", "handlers") for item in _l(spec.get(kind))
                  if isinstance(item, dict) and isinstance(item.get("name"), str)]
         if task not in names:
             hint = did_you_mean(task, names, what="tasks and handlers")
