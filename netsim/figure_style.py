@@ -90,7 +90,8 @@ def paper_style() -> Iterator[None]:
     """Apply :data:`PAPER_STYLE` to the figures made and saved in the ``with`` block."""
     import matplotlib
 
-    with matplotlib.rc_context(PAPER_STYLE):
+    # matplotlib types rc as a dict keyed by a Literal of every rcParam name; PAPER_STYLE's keys are plain str
+    with matplotlib.rc_context(PAPER_STYLE):  # type: ignore[arg-type]
         yield
 
 

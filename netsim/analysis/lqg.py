@@ -301,7 +301,7 @@ def _period_maps(
     switch = np.eye(nv)
     switch[ih, ih] = 0.0
     switch[ih, iu] = np.eye(m)
-    events: list[tuple[float, np.ndarray]] = []
+    events: list[tuple[float, np.ndarray | None]] = []  # (time, jump of v); None: the end of the period
     if tau <= length:
         events.append((tau, switch))
     pre = np.eye(nz)  # a jump at the very start comes before the sample (the sample sees the new reference)
@@ -311,9 +311,9 @@ def _period_maps(
             Jz[ix, ix] = J
             pre = Jz @ pre
         elif 0.0 < s_j < length:
-            E = np.eye(nv)
-            E[ix, ix] = J
-            events.append((s_j, E))
+            jump = np.eye(nv)
+            jump[ix, ix] = J
+            events.append((s_j, jump))
     events.sort(key=lambda e: e[0])
     M = np.eye(nv)  # v now = M v(sample) + noise of covariance Wacc
     Wacc = np.zeros((nv, nv))
@@ -432,7 +432,7 @@ def lqg_cost(
     vecP = np.linalg.solve(np.eye(na * K) - Op, rhs)
     Ps = [vecP[a * K : (a + 1) * K].reshape(nz, nz) for a in range(na)]
     period_cost = cost_c + sum(float(np.sum(costQ[a] * Ps[a])) for a in range(na))
-    P = sum(Ps)
+    P = sum(Ps, np.zeros((nz, nz)))  # the same additions as sum(Ps), which starts from int 0
     return LQGCost(float(period_cost / h), float(period_cost), rho, 0.5 * (P + P.T))
 
 

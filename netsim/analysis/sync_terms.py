@@ -59,7 +59,7 @@ class NodeSyncAnalysis:
         self.sections[task.name] = dict(timing.sections)
         if timing.suspends_on:
             self.suspends[task.name] = ", ".join(timing.suspends_on)
-        return timing.wcet  # type: ignore[no-any-return]
+        return timing.wcet
 
     def apply(self, items: list[RTATask], skipped: list[tuple[str, str]]
               ) -> tuple[list[RTATask], list[tuple[str, str]]]:

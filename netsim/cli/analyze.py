@@ -61,8 +61,10 @@ def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict],
     for node_name, node in scenario.nodes.items():
         policy = node.policy
         kernel = sim.kernels.get(node_name)
-        mapped = node_tasks(node, dict(getattr(kernel, "loads", {}) or {}),
-                            lambda name, n=node_name: _min_gap_ns(_jobs_of(jobs, n, name)["release_s"]))
+        def min_gap(name: str, n: str = node_name) -> int | None:
+            return _min_gap_ns(_jobs_of(jobs, n, name)["release_s"])
+
+        mapped = node_tasks(node, dict(getattr(kernel, "loads", {}) or {}), min_gap)
         items, notes, skipped, sync = mapped.items, mapped.notes, mapped.skipped, mapped.sync
         task_names = {t.name for t in node.tasks}
         if policy in ("edf", "np_edf"):

@@ -33,7 +33,8 @@ def _subsystem(A: np.ndarray, B: np.ndarray, C: np.ndarray, i_in: int, outs: lis
     others = np.setdiff1d(np.arange(n), idx)
     if idx.size == 0:
         return None
-    if others.size and (np.any(A[np.ix_(idx, others)] != 0) or np.any(C[np.ix_(outs, others)] != 0)):
+    rows = np.array(outs, dtype=int)
+    if others.size and (np.any(A[np.ix_(idx, others)] != 0) or np.any(C[np.ix_(rows, others)] != 0)):
         return None
     if B.shape[1] > 1 and np.any(np.delete(B, i_in, axis=1)[idx, :] != 0):
         return None

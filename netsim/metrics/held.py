@@ -71,17 +71,17 @@ def _edges(chunks: Iterable[tuple[np.ndarray, np.ndarray]], t0: float, t1: float
            ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """``(e, dt)`` per window: each row's value and the width of its step clipped to ``[t0, t1]`` (the next row's
     time, the last row's up to ``max(t1, t_last)``), as :func:`netsim.metrics.runtime.held_integrals` cuts them."""
-    held_t: np.ndarray | None = None
-    held_e: np.ndarray | None = None
+    held: tuple[np.ndarray, np.ndarray] | None = None  # the last row of the chunks so far: (t, e)
     for t, e in chunks:
         if len(t) == 0:
             continue
-        if held_t is not None:
-            t, e = np.concatenate([held_t, t]), np.concatenate([held_e, e])
+        if held is not None:
+            t, e = np.concatenate([held[0], t]), np.concatenate([held[1], e])
         edges = np.clip(t, t0, t1)
         yield e[:-1], np.diff(edges)
-        held_t, held_e = t[-1:], e[-1:]
-    if held_t is not None:
+        held = t[-1:], e[-1:]
+    if held is not None:
+        held_t, held_e = held
         last = np.clip(np.append(held_t, max(t1, float(held_t[0]))), t0, t1)
         yield held_e, np.diff(last)
 

@@ -64,7 +64,7 @@ def task_metrics_rows(rows: Any) -> dict[str, float]:
         out[f"{key}.pending"] = float(labels.count("pending"))
         out[f"{key}.max_response_s"] = float(resp.max()) if len(resp) else math.nan
         out[f"{key}.mean_response_s"] = float(resp.sum() / len(resp)) if len(resp) else math.nan
-        if arrivals:
+        if jitter_all is not None and from_arrival_all is not None:  # both read when arrivals
             out.update(arrival_metrics(key, jitter_all[idx], from_arrival_all[idx]))
     return out
 

@@ -369,7 +369,8 @@ def absolute_fmu_path(raw: dict[str, Any], folder: Path) -> None:
     plant = raw.get("plant")
     if not isinstance(plant, dict) or "fmu" not in (plant.get("type"), plant.get("model")):
         return
-    holder = plant.get("params") if isinstance(plant.get("params"), dict) and "path" in plant["params"] else plant
+    params = plant.get("params")
+    holder = params if isinstance(params, dict) and "path" in params else plant
     written = holder.get("path")
     if isinstance(written, str) and written and not Path(written).expanduser().is_absolute():
         holder["path"] = str((folder / written).resolve())

@@ -85,7 +85,7 @@ def _kind(path: Path) -> tuple[str, bool]:
     """``(fmiVersion, has a CoSimulation or ModelExchange element)`` from the root of ``modelDescription.xml``."""
     import zipfile
 
-    from lxml import etree
+    from lxml import etree  # type: ignore[import-untyped]  # lxml ships no types; lxml-stubs is not a dependency
 
     if path.is_dir():
         root = etree.parse(str(path / "modelDescription.xml")).getroot()

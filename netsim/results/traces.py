@@ -20,7 +20,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Iterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["QUANTILES", "TRACE_MODES", "JobSummary", "MessageSummary", "ObservedList", "QuantileSketch",
            "attach_streams", "attach_traces", "trace_problems"]
@@ -308,7 +311,7 @@ def attach_traces(sim: Any, output: Any) -> None:
     attach_streams(sim)
 
 
-class ObservedList(list):  # type: ignore[type-arg]
+class ObservedList(list):
     """A list of records (a table kept in full) that also hands each appended record to its ``listeners``."""
 
     def __init__(self, items: Iterable[Any] = ()) -> None:
@@ -346,7 +349,8 @@ def attach_streams(sim: Any) -> None:
     ``sim.metric_streams`` (key: the metric function's ``stream_key(params)``), read by the metric at the end."""
     scenario = getattr(sim, "scenario", None)
     output = getattr(scenario, "output", None)
-    if output is None or (getattr(output, "jobs", "full") == "full" and getattr(output, "messages", "full") == "full"):
+    if scenario is None or output is None or (
+            getattr(output, "jobs", "full") == "full" and getattr(output, "messages", "full") == "full"):
         return
     streams = dict(s for s in (_streamed(spec) for spec in scenario.metrics) if s is not None)
     if not streams:
@@ -373,7 +377,7 @@ def attach_streams(sim: Any) -> None:
     sim.metric_streams = streams
 
 
-def trace_problems(scenario: Any) -> list[str]:
+def trace_problems(scenario: Scenario) -> list[str]:
     """What a scenario's metrics need that its ``output`` trace settings do not keep, one sentence each.
 
     A metric function that reads the rows of the jobs or messages table says so in a ``tables`` attribute
@@ -386,7 +390,7 @@ def trace_problems(scenario: Any) -> list[str]:
 
     output = scenario.output
     modes = {table: getattr(output, table, "full") for table in ("jobs", "messages")}
-    problems = []
+    problems: list[str] = []
     for i, spec in enumerate(scenario.metrics):
         try:
             fn = lookup("metric", spec.type)
