@@ -37,7 +37,7 @@ from __future__ import annotations
 import csv
 import difflib
 from pathlib import Path
-from typing import Annotated, Any, Callable, Literal, Sequence, Union, get_args
+from typing import TYPE_CHECKING, Annotated, Any, Callable, Literal, Sequence, Union, get_args
 
 import numpy as np
 from pydantic import (
@@ -56,6 +56,9 @@ from pydantic import (
 from netsim.errors import ConfigError, SimulationError
 from netsim.timebase import UNITS
 from netsim.units import Duration, StrictModel, Time
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
 
 __all__ = [
     "DISTS",
@@ -105,7 +108,7 @@ class Distribution(StrictModel):
 
     dist: str
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         """One draw in ns from ``rng`` (``job``: the requesting job, read by :class:`Function` only)."""
         raise NotImplementedError
 
@@ -202,7 +205,7 @@ class Constant(Distribution):
     dist: Literal["constant"] = "constant"
     value: Time = 0
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         return self.value
 
     def upper_bound(self) -> int | None:
@@ -230,7 +233,7 @@ class Uniform(Distribution):
             raise ValueError("low must not exceed high")
         return self
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         return int(rng.integers(self.low, self.high + 1))
 
     def upper_bound(self) -> int | None:
@@ -259,7 +262,7 @@ class Normal(Distribution):
             raise ValueError("max must not be below min")
         return self
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         x = self.mean + self.std * float(rng.standard_normal())
         if x < self.min:
             x = self.min
@@ -278,7 +281,7 @@ class Exponential(Distribution):
     mean: Duration
     shift: Time = 0
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         return self.shift + int(round(float(rng.exponential(float(self.mean)))))
 
     def sampler(self, rng: np.random.Generator) -> Callable[[], int]:
@@ -295,7 +298,7 @@ class ShiftedGamma(Distribution):
     scale: Duration
     shift: Time = 0
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         return self.shift + int(round(rng.gamma(float(self.shape), float(self.scale))))
 
     def sampler(self, rng: np.random.Generator) -> Callable[[], int]:
@@ -348,7 +351,7 @@ class Empirical(Distribution):
                            else load_delays_csv(self.file or "", self.column, self.unit).tolist())
         return self._table
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         table = self.table()
         return int(table[int(rng.integers(0, len(table)))])
 
@@ -368,7 +371,7 @@ class Function(Distribution):
     dist: Literal["function"] = "function"
     fn: Callable[[Any], Any]
 
-    def draw(self, rng: np.random.Generator, job: Any = None) -> int:
+    def draw(self, rng: np.random.Generator, job: Job | None = None) -> int:
         ns = self.fn(job)
         try:
             out = int(round(ns))

@@ -48,11 +48,14 @@ import json
 import logging
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from netsim.errors import ConfigError
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = [
     "DESIGN_FILE",
@@ -385,7 +388,7 @@ def _task_entry(node: str, index: int, spec: Any, summary: dict[str, Any], progr
     return entry
 
 
-def _state_feedback_tasks(scenario: Any) -> list[tuple[str, int, Any]]:
+def _state_feedback_tasks(scenario: Scenario) -> list[tuple[str, int, Any]]:
     from netsim import registry
     from netsim.programs.state_feedback import StateFeedbackProgram
 
@@ -401,7 +404,7 @@ def _state_feedback_tasks(scenario: Any) -> list[tuple[str, int, Any]]:
     return out
 
 
-def static_designs(scenario: Any, plant: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
+def static_designs(scenario: Scenario, plant: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a valid scenario, built as validation builds
     them (:func:`~netsim.programs.feedback_design.task_design`: the designs validation made, nothing simulated)."""
     from netsim.programs.feedback_design import model_source, task_design
@@ -482,7 +485,7 @@ def run_warnings(sim: Any) -> list[str]:
     return design_warnings(run_designs(sim, margin=False))
 
 
-def nominal_warnings_at(scenario: Any, plant: Any) -> list[tuple[str, str]]:
+def nominal_warnings_at(scenario: Scenario, plant: Any) -> list[tuple[str, str]]:
     """The same warnings for ``netsim validate``: ``(YAML path, message)`` at each task's ``params.law``
     (:mod:`netsim.scenario.static_build` makes them warning problems)."""
     designs = static_designs(scenario, plant, margin=False)

@@ -93,7 +93,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Generator
-from typing import Any, ClassVar, Literal, cast
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, cast
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, field_validator, model_validator
@@ -111,6 +111,10 @@ from netsim.programs.feedback_design import claim_design, task_design
 from netsim.programs.inbox import take_matching
 from netsim.registry import register
 from netsim.units import QuietDefaultsModel, StrictModel, Time
+
+if TYPE_CHECKING:
+    from netsim.kernel.job import Job
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["AppliedInputSource", "MeasurementSource", "ModelSpec", "SolveTime", "StateFeedbackProgram"]
 
@@ -375,7 +379,7 @@ class StateFeedbackProgram:
             return
         got[source] = v
 
-    def _take_messages(self, job: Any, k_now: int) -> None:
+    def _take_messages(self, job: Job, k_now: int) -> None:
         kernel = self.ctx.kernel
         for i, src in enumerate(self.p.measurements):
             if src.network is None:
@@ -450,7 +454,7 @@ class StateFeedbackProgram:
         return fused_any
 
     # ------------------------------------------------------------------ the job
-    def __call__(self, job: Any) -> Body:
+    def __call__(self, job: Job) -> Body:
         from netsim.control.interface import sample_index
 
         p = self.p
@@ -489,6 +493,7 @@ class StateFeedbackProgram:
                 yield job.analog_out(ch, float(v))
         else:
             payload: Any = float(u[0]) if self.m == 1 else [float(v) for v in u]
+            assert p.network is not None  # _Params._output: exactly one of the three outputs is given
             yield job.send(p.network, _destination(p.to), payload, p.bits, priority=p.priority, tag=p.tag)
         if p.record_as:
             self.ctx.record(p.record_as, float(u[0]) if self.m == 1 else u, job.now)
@@ -519,7 +524,7 @@ class StateFeedbackProgram:
         return out
 
     @staticmethod
-    def check_design(scenario: Any, node: str, index: int, spec: Any, plant: Any) -> None:
+    def check_design(scenario: Scenario, node: str, index: int, spec: Any, plant: Any) -> None:
         """What building this task checks, without a kernel (``netsim validate``); raises ConfigError with a path."""
         params = spec.validated_params()
         path = f"nodes.{node}.tasks[{index}]"

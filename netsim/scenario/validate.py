@@ -53,7 +53,7 @@ program's channels); split by section, each part would need the others' indexes.
 from __future__ import annotations
 
 import logging
-from typing import Any, Iterable
+from typing import TYPE_CHECKING, Any, Iterable
 
 from pydantic import BaseModel, ValidationError
 
@@ -65,6 +65,9 @@ from netsim.scenario.problems import WARNING, Problem, ScenarioError
 from netsim.scenario.schema_sync import sync_ref_problems
 from netsim.kernel.policies import find_policy, is_builtin_policy, resolve_policy
 from netsim.timebase import TimeParseError, format_time, parse_time
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["validate_params", "check_raw", "plugin_load_problems"]
 
@@ -124,7 +127,7 @@ def _names(x: Any) -> list[str]:
 class _Checker:
     """Collects problems and validated plugin parameters for one raw scenario."""
 
-    def __init__(self, raw: dict[str, Any], scenario: Any = None) -> None:
+    def __init__(self, raw: dict[str, Any], scenario: Scenario | None = None) -> None:
         self.raw = raw
         self.scenario = scenario  # the validated Scenario (None when the schema refused something)
         self.tasks: dict[tuple[str, int], Any] = {}  # (node, index) -> the task's validated TaskSpec
@@ -792,7 +795,7 @@ def _ports(factory: Any, params: Any) -> tuple[list[Any] | None, list[Any] | Non
 
 
 def check_raw(raw: dict[str, Any], line_of: LineOf | None = None,
-              scenario: Any = None) -> tuple[list[Problem], dict[str, Any]]:
+              scenario: Scenario | None = None) -> tuple[list[Problem], dict[str, Any]]:
     """Plugin and cross-reference problems of a raw scenario, and the validated plugin parameters.
 
     Parameters
