@@ -180,7 +180,9 @@ def _forget_clusters(ids: set[int]) -> None:
     from distributed.deploy.spec import SpecCluster
 
     instances = getattr(SpecCluster, "_instances", None)
-    for cluster in [c for c in list(instances or ()) if id(c) in ids]:
+    if instances is None:  # a Dask without the exit-time list: nothing to take off it
+        return
+    for cluster in [c for c in list(instances) if id(c) in ids]:
         with contextlib.suppress(Exception):
             cluster.close(timeout=5)
         instances.discard(cluster)
@@ -406,8 +408,9 @@ def open_executor(
                     desc = f"dask scheduler {scheduler}"
                 else:
                     in_process = not (cluster_kwargs or {}).get("processes", True)
-                    log_file = scratch / "workers.log" if scratch is not None else None
-                    if log_file is not None:
+                    log_file = None
+                    if scratch is not None:
+                        log_file = scratch / "workers.log"
                         scratch.mkdir(parents=True, exist_ok=True)
                     with _sigint_deferred():
                         with contextlib.nullcontext() if in_process else _stderr_to(log_file):
