@@ -188,6 +188,21 @@ def _panels(names: list[str], roles: Mapping[str, str], units: Mapping[str, str]
     return panels
 
 
+def _numbered_ports(scenario: Mapping[str, Any] | None) -> tuple[list[str], list[str]] | None:
+    """The plant's ``(output names, input names)`` when an io channel with a ``unit:`` names its plant port by
+    number (``output: 0``, as the cart's encoder does), so that the unit reaches the recorded output; None
+    otherwise, or when the plant cannot be built here (the plant is built again, as ``to_timeresponse`` does)."""
+    channels = (scenario or {}).get("io") or {}
+    numbered = any(isinstance(ch, Mapping) and ch.get("unit") and isinstance(ch.get("output", ch.get("input")), int)
+                   for ch in channels.values())
+    if not numbered:
+        return None
+    from netsim.results.interop import _plant_names
+
+    names = _plant_names(scenario)
+    return (names[1], names[2]) if names is not None else None
+
+
 def first_transient(t: np.ndarray, outputs: Mapping[str, np.ndarray],
                     references: Mapping[str, np.ndarray]) -> tuple[float, float] | None:
     """``(t0, t1)`` around the run's first transient, or None when there is none worth a zoom.
@@ -272,7 +287,7 @@ def responses_figure(signals: pd.DataFrame, scenario: Mapping[str, Any] | None =
 
     names = [c for c in signals.columns if c != "time_s"]
     roles = signal_roles(scenario)
-    units = signal_units(scenario)
+    units = signal_units(scenario, _numbered_ports(scenario))
     loops = signal_loops(scenario)
     colours = _colours(names, loops, roles)
     if roles or units:

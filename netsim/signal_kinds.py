@@ -67,11 +67,13 @@ def signal_loops(scenario: Mapping[str, Any] | None) -> list[list[str]]:
     return [g for g in groups if len(g) > 1]
 
 
-def signal_units(scenario: Mapping[str, Any] | None) -> dict[str, str]:
+def signal_units(scenario: Mapping[str, Any] | None, ports: tuple[list[str], list[str]] | None = None
+                 ) -> dict[str, str]:
     """Each signal's unit, from the ``unit:`` of the scenario's ``io`` channels (never from names).
 
-    An ADC or encoder channel's unit is also that of the plant output it reads (when named, e.g. ``output:
-    theta``); a DAC's that of ``<name>.command`` and of the plant input it drives. A reference takes the unit
+    An ADC or encoder channel's unit is also that of the plant output it reads (named, e.g. ``output: theta``,
+    or numbered, ``output: 0``, when ``ports`` gives the plant's ``(output names, input names)``); a DAC's that
+    of ``<name>.command`` and of the plant input it drives. A reference takes the unit
     of the outputs that follow it (a task's ``channel``, a metric's ``output``; a state-feedback task's measured
     outputs) when they agree. Signals whose unit nobody declared are absent.
 
@@ -79,6 +81,8 @@ def signal_units(scenario: Mapping[str, Any] | None) -> dict[str, str]:
     --------
     >>> signal_units({"io": {"y": {"type": "adc", "output": "angle", "unit": "rad"}}})
     {'y': 'rad', 'angle': 'rad'}
+    >>> signal_units({"io": {"y": {"type": "adc", "output": 1, "unit": "m/s"}}}, (["p", "v"], ["u"]))
+    {'y': 'm/s', 'v': 'm/s'}
     """
     units: dict[str, str] = {}
     if not scenario:
@@ -89,6 +93,9 @@ def signal_units(scenario: Mapping[str, Any] | None) -> dict[str, str]:
         unit = str(ch["unit"])
         units[name] = unit
         port = ch.get("input") if ch.get("type") == "dac" else ch.get("output")
+        if isinstance(port, int) and not isinstance(port, bool) and ports is not None:
+            known = ports[1] if ch.get("type") == "dac" else ports[0]
+            port = known[port] if 0 <= port < len(known) else None
         if isinstance(port, str):
             units.setdefault(port, unit)
         if ch.get("type") == "dac":
