@@ -32,6 +32,21 @@ MIN_FEATURE_PX = 2
 #: Share of a Gantt chart's width the time axis takes (the rest: row names and the legend).
 _PLOT_SHARE = 0.7
 
+
+class _LabelOnce:
+    """A legend labeller: each label the first time it is asked for, None after (one legend entry per kind);
+    ``seen`` holds the labels given out."""
+
+    def __init__(self) -> None:
+        self.seen: set[str] = set()
+
+    def __call__(self, label: str) -> str | None:
+        if label in self.seen:
+            return None
+        self.seen.add(label)
+        return label
+
+
 def resolve_window(window: Any, starts: pd.Series | np.ndarray, end_s: float) -> tuple[float, float]:
     """The time window ``(t0, t1)`` in seconds of a Gantt chart or timeline.
 
@@ -166,13 +181,7 @@ def schedule_figure(schedule: pd.DataFrame, jobs: pd.DataFrame | None = None, *,
     heights = {"running": 0.5, "ready": 0.2, "blocked": 0.12}
     inside = (sched["start_s"] < t1) & (sched["end_s"] > t0)
     sched = sched[inside]
-    seen: set[str] = set()
-
-    def once(label: str) -> str | None:
-        if label in seen:
-            return None
-        seen.add(label)
-        return label
+    once = _LabelOnce()
 
     for i, (node, task) in enumerate(rows):
         sel = sched[(sched["node"] == node) & (sched["task"] == task)]
@@ -218,7 +227,7 @@ def schedule_figure(schedule: pd.DataFrame, jobs: pd.DataFrame | None = None, *,
     ax.set_xlim(t0, t1)
     ax.set_title(title or f"schedule ({_window_note(t0, t1, run_end, 'job' if chosen else '')})")
     ax.grid(True, axis="x", alpha=0.3)
-    if seen:
+    if once.seen:
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     return fig
 
@@ -258,13 +267,7 @@ def network_figure(messages: pd.DataFrame, *, window: Any = None, end_s: float =
     dropped_all = messages["dropped"].astype(str).str.lower() == "true"
     msgs = messages[(sent >= t0) & (sent <= t1)]
     dropped = dropped_all[msgs.index]
-    seen: set[str] = set()
-
-    def once(label: str) -> str | None:
-        if label in seen:
-            return None
-        seen.add(label)
-        return label
+    once = _LabelOnce()
 
     n_drop = 0
     for i, (net, sender) in enumerate(rows):
@@ -300,6 +303,6 @@ def network_figure(messages: pd.DataFrame, *, window: Any = None, end_s: float =
     ax.set_xlim(t0, t1)
     ax.set_title(title or f"network ({_window_note(t0, t1, run_end, 'message' if chosen else '')}; {n_drop} dropped)")
     ax.grid(True, axis="x", alpha=0.3)
-    if seen:
+    if once.seen:
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     return fig
