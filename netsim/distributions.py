@@ -458,11 +458,12 @@ def load_delays_csv(path: str | Path, column: str | int = 0, unit: str = "s") ->
     """
     p = Path(path)
     if not p.is_file():
-        raise ConfigError(f"delay file '{p}' does not exist; give a CSV of measured delays")
+        raise ConfigError(f"times file '{p}' does not exist; give a CSV of measured times "
+                          "(delays, execution times, gaps)")
     with p.open(newline="") as fh:
         rows = [row for row in csv.reader(fh) if row and any(c.strip() for c in row)]
     if not rows:
-        raise ConfigError(f"delay file '{p}' is empty")
+        raise ConfigError(f"times file '{p}' is empty")
     header = rows[0]
     try:
         [float(c) for c in header if c.strip()]
@@ -472,7 +473,7 @@ def load_delays_csv(path: str | Path, column: str | int = 0, unit: str = "s") ->
     if isinstance(column, str):
         if not has_header or column not in [h.strip() for h in header]:
             known = ", ".join(h.strip() for h in header) if has_header else "no header row"
-            raise ConfigError(f"delay file '{p}' has no column '{column}' ({known})")
+            raise ConfigError(f"times file '{p}' has no column '{column}' ({known})")
         idx = [h.strip() for h in header].index(column)
     else:
         idx = int(column)
@@ -481,14 +482,14 @@ def load_delays_csv(path: str | Path, column: str | int = 0, unit: str = "s") ->
     out = []
     for lineno, row in enumerate(body, start=2 if has_header else 1):
         if idx >= len(row):
-            raise ConfigError(f"delay file '{p}' line {lineno} has no column {idx}")
+            raise ConfigError(f"times file '{p}' line {lineno} has no column {idx}")
         try:
             v = float(row[idx])
         except ValueError:
-            raise ConfigError(f"delay file '{p}' line {lineno}: {row[idx]!r} is not a number") from None
+            raise ConfigError(f"times file '{p}' line {lineno}: {row[idx]!r} is not a number") from None
         if not np.isfinite(v) or v < 0:
-            raise ConfigError(f"delay file '{p}' line {lineno}: delay {v} must be finite and >= 0")
+            raise ConfigError(f"times file '{p}' line {lineno}: time {v} must be finite and >= 0")
         out.append(int(round(v * scale)))
     if not out:
-        raise ConfigError(f"delay file '{p}' holds no delays")
+        raise ConfigError(f"times file '{p}' holds no times")
     return np.asarray(out, dtype=np.int64)

@@ -93,7 +93,7 @@ def test_empirical_delay_file_problems_are_config_errors(tmp_path):
     cases = [
         ({"dist": "empirical", "file": str(tmp_path / "nope.csv")}, "does not exist"),
         ({"dist": "empirical", "file": str(bad), "column": "d"}, "no column 'd'"),
-        ({"dist": "empirical", "file": str(bad), "column": "delay"}, "line 3: delay -0.002 must be"),
+        ({"dist": "empirical", "file": str(bad), "column": "delay"}, "line 3: time -0.002 must be"),
         ({"dist": "empirical"}, "exactly one of"),
     ]
     for spec, match in cases:
