@@ -47,12 +47,13 @@ def task_error(node: str, task: str, field: str, message: str) -> BuildError:
     """A :class:`BuildError` naming the node, the task (or handler) and the field to change.
 
     The error carries ``node``, ``task`` and ``field`` attributes so a scenario builder can map it to a
-    YAML path.
+    YAML path, and ``reason``, the message without its node/task/field lead, which it shows at that path.
     """
     err = BuildError(f"node '{node}', task '{task}', field '{field}': {message}")
     err.node = node  # type: ignore[attr-defined]
     err.task = task  # type: ignore[attr-defined]
     err.field = field  # type: ignore[attr-defined]
+    err.reason = message  # type: ignore[attr-defined]
     return err
 
 
