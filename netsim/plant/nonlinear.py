@@ -29,7 +29,7 @@ from scipy.integrate import solve_ivp
 from netsim.errors import ConfigError, SimulationError
 from netsim.plant.base import Plant
 from netsim.plant.disturbance import _Source
-from netsim.plant.integrator import Rk4Buffers, hermite, rk4_steps, steps_for
+from netsim.plant.integrator import Rk4Buffers, RkSegments, hermite, rk4_steps, steps_for
 from netsim.plant.modes import Fn, Guard, Mode, stick_slip_modes
 from netsim.plant.shared import NEVER, _vector
 from netsim.timebase import S
@@ -158,7 +158,7 @@ class NonlinearPlant(Plant):
             if step_ns < 1:
                 raise ConfigError(f"plant {self.name}: integrator rk4 max_step {max_step} s is below 1 ns")
             self._rk4_ns, self.max_step = step_ns, step_ns / S
-            self.method = "rk4"
+            self.method, self._rk_segments = "rk4", None
             return
         if method != "solve_ivp":
             raise ConfigError(f"plant {self.name}: integrator method must be 'solve_ivp' or 'rk4', got {method!r}")
@@ -170,6 +170,7 @@ class NonlinearPlant(Plant):
         self.method = "RK45" if solver is None else str(solver)
         self.rtol, self.atol = rtol, atol
         self.max_step = math.inf if max_step is None else float(max_step)
+        self._rk_segments = RkSegments.make(self.method, self.n_states, rtol, atol, self.max_step)
 
     def _check_output(self, x: np.ndarray) -> None:
         y = np.atleast_1d(np.asarray(self.h(0.0, x, np.zeros(self.n_inputs), self.params), dtype=float))
@@ -265,10 +266,11 @@ class NonlinearPlant(Plant):
                 ev.direction = g.direction  # type: ignore[attr-defined]
                 evs.append(ev)
             try:
-                sol = solve_ivp(
-                    rhs, (t, t1), x, method=self.method, rtol=self.rtol, atol=self.atol,
-                    max_step=self.max_step, events=evs or None,
-                )
+                if not evs and self._rk_segments is not None:  # solve_ivp's steps without solve_ivp (integrator.py)
+                    sol = self._rk_segments.solve(rhs, t, t1, x)
+                else:
+                    sol = solve_ivp(rhs, (t, t1), x, method=self.method, rtol=self.rtol, atol=self.atol,
+                                    max_step=self.max_step, events=evs or None)
             except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
                 raise SimulationError(f"plant {self.name}: integrator failed at t = {t:.12g} s: {exc}") from exc
             t_new = float(sol.t[-1])
