@@ -445,6 +445,7 @@ class Task:
         "queue",
         "released",
         "rng",
+        "server",
         "spec",
         "trace_since",
         "trace_state",
@@ -469,6 +470,7 @@ class Task:
         self.watch_deadline = spec.deadline_handler is not None or spec.abort_on_miss  # push a deadline check
         self.rng: Any = None  # the task's own stream for release jitter and sporadic gaps (set by add_task)
         self.first_release: int | None = None  # nominal time of the first self-release
+        self.server: Any = None  # the CBS or TBS serving the task (netsim.kernel.servers), None: none
 
 
 class Handler:
