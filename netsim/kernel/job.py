@@ -107,6 +107,8 @@ class JobState:
     _held, _own_rank
         The monitors the job owns (``None`` until it first enters or waits for one) and its own rank while
         ``_rank``/``_base_rank`` carry an inherited or ceiling rank (:mod:`netsim.kernel.monitor`).
+    _server
+        The constant bandwidth server whose budget the job uses (:mod:`netsim.kernel.servers`), else None.
     """
 
     _gen: Any = None
@@ -128,6 +130,7 @@ class JobState:
     _np = False
     _held: "list[Monitor] | None" = None
     _own_rank: Any = None
+    _server: Any = None
 
 
 class Job(JobState):
