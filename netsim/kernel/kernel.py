@@ -167,6 +167,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         self.switch_time = 0
         self.segments = 0
         self.halted = False  # halt(): the node stopped for good (its battery ran out, netsim.energy)
+        self.servers: dict[str, Any] = {}  # CBS/TBS servers by name (netsim.kernel.servers)
         # the event loop's heap and id counter: wake-ups are call entries pushed on it (kernel.events)
         _, self._queue, self._eid = env.sim.scheduler()
         schedule_call(self._sim, 0, URGENT, self._on_start)
@@ -298,6 +299,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         job._rank = job._base_rank = (1, key)
         job._np = not (spec.preemptible and self.policy.preemptive)
         job._budget = spec.wcet
+        if task.server is not None:  # served by a CBS or TBS: the server ranks the job (netsim.kernel.servers)
+            task.server.arrive(job)
         if task.watch_deadline and deadline is not None:  # a deadline handler or abort_on_miss
             at = deadline if nominal is None or deadline > now else now  # a jitter may pass the deadline
             heappush(self._queue, (at, DEADLINE, next(self._eid), (self._on_deadline, job)))
