@@ -183,6 +183,8 @@ class Dispatcher:
                         self._last_task_job = None  # idle: the next task pays a context switch
                         return
                     cur = heappop(ready)[2]
+                    if cur._server is not None and cur._server.held(cur):
+                        continue  # a hard CBS out of budget keeps its job until the replenishment (servers)
                     # switch in: the job holds the CPU (a task job after another task job or idle pays a context switch)
                     cur._state = RUNNING
                     self._running = cur
@@ -211,6 +213,9 @@ class Dispatcher:
                     budget = cur._budget
                     if budget is not None and budget < remaining:
                         if budget <= 0:
+                            if cur._server is not None:  # a CBS's budget ran out (netsim.kernel.servers)
+                                cur._server.exhausted(cur)
+                                continue
                             cur._budget = None
                             cur.wcet_overrun = True
                             self._fire_overrun(cur._task.wcet_handler, cur, "wcet")
@@ -277,6 +282,8 @@ class Dispatcher:
             job._remaining -= elapsed
             if job._budget is not None:
                 job._budget -= elapsed
+                if job._server is not None:  # a constant bandwidth server's budget (netsim.kernel.servers)
+                    job._server.charged(job)
         job.cpu_time += elapsed
         job._task.cpu += elapsed
 
@@ -334,4 +341,3 @@ class Dispatcher:
                 ref(job)
             finally:
                 self._busy = busy
-
