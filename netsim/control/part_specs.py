@@ -44,6 +44,8 @@ class PartSpec(BaseModel):
     _given: Any = PrivateAttr(None)
     #: The part class (set on each generated spec model).
     part: ClassVar[Any] = None
+    if TYPE_CHECKING:  # the part's name: a Literal field of each generated spec model (_spec_model)
+        type: str
 
     @property
     def params(self) -> Any:
