@@ -70,6 +70,7 @@ class Interpreter:
     kill_job: Callable[[Job], None]  # Kernel
     _on_sleep_done: Callable[[Any], None]  # Kernel
     _trace: Callable[[Any, "str | None", int], None]  # Tracing
+    set_speed: Callable[[float], None]  # Kernel
 
     #: ``_OPS[op]`` is the method answering operation ``op`` (filled below the class; EXECUTE is inline).
     _OPS: tuple[Callable[..., Any], ...] = ()
@@ -254,6 +255,10 @@ class Interpreter:
             self._kill(job)
             return GAVE_UP
         self.kill_job(target)
+        return None
+
+    def _op_set_speed(self, job: Job, req: Request, now: int) -> Any:
+        self.set_speed(req.a)
         return None
 
     # ================================================================= helpers

@@ -109,6 +109,11 @@ class JobState:
         ``_rank``/``_base_rank`` carry an inherited or ceiling rank (:mod:`netsim.kernel.monitor`).
     _server
         The constant bandwidth server whose budget the job uses (:mod:`netsim.kernel.servers`), else None.
+    _core, _last_core, _in_seg, _seg_work
+        Multicore and speed-scaling kernels only (:mod:`netsim.kernel.multicore`): the core the job holds
+        (-1: none), the core it last ran on (-1: never ran), whether one of its segments is under way, and
+        the work (execution ns at speed 1) its current execution segment was planned for (0: a kernel-time
+        segment: context switch, migration or ISR latency).
     """
 
     _gen: Any = None
@@ -131,6 +136,10 @@ class JobState:
     _held: "list[Monitor] | None" = None
     _own_rank: Any = None
     _server: Any = None
+    _core = -1
+    _last_core = -1
+    _in_seg = False
+    _seg_work = 0
 
 
 class Job(JobState):
@@ -235,6 +244,11 @@ class Job(JobState):
     def sleep_until(self, t_ns: int) -> Request:
         """Give up the CPU until absolute time ``t_ns`` (returns at once if it has passed)."""
         return Request(rq.SLEEP_UNTIL, t_ns)
+
+    def set_speed(self, speed: float) -> Request:
+        """Set the node's CPU speed now (TrueTime's ``ttSetCPUScaling``): from now on ``execute(w)`` takes
+        ``w / speed`` ns (the node needs ``nodes.<n>.speed``: :mod:`netsim.kernel.speed`)."""
+        return Request(rq.SET_SPEED, speed)
 
     # ----------------------------------------------------------------- I/O and network
     def analog_in(self, channel: str) -> Request:

@@ -101,6 +101,9 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         Keep the schedule trace (``Kernel.schedule``); turning it off saves time in long runs.
     livelock_limit
         Zero-time activities allowed at one instant before a :class:`LivelockError`.
+    cores, multicore, migration_cost, speed, speed_levels
+        Cores, ``"global"``/``"partitioned"``, migration cost (:mod:`netsim.kernel.multicore`); initial CPU
+        speed (``None``: no scaling) and the speeds :meth:`set_speed` accepts (:mod:`netsim.kernel.speed`).
 
     Attributes
     ----------
@@ -120,10 +123,23 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         Periodic interrupt loads accounted in closed form (:meth:`create_periodic_load`).
     """
 
+    def __new__(cls, *args: Any, cores: int = 1, speed: float | None = None, **kwargs: Any) -> "Kernel":
+        """A :class:`~netsim.kernel.multicore.MulticoreKernel` for ``cores > 1`` or a ``speed`` (chosen at build time)."""
+        if cls is Kernel and (cores != 1 or speed is not None):
+            from netsim.kernel.multicore import MulticoreKernel
+
+            cls = MulticoreKernel
+        return object.__new__(cls)
+
     def __init__(self, env: SimEnv, name: str, policy: "str | Policy" = "fp", context_switch: int = 0, *,
-                 trace: bool = True, livelock_limit: int = 200_000) -> None:
+                 trace: bool = True, livelock_limit: int = 200_000, cores: int = 1, multicore: str = "global",
+                 migration_cost: int = 0, speed: float | None = None,
+                 speed_levels: "list[float] | None" = None) -> None:
         if not isinstance(name, str) or not name:
             raise BuildError(f"kernel name must be a non-empty string, got {name!r}")
+        if cores != 1 or speed is not None:  # Kernel(...) makes a MulticoreKernel for these (see __new__)
+            raise BuildError(f"node '{name}': {type(self).__name__} is a subclass of Kernel with one core and no "
+                             "speed scaling; subclass netsim.kernel.multicore.MulticoreKernel for cores/speed")
         self.env = env
         self._sim = env.sim
         self.name = name
@@ -168,6 +184,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         self.segments = 0
         self.halted = False  # halt(): the node stopped for good (its battery ran out, netsim.energy)
         self.servers: dict[str, Any] = {}  # CBS/TBS servers by name (netsim.kernel.servers)
+        self.cores = 1  # a MulticoreKernel sets its own (netsim.kernel.multicore)
+        self.speed = 1.0  # CPU speed; changed only by a kernel with speed scaling (set_speed)
         # the event loop's heap and id counter: wake-ups are call entries pushed on it (kernel.events)
         _, self._queue, self._eid = env.sim.scheduler()
         schedule_call(self._sim, 0, URGENT, self._on_start)
@@ -183,6 +201,11 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
     def running(self) -> str | None:
         """Name of the task or handler holding the CPU (``None``: idle)."""
         return None if self._running is None else self._running.task_name
+
+    def set_speed(self, speed: float) -> None:
+        """Set the CPU speed (``ttSetCPUScaling``): a SimulationError here, a node without ``speed``."""
+        raise SimulationError(f"node '{self.name}': set_speed({speed!r}) on a node without speed scaling; give "
+                              f"the node an initial speed (nodes.{self.name}.speed: 1, or Kernel(..., speed=1.0))")
 
     def inbox(self, network: str) -> deque[Message]:
         """The node's queue of received, not yet read messages of ``network``."""

@@ -41,6 +41,7 @@ class Op(IntEnum):
     SLEEP = 15
     ENTER = 16
     EXIT = 17
+    SET_SPEED = 18
 
 
 # The operations as plain ints (``Request(RECEIVE, "net")`` in programs that prebuild their requests). Requests
@@ -64,6 +65,7 @@ KILL = Op.KILL.value
 SLEEP = Op.SLEEP.value
 ENTER = Op.ENTER.value
 EXIT = Op.EXIT.value
+SET_SPEED = Op.SET_SPEED.value
 
 #: The name of each operation (the name of its ``Job`` method).
 OP_NAMES: dict[int, str] = {op.value: op.name.lower() for op in Op}
