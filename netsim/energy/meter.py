@@ -6,7 +6,14 @@ the energy used up to ``t`` is
 
     E(t) = P_idle t + (P_busy - P_idle) busy(t) + sum over radios and states of P_state time_state(t),
 
-exact for the piecewise-constant powers of :class:`~netsim.energy.params.EnergyModel`.
+exact for the piecewise-constant powers of :class:`~netsim.energy.params.EnergyModel`. On a node with ``m``
+cores or speed scaling (:mod:`netsim.kernel.multicore`) the powers are per core and the busy time is kept per
+speed ``s`` (``Kernel.busy_by_speed``, core-ns):
+
+    E_cpu(t) = m P_idle t + sum over speeds s of (P_busy(s) - P_idle) busy_s(t),
+
+with ``P_busy(s) = static + (busy - static) s^exponent`` (:class:`~netsim.energy.params.CpuPower`), the
+integral of that power law over the run.
 
 The battery: a check at ``t`` knows the energy left ``R = C - E(t)``; the node cannot use it faster than
 ``P_max`` (CPU busy plus every radio in its most costly state), so it cannot run out before
@@ -68,7 +75,7 @@ class EnergyMeter:
         cpu = model.cpu
         self._busy_w = cpu.busy if cpu is not None else 0.0
         self._idle_w = cpu.idle if cpu is not None else 0.0
-        self._p_max = (max(self._busy_w, self._idle_w)
+        self._p_max = (getattr(kernel, "cores", 1) * max(self._busy_w, self._idle_w)  # P_busy(s) <= busy
                        + len(self._clocks) * max(self._radio_w.values(), default=0.0))
         self.depleted_ns: int | None = None
         self._frozen: dict[str, float] | None = None
@@ -84,7 +91,15 @@ class EnergyMeter:
         if self._frozen is not None:
             return dict(self._frozen)
         busy = sum(self.kernel.cpu_time.values())
-        cpu_j = (self._idle_w * t_ns + (self._busy_w - self._idle_w) * busy) / S
+        by_speed = getattr(self.kernel, "busy_by_speed", None)
+        if by_speed is None:
+            cpu_j = (self._idle_w * t_ns + (self._busy_w - self._idle_w) * busy) / S
+        else:  # several cores and/or speed scaling: each core idles or draws P_busy(s) at its speed
+            cpu = self.model.cpu
+            cores = self.kernel.cores
+            dynamic = sum(((cpu.busy_at(s) if cpu is not None else 0.0) - self._idle_w) * ns
+                          for s, ns in sorted(by_speed().items()))
+            cpu_j = (self._idle_w * cores * t_ns + dynamic) / S
         times = {k: 0 for k in ("tx", "rx", "idle", "sleep")}
         for clock in self._clocks:
             for k, v in clock.times(t_ns).items():

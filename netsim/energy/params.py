@@ -22,9 +22,9 @@ the air ends, and its radios receive nothing.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, model_serializer, model_validator
 
 from netsim.quantities import Energy, Power, parse_energy, parse_power
 from netsim.units import StrictModel
@@ -36,10 +36,44 @@ __all__ = ["CpuPower", "RadioPower", "Battery", "EnergyModel", "parse_power", "p
 
 
 class CpuPower(StrictModel):
-    """CPU power (W) by state."""
+    """CPU power (W) by state, per core.
 
-    busy: Power = Field(description="W while the CPU runs a task, a handler or a context switch")
+    On a node with speed scaling (``nodes.<n>.speed``, :mod:`netsim.kernel.speed`) a busy core at speed ``s``
+    draws ``P_busy(s) = static + (busy - static) * s ** exponent``: ``busy`` at full speed, ``static`` the part
+    that does not scale (leakage), the rest dynamic power (CMOS: ``P ~ f V^2``, with ``V ~ f`` the cube of the
+    speed, hence ``exponent: 3`` by default). Without speed scaling ``s = 1`` and a busy core draws ``busy``.
+    """
+
+    busy: Power = Field(description="W while the CPU runs a task, a handler or a context switch (at full speed)")
     idle: Power = Field(0.0, description="W while the CPU idles")
+    static: Power | None = Field(None, description="W of the busy power that does not scale with the speed "
+                                 "(default 0: all of it scales)")
+    exponent: float | None = Field(None, gt=0, description="the busy power's dynamic part scales as "
+                                   "speed ** exponent (default 3)")
+
+    @model_validator(mode="after")
+    def _static_below_busy(self) -> "CpuPower":
+        if self.static is not None and self.static > self.busy:
+            raise ValueError(f"static {self.static} W exceeds busy {self.busy} W (static is the part of the busy "
+                             "power that does not scale with the speed)")
+        return self
+
+    @model_serializer(mode="wrap")
+    def _without_unset_scaling(self, handler: Any) -> Any:
+        data = handler(self)  # an energy model without the speed law dumps (and hashes) as before it existed
+        if isinstance(data, dict):
+            for key in ("static", "exponent"):
+                if data.get(key, 0) is None:
+                    del data[key]
+        return data
+
+    def busy_at(self, speed: float) -> float:
+        """``P_busy(speed)`` in W (see the class docstring)."""
+        if speed == 1:
+            return float(self.busy)
+        static = 0.0 if self.static is None else float(self.static)
+        exponent = 3.0 if self.exponent is None else float(self.exponent)
+        return static + (float(self.busy) - static) * speed ** exponent
 
 
 class RadioPower(StrictModel):
