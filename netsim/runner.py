@@ -27,7 +27,7 @@ a sweep, which share their baseline, run it once per worker process. The key is 
 baseline scenario without ``output`` and ``seed``, after each program's ``canonical_params`` (if it has one)
 has reset the parameters its other settings make inert (e.g. the thresholds of a sensor in time-triggered
 mode). An entry is reused for any seed when the baseline run did not use its seed (no random stream drawn
-from, see :meth:`~netsim.scenario.builder.Simulation.used_seed`), else only for the same seed. Results are
+from, see :meth:`~netsim.build.builder.Simulation.used_seed`), else only for the same seed. Results are
 identical with and without the cache; :func:`clear_baseline_cache` empties it.
 
 Why this module is long: the run's stages (load, baseline, simulate, metrics, verdict, write) share one failure
@@ -47,12 +47,10 @@ from functools import lru_cache
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping, cast
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
-
-import pandas as pd  # noqa: E402
 
 from netsim.errors import DivergenceError  # noqa: E402
 from netsim.results import Lazy, RunResult, check_out_dir  # noqa: E402
@@ -155,10 +153,10 @@ def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = N
     """Build and run ``scenario`` (validated); returns (result without metrics, simulation, exception or None).
 
     ``progress(t_ns, t_end_ns)``, when given, is called about every 1 % of simulated time
-    (:meth:`~netsim.scenario.builder.Simulation.run`). The result's ``meta`` has ``status``, ``error``,
+    (:meth:`~netsim.build.builder.Simulation.run`). The result's ``meta`` has ``status``, ``error``,
     ``t_end_s``, ``wall_time_s`` and ``events``.
     """
-    from netsim.scenario.builder import build
+    from netsim.build.builder import build
 
     t0 = time.perf_counter()
     sim = build(scenario)
@@ -199,7 +197,7 @@ def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = N
     from netsim.programs.design_summary import run_warnings as design_warnings  # D's hook (issue 26 s4)
 
     # the unstable-nominal-loop warnings go to meta.json only: loading the scenario logged them already
-    # (validate's static check, netsim.scenario.static_build), and the console showed each twice
+    # (validate's dry run, netsim.build.dry_run), and the console showed each twice
     said = design_warnings(sim)
     warnings = _unrecorded(scenario, sim.env.recorder)
     # a program's own warnings about its setting (e.g. netsim.models.unicycle's filter and plant disagreeing)
@@ -377,22 +375,22 @@ def run(
         if failure is not None and not isinstance(failure, DivergenceError):
             # a run that failed has tables up to the failure, but no metrics: numbers computed over a run cut
             # short by an error would read like results (RunResult.to_csv then writes no metrics.csv)
-            result.metrics = pd.Series(dtype=float, name="value")
+            result._set_metrics({})
         else:
-            result.metrics = pd.Series(_metrics(result, sim, scenario, baseline), dtype=float, name="value")
+            result._set_metrics(_metrics(result, sim, scenario, baseline))
     except Exception as exc:  # noqa: BLE001
         if failure is None:
             failure = exc
             result.meta["status"] = "error"
             result.meta["error"] = f"{type(exc).__name__}: {exc}"
-        result.metrics = pd.Series(dtype=float, name="value")
+        result._set_metrics({})
     if failure is None:
         from netsim.run_warnings import load_warnings
 
         mode = result.traces.get("jobs", "full")  # 'never ran' is known from the rows or the summary, not when off
         rows = result._table_rows("jobs")  # the records' columns: no DataFrame built for the warnings
         ran = (result.jobs if rows is None else rows) if mode == "full" else result.job_summary
-        extra = load_warnings(cast(dict[str, float], result.metrics.to_dict()), ran, scenario.nodes if mode != "off" else {},
+        extra = load_warnings(result.metric_values(), ran, scenario.nodes if mode != "off" else {},
                               scenario.networks or {})
         for text in extra:
             log.warning("%s: %s", scenario.name, text)
@@ -468,28 +466,36 @@ def _metrics_view(result: RunResult) -> RunResult:
     """``result`` for the metrics: the same signals, metadata and records, with its unbuilt tables as their own
     :class:`~netsim.results.Lazy` builders, so a table a metric reads is built on the view, not on ``result``."""
     return RunResult(signals=_lazy_view(result, "signals"), jobs=_lazy_view(result, "jobs"),
-                     messages=_lazy_view(result, "messages"), metrics=result.metrics, meta=result.meta,
+                     messages=_lazy_view(result, "messages"), metrics=_same(result, "metrics"), meta=result.meta,
                      scenario=result.scenario, schedule=_lazy_view(result, "schedule"), out_dir=result.out_dir,
                      traces=result.traces, job_summary=result.job_summary, message_summary=result.message_summary,
                      _job_rows=result._job_rows, _message_rows=result._message_rows, _signal_source=result._signal_source,
-                     _streams=result._streams)
+                     _streams=result._streams, _metric_values=result._metric_values)
 
 
 def _shared(result: RunResult) -> RunResult:
     """A view of a cached result that a metric may modify without touching the cache (copy-on-write)."""
     return RunResult(signals=_lazy_view(result, "signals"), jobs=_lazy_view(result, "jobs"),
-                     messages=_lazy_view(result, "messages"), metrics=result.metrics.copy(deep=False),
+                     messages=_lazy_view(result, "messages"), metrics=_lazy_view(result, "metrics"),
                      meta=dict(result.meta), scenario=result.scenario,
                      schedule=_lazy_view(result, "schedule"), traces=dict(result.traces),
                      job_summary=result.job_summary, message_summary=result.message_summary,
-                     _job_rows=result._job_rows, _message_rows=result._message_rows, _signal_source=result._signal_source)
+                     _job_rows=result._job_rows, _message_rows=result._message_rows, _signal_source=result._signal_source,
+                     _metric_values=result._metric_values)
 
 
 def _lazy_view(result: RunResult, name: str) -> Any:
     """A table of ``result`` for a view: its :class:`~netsim.results.Lazy` builder while unbuilt (nothing built
-    for a baseline that no metric reads that table of), else a shallow copy."""
+    for a baseline that no metric reads that table of; each view that reads it builds its own), else a shallow
+    copy."""
     value = object.__getattribute__(result, name)
     return value if isinstance(value, Lazy) else value.copy(deep=False)
+
+
+def _same(result: RunResult, name: str) -> Any:
+    """A field of ``result`` as it is: the object itself, or its :class:`~netsim.results.Lazy` builder while unbuilt
+    (reading it from the view builds a table equal to the one ``result`` would build)."""
+    return object.__getattribute__(result, name)
 
 
 def _baseline(base_sc: Any) -> RunResult:
@@ -507,7 +513,7 @@ def _baseline(base_sc: Any) -> RunResult:
     from netsim.metrics.runtime import generic_metrics
 
     t_base = int(round(baseline.meta["t_end_s"] * S))
-    baseline.metrics = pd.Series(generic_metrics(baseline, base_sim, t_base), dtype=float, name="value")
+    baseline._set_metrics(generic_metrics(baseline, base_sim, t_base))
     _ = baseline.signals  # built once for the cache (metrics read the baseline's signals at every point)
     slot = None if not base_sim.used_seed() else int(base_sc.seed)
     _BASELINES.setdefault(key, {})[slot] = baseline
@@ -524,4 +530,4 @@ def run_point(raw: Mapping[str, Any], out: str | Path, seed: int, tables: bool =
     Returns the metrics (an errored run raises; a diverged run returns its metrics, its ``meta.json`` says so).
     """
     result = run(dict(raw), out=out, seed=seed, write=True, tables=tables)
-    return {str(k): float(v) for k, v in result.metrics.items()}
+    return result.metric_values()

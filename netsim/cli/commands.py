@@ -142,7 +142,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if not args.quiet or status != "ok":  # quiet: nothing on stdout unless the run failed
         print(f"{scenario.name}: {told}{_run_facts(meta)}")
     if not args.quiet:
-        _print_metrics(getattr(result, "metrics", None))
+        values = getattr(result, "metric_values", None)  # a plain dict: no pandas Series built to print them
+        _print_metrics(values() if callable(values) else getattr(result, "metrics", None))
         if out_dir:
             print(f"run folder: {out_dir}")
     from netsim.status import count_statuses

@@ -43,10 +43,16 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
-import pandas as pd
+
+from netsim.lazy_import import lazy_module
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:  # imported at its first use: `netsim run` and `validate` build no DataFrame (issue 29)
+    pd = lazy_module("pandas")
 
 from netsim.results.files import (
     FLOAT_FORMAT,
@@ -113,6 +119,14 @@ def _json_default(obj: Any) -> Any:
 #: The files :meth:`RunResult.to_csv` writes besides ``metrics.csv`` and ``meta.json``.
 _TABLE_FILES = ("scenario.yaml", "signals.csv", "jobs.csv", "messages.csv", "jobs_summary.csv", "messages_summary.csv",
                 "schedule.csv")
+
+
+def _empty_signals() -> pd.DataFrame:
+    return pd.DataFrame({"time_s": pd.Series([], dtype=float)})
+
+
+def _empty_metrics() -> pd.Series:
+    return pd.Series(dtype=float, name="value")
 
 
 class Lazy:
@@ -185,13 +199,14 @@ class RunResult:
     def __setstate__(self, state: dict[str, Any]) -> None:
         object.__getattribute__(self, "__dict__").update(state)
 
-    signals: pd.DataFrame = field(default_factory=lambda: pd.DataFrame({"time_s": pd.Series([], dtype=float)}))
-    jobs: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=JOB_COLUMNS))
-    messages: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=MESSAGE_COLUMNS))
-    metrics: pd.Series = field(default_factory=lambda: pd.Series(dtype=float, name="value"))
+    # the empty tables are Lazy too: a run fills them in, and pandas is imported only when one is read (issue 29)
+    signals: pd.DataFrame = field(default_factory=lambda: Lazy(_empty_signals))
+    jobs: pd.DataFrame = field(default_factory=lambda: Lazy(lambda: pd.DataFrame(columns=JOB_COLUMNS)))
+    messages: pd.DataFrame = field(default_factory=lambda: Lazy(lambda: pd.DataFrame(columns=MESSAGE_COLUMNS)))
+    metrics: pd.Series = field(default_factory=lambda: Lazy(_empty_metrics))
     meta: dict[str, Any] = field(default_factory=dict)
     scenario: dict[str, Any] | None = None
-    schedule: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=SCHEDULE_COLUMNS))
+    schedule: pd.DataFrame = field(default_factory=lambda: Lazy(lambda: pd.DataFrame(columns=SCHEDULE_COLUMNS)))
     out_dir: Path | None = None
     #: The scenario's trace settings (``output.jobs``, ``messages``, ``schedule``): a table not kept in ``full``
     #: is not written (``jobs.csv`` / ``messages.csv``), its summary is (:mod:`netsim.results.traces`).
@@ -213,6 +228,66 @@ class RunResult:
     _schedule_source: Any = None
     #: Metrics streamed while the run went, by key (:func:`netsim.results.traces.attach_streams`; this run's).
     _streams: Any = None
+    #: The metrics as floats by name while ``metrics`` is unbuilt (:meth:`_set_metrics`): ``metrics.csv`` and the
+    #: command line's summary read them, ``metrics`` is built from them when read.
+    _metric_values: dict[str, float] | None = None
+
+    def _set_metrics(self, values: Mapping[Any, Any]) -> None:
+        """Set :attr:`metrics` from a name -> value mapping: ``pandas.Series(values, dtype=float, name="value")``,
+        built when first read (``metrics.csv`` and :meth:`metric_values` need no pandas).
+
+        Parameters
+        ----------
+        values : Mapping
+            Metric name -> value (a number, or None for NaN).
+
+        Examples
+        --------
+        >>> run = RunResult()
+        >>> run._set_metrics({"y.ISE": 0.25, "y.IAE": None})
+        >>> run.metric_values()
+        {'y.ISE': 0.25, 'y.IAE': nan}
+        >>> run.metrics.to_dict()
+        {'y.ISE': 0.25, 'y.IAE': nan}
+        """
+        data = dict(values)
+
+        def series() -> pd.Series:
+            return pd.Series(data, dtype=float, name="value")
+
+        try:  # the same float conversion as the Series' (None -> NaN, bool -> 0.0/1.0)
+            floats = np.asarray(list(data.values()), dtype=float)
+        except (TypeError, ValueError):
+            floats = None
+        if floats is None or floats.ndim != 1 or not all(isinstance(name, str) for name in data):
+            self.metrics, self._metric_values = series(), None  # the Series says what is wrong with the values
+            return
+        self.metrics = Lazy(series)
+        self._metric_values = dict(zip(data, floats.tolist()))
+
+    def metric_values(self) -> dict[str, float]:
+        """The metrics as a plain dict, name -> value (:attr:`metrics` without building its pandas Series).
+
+        Returns
+        -------
+        dict of str to float
+            In ``metrics.csv`` order.
+
+        Examples
+        --------
+        >>> RunResult(metrics=pd.Series({"y.ISE": 0.25})).metric_values()
+        {'y.ISE': 0.25}
+        """
+        plain = self._unbuilt_metrics()
+        if plain is not None:
+            return dict(plain)
+        return {str(k): float(v) for k, v in zip(self.metrics.index, self.metrics.to_numpy(dtype=float))}
+
+    def _unbuilt_metrics(self) -> dict[str, float] | None:
+        """:attr:`_metric_values` while :attr:`metrics` is unbuilt (nothing can have changed it), else None."""
+        if type(object.__getattribute__(self, "metrics")) is not Lazy:
+            return None
+        return object.__getattribute__(self, "_metric_values")
 
     def _signal_chunks(self, names: list[str]) -> Any:
         """The signals table's rows in windows, ``(t_ns, [column of each name, ...])`` per window
@@ -342,9 +417,13 @@ class RunResult:
         if kind_of(self.status) not in (ERROR, INTERRUPTED):  # a failed or cut run has no metrics: see meta.json
             from netsim.results.files import metrics_text
 
-            names = [str(k) for k in self.metrics.index]
-            text = metrics_text(names, list(self.metrics.to_numpy(dtype=float))) if all(
-                isinstance(k, str) for k in self.metrics.index) else None
+            plain = self._unbuilt_metrics()
+            if plain is not None:  # no Series built: the values it would hold (_set_metrics)
+                text = metrics_text(list(plain), list(plain.values()))
+            else:
+                names = [str(k) for k in self.metrics.index]
+                text = metrics_text(names, list(self.metrics.to_numpy(dtype=float))) if all(
+                    isinstance(k, str) for k in self.metrics.index) else None
             if text is not None:
                 write_atomic(out / "metrics.csv", text)
             else:
@@ -540,7 +619,7 @@ class RunResult:
         >>> RunResult(meta={"scenario": "demo", "t_end_s": 2.0}).summary()["duration_s"]
         2.0
         """
-        control, timing = key_metrics(self.metrics)
+        control, timing = key_metrics(self.metric_values())
         return {"scenario": self.meta.get("scenario", ""), "status": self.status,
                 "duration_s": self.meta.get("t_end_s", self.meta.get("duration_s")),
                 "wall_time_s": self.meta.get("wall_time_s"), "folder": None if self.out_dir is None else

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import pandas as pd
+from netsim.lazy_import import lazy_module
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:  # imported at its first use: `netsim run` and `validate` build no DataFrame (issue 29)
+    pd = lazy_module("pandas")
 
 from netsim.results import Lazy, RunResult
 from netsim.results.rows import Column, Rows, job_rows, message_rows
@@ -22,7 +27,7 @@ from netsim.results.traces import JobSummary, MessageSummary
 __all__ = ["collect"]
 
 def collect(sim: Any, t_end_ns: int) -> RunResult:
-    """The tables of a (finished or aborted) simulation ``sim`` (a built :class:`~netsim.scenario.builder.Simulation`),
+    """The tables of a (finished or aborted) simulation ``sim`` (a built :class:`~netsim.build.builder.Simulation`),
     without metrics: signals, jobs and messages (or their summaries, :mod:`netsim.results.traces`), and the
     schedule, built when first read."""
     rec = sim.env.recorder

@@ -8,10 +8,16 @@ messages file back with the column types the run had.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, Iterable, Iterator
 
 import numpy as np
-import pandas as pd
+
+from netsim.lazy_import import lazy_module
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:  # imported at its first use: `netsim run` and `validate` build no DataFrame (issue 29)
+    pd = lazy_module("pandas")
 
 __all__ = ["FLOAT_FORMAT", "TIME_COLUMNS", "write_csv", "read_table", "float_block_text", "JOB_TYPES", "MESSAGE_TYPES"]
 

@@ -32,10 +32,16 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NamedTuple, cast
+from typing import TYPE_CHECKING, Any, NamedTuple, cast
 
 import numpy as np
-import pandas as pd
+
+from netsim.lazy_import import lazy_module
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:  # imported at its first use: `netsim run` and `validate` build no DataFrame (issue 29)
+    pd = lazy_module("pandas")
 
 from netsim.errors import ConfigError
 from netsim.results.manifest import (MANIFEST_NAME, RECORD_NAME, json_object, manifest_digests, read_record,

@@ -4,9 +4,10 @@ a notebook shows them in :meth:`netsim.results.RunResult._repr_html_`)."""
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
 
-import pandas as pd
+if TYPE_CHECKING:  # for the annotation alone: the summary reads any mapping (issue 29: `netsim run` loads no pandas)
+    import pandas as pd
 
 __all__ = ["key_metrics", "seconds_text"]
 

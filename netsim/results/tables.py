@@ -11,10 +11,16 @@ import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
+
+from netsim.lazy_import import lazy_module
+
+if TYPE_CHECKING:
+    import pandas as pd
+else:  # imported at its first use: `netsim run` and `validate` build no DataFrame (issue 29)
+    pd = lazy_module("pandas")
 
 from netsim.errors import ConfigError
 from netsim.timebase import S
