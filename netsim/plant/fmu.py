@@ -1,4 +1,4 @@
-"""Plants from FMUs: ``plant: {type: fmu, path: ...}`` runs an FMI 2.0 FMU with FMPy.
+"""Plants from FMUs: ``plant: {type: fmu, path: ...}`` runs an FMI 2.0 or FMI 3.0 FMU with FMPy.
 
 A scenario writes::
 
@@ -15,7 +15,9 @@ A scenario writes::
       record_grid: 1 ms
 
 The names are the FMU's variable names: ``io`` channels name them as they name any plant port
-(``{type: dac, input: u}``, ``{type: adc, output: theta}``).
+(``{type: dac, input: u}``, ``{type: adc, output: theta}``). The variables mapped are scalar floating-point ones:
+``Real`` in FMI 2.0, ``Float64`` in FMI 3.0; naming a variable of another type (an FMI 3.0 ``Float32`` or
+``Int32``, an array) is refused at its YAML path.
 
 **An FMU is code.** Its library runs inside netsim, so an ``fmu`` plant is loaded only with the permission
 plugin files need (:mod:`netsim.trust`: ``--allow-plugins``, ``allow_plugins=True``, ``NETSIM_ALLOW_PLUGINS``
@@ -24,9 +26,9 @@ A relative ``path`` is read from the scenario file's folder (the working folder 
 mapping; a sweep writes its base scenario's FMU path as an absolute path, :func:`absolute_fmu_path`).
 
 **Co-simulation: stepping.** The plant is advanced lazily like every plant (:mod:`netsim.plant`): when anything
-samples or actuates it, one ``fmi2DoStep`` takes the FMU from the plant's time to that instant under the inputs
-held since the last change (zero-order hold), and ``fmi2SetReal`` writes an input when it changes. So the FMU is
-stepped exactly between the events that touch it. The recorder's ``record_grid`` samples are such events too:
+samples or actuates it, one ``fmi2DoStep`` (``fmi3DoStep``) takes the FMU from the plant's time to that instant
+under the inputs held since the last change (zero-order hold), and ``fmi2SetReal`` (``fmi3SetFloat64``) writes an
+input when it changes. So the FMU is stepped exactly between the events that touch it. The recorder's ``record_grid`` samples are such events too:
 the plant steps to each record instant, so the recorded outputs are the FMU's own values there, not an
 interpolation (an FMU that integrates with a fixed internal step is therefore asked for communication steps that
 need not be multiples of it: the FMU decides how it handles a short step). ``x0`` sets the state variables during
@@ -36,8 +38,13 @@ be piecewise constant or held (no sinusoid, no continuous disturbance model).
 **Model exchange.** netsim integrates the FMU's derivatives with the plant's integrator
 (:mod:`netsim.plant.fmu_exchange`); FMUs with event indicators (state events) are refused.
 
-FMI 1.0 and 3.0 FMUs are refused at ``plant.path``. The FMU's files are read, unpacked and (a source FMU)
-compiled by :mod:`netsim.plant.fmu_files`.
+**FMI 3.0.** The same plant runs FMI 3.0 FMUs (FMPy's ``FMU3Slave`` and ``FMU3Model``): start values are set
+after instantiation and the start time is given to ``fmi3EnterInitializationMode`` (FMI 3.0 has no
+``setupExperiment``); a co-simulation FMU is instantiated without event mode and without early return, so it
+handles its own events inside ``fmi3DoStep``, and a step that ends early or asks to terminate stops the run with
+the instant. FMUs with clocks are refused at ``plant.interface``; configuration mode is not used (structural
+parameters keep their start values). FMI 1.0 FMUs are refused at ``plant.path``. The FMU's files are read,
+unpacked and (a source FMU) compiled by :mod:`netsim.plant.fmu_files`.
 """
 
 from __future__ import annotations
@@ -92,9 +99,32 @@ def _description(path: Path) -> Any:
     return found
 
 
+def _real(md: Any) -> str:
+    """The variable type netsim maps: ``Real`` (FMI 2.0) or ``Float64`` (FMI 3.0)."""
+    return "Real" if md.fmiVersion == "2.0" else "Float64"
+
+
 def _variables(md: Any, causality: str | None = None) -> dict[str, Any]:
+    """The FMU's scalar ``Real``/``Float64`` variables (of ``causality``) by name."""
+    real = _real(md)
     return {v.name: v for v in md.modelVariables
-            if v.type == "Real" and (causality is None or v.causality == causality)}
+            if v.type == real and not v.shape and (causality is None or v.causality == causality)}
+
+
+def _why_not(md: Any, name: str, causality: str | None = None) -> str:
+    """`` ('n' is Int32: ...)`` when ``name`` is a variable (of ``causality``) netsim cannot map, else ``''``."""
+    found = next((v for v in md.modelVariables if v.name == name), None)
+    if found is None or (causality is not None and found.causality != causality):
+        return ""
+    if found.type != _real(md):
+        return f" ('{name}' is {found.type}: netsim maps {_real(md)} variables only)"
+    if found.shape:
+        return f" ('{name}' is an array of shape {tuple(found.shape)}: netsim maps scalar variables only)"
+    return ""
+
+
+def _clocks(md: Any) -> list[str]:
+    return [v.name for v in md.modelVariables if v.type == "Clock"]
 
 
 def _interface_of(md: Any, chosen: str | None) -> str:
@@ -108,12 +138,13 @@ def _default_states(md: Any) -> list[str]:
 
 
 class FmuParams(StrictModel):
-    """An FMI 2.0 FMU run by FMPy (co-simulation or model exchange): inputs, outputs and states by variable name."""
+    """An FMI 2.0 or 3.0 FMU run by FMPy (co-simulation or model exchange): inputs, outputs and states by variable
+    name."""
 
     path: str = Field(min_length=1, description="the .fmu file or unpacked FMU folder, relative to the scenario "
                                                 "file (loaded only with --allow-plugins: an FMU is code)")
     interface: Literal["co_simulation", "model_exchange"] | None = Field(
-        None, validate_default=True, description="co_simulation: the FMU steps itself (fmi2DoStep); model_exchange: netsim integrates its "
+        None, validate_default=True, description="co_simulation: the FMU steps itself (doStep); model_exchange: netsim integrates its "
                           "derivatives (plant.integrator); default: co-simulation when the FMU has it")
     inputs: list[str] | None = Field(None, description="FMU input variables, in plant input order (default: all)")
     outputs: list[str] | None = Field(None, description="FMU output variables, in plant output order (default: all)")
@@ -148,6 +179,9 @@ class FmuParams(StrictModel):
         if value is not None and (md.coSimulation if value == "co_simulation" else md.modelExchange) is None:
             has = "co_simulation" if md.coSimulation is not None else "model_exchange"
             raise ValueError(f"the FMU has no {value} interface; it has {has} only")
+        if _clocks(md):
+            raise ValueError(f"the FMU has clocks {_clocks(md)[:5]}; netsim runs FMUs without clocks (FMI 3.0 "
+                             "scheduled execution and clocked partitions are not supported)")
         if _interface_of(md, value) == "model_exchange" and md.numberOfEventIndicators:
             raise ValueError(f"the FMU's model exchange interface has {md.numberOfEventIndicators} event indicators; "
                              "netsim integrates model-exchange FMUs without state events: use its co-simulation "
@@ -169,7 +203,8 @@ class FmuParams(StrictModel):
         known = _variables(md, causality)
         for name in value:
             if name not in known:
-                raise ValueError(f"the FMU has no Real {causality} '{name}'; its {causality}s are {list(known)}")
+                raise ValueError(f"the FMU has no {_real(md)} {causality} '{name}'{_why_not(md, name, causality)}; "
+                                 f"its {causality}s are {list(known)}")
         if len(set(value)) != len(value):
             raise ValueError(f"{info.field_name} must be unique names, got {value}")
         return value
@@ -183,7 +218,8 @@ class FmuParams(StrictModel):
         known = _variables(md)
         for name in value:
             if name not in known:
-                raise ValueError(f"the FMU has no Real variable '{name}'; its states are {_default_states(md)}")
+                raise ValueError(f"the FMU has no {_real(md)} variable '{name}'{_why_not(md, name)}; its states are "
+                                 f"{_default_states(md)}")
         if _interface_of(md, info.data.get("interface")) == "model_exchange" and value != _default_states(md):
             raise ValueError(f"with model exchange the state is the FMU's continuous state {_default_states(md)}; "
                              "omit states or list exactly these")
@@ -198,8 +234,8 @@ class FmuParams(StrictModel):
         known = {n: v for n, v in _variables(md).items() if v.causality == "parameter" or v.initial == "exact"}
         for name in value:
             if name not in known:
-                raise ValueError(f"the FMU has no Real parameter '{name}' to set; its parameters are "
-                                 f"{[n for n, v in known.items() if v.causality == 'parameter']}")
+                raise ValueError(f"the FMU has no {_real(md)} parameter '{name}' to set{_why_not(md, name)}; its "
+                                 f"parameters are {[n for n, v in known.items() if v.causality == 'parameter']}")
         return value
 
     @model_validator(mode="after")
@@ -244,7 +280,7 @@ def _release(slave: Any, mode: list[str]) -> None:
 
 
 class FmuPlant(Plant):
-    """An FMI 2.0 co-simulation FMU as a plant: one ``doStep`` per propagation (see :mod:`netsim.plant.fmu`).
+    """An FMI 2.0 or 3.0 co-simulation FMU as a plant: one ``doStep`` per propagation (see :mod:`netsim.plant.fmu`).
 
     Parameters
     ----------
@@ -268,25 +304,35 @@ class FmuPlant(Plant):
         super().__init__(len(states), len(inputs), len(outputs), input_names=list(inputs),
                          output_names=list(outputs), state_names=list(states), name=name,
                          divergence_bound=divergence_bound)
-        from fmpy.fmi2 import FMU2Slave
-
         variables = _variables(description)
         self._vr_in = [variables[n].valueReference for n in inputs]
         self._vr_out = [variables[n].valueReference for n in outputs]
         self._vr_x = [variables[n].valueReference for n in states]
         self._parameters = [(variables[n].valueReference, float(v)) for n, v in (parameters or {}).items()]
-        self._slave = FMU2Slave(guid=description.guid, unzipDirectory=str(folder),
-                                modelIdentifier=description.coSimulation.modelIdentifier, instanceName=name)
+        self._fmi3 = description.fmiVersion != "2.0"
+        if self._fmi3:
+            from fmpy.fmi3 import FMU3Slave as Slave
+        else:
+            from fmpy.fmi2 import FMU2Slave as Slave
+        self._slave = Slave(guid=description.guid, unzipDirectory=str(folder),
+                            modelIdentifier=description.coSimulation.modelIdentifier, instanceName=name)
+        # the typed value functions: fmi2GetReal/fmi2SetReal or fmi3GetFloat64/fmi3SetFloat64
+        self._get = self._slave.getFloat64 if self._fmi3 else self._slave.getReal
+        self._set = self._slave.setFloat64 if self._fmi3 else self._slave.setReal
         self._mode = ["loaded"]  # loaded -> init (instantiated, initialising) -> step (stepped at least once)
         weakref.finalize(self, _release, self._slave, self._mode)
 
     def _start(self) -> None:
-        slave = self._slave
-        slave.instantiate()
-        slave.setupExperiment(startTime=self._t / 1e9)
+        slave, start = self._slave, self._t / 1e9
+        slave.instantiate()  # FMI 3.0: without event mode or early return (the FMU handles its events in doStep)
+        if not self._fmi3:
+            slave.setupExperiment(startTime=start)
         if self._parameters:
-            slave.setReal([vr for vr, _ in self._parameters], [v for _, v in self._parameters])
-        slave.enterInitializationMode()
+            self._set([vr for vr, _ in self._parameters], [v for _, v in self._parameters])
+        if self._fmi3:
+            slave.enterInitializationMode(startTime=start)  # FMI 3.0 has no setupExperiment
+        else:
+            slave.enterInitializationMode()
         self._mode[0] = "init"
         super()._start()
 
@@ -306,7 +352,7 @@ class FmuPlant(Plant):
         if self._mode[0] == "loaded" or not self._vr_in:
             return
         u = self._piecewise_input() if self._sources else self._u
-        self._slave.setReal(self._vr_in, u.tolist())
+        self._set(self._vr_in, u.tolist())
 
     def _step(self, t: int) -> bool:
         slave = self._slave
@@ -314,9 +360,11 @@ class FmuPlant(Plant):
             slave.exitInitializationMode()
             self._mode[0] = "step"
         try:
-            slave.doStep(self._t / 1e9, (t - self._t) / 1e9)
+            done = slave.doStep(self._t / 1e9, (t - self._t) / 1e9)
         except Exception as exc:  # noqa: BLE001 - FMPy's FMICallException, reported with the instant
             raise SimulationError(f"plant {self.name}: the FMU's doStep to t = {t / 1e9:.9g} s failed: {exc}") from None
+        if self._fmi3:
+            _check_fmi3_step(self.name, t, done)
         self._t = t
         x = self._state_now() if self._vr_x else self._output_now()
         if not (x.dot(x) <= self._bound2):
@@ -324,23 +372,37 @@ class FmuPlant(Plant):
         return False
 
     def _output_now(self) -> np.ndarray:
-        return np.array(self._slave.getReal(self._vr_out), dtype=float)
+        return np.array(self._get(self._vr_out), dtype=float)
 
     def _state_now(self) -> np.ndarray:
         if not self._vr_x:
             return np.zeros(0)
-        return np.array(self._slave.getReal(self._vr_x), dtype=float)
+        return np.array(self._get(self._vr_x), dtype=float)
 
     def _set_state_now(self, x: np.ndarray) -> None:
         if self._mode[0] != "init":
             raise SimulationError(f"plant {self.name}: an FMU's state can be set only before its first step "
                                   "(x0), not during the run")
         if self._vr_x:
-            self._slave.setReal(self._vr_x, [float(v) for v in x])
+            self._set(self._vr_x, [float(v) for v in x])
 
 
-@register("plant", "fmu", "an FMI 2.0 FMU run by FMPy, co-simulation or model exchange (needs --allow-plugins: an FMU "
-                          "is code)")
+def _check_fmi3_step(name: str, t: int, done: Any) -> None:
+    """Stop the run when an FMI 3.0 ``doStep`` to ``t`` ns asked to terminate or did not reach ``t``.
+
+    ``done`` is FMPy's ``(eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime)``;
+    eventHandlingNeeded is meaningless without event mode (the FMU was instantiated with eventModeUsed false)."""
+    _, terminate, early, last = done
+    if terminate:
+        raise SimulationError(f"plant {name}: the FMU asked to terminate the simulation in its step to "
+                              f"t = {t / 1e9:.9g} s (fmi3DoStep's terminateSimulation)")
+    if early:
+        raise SimulationError(f"plant {name}: the FMU's step to t = {t / 1e9:.9g} s returned early at "
+                              f"t = {last:.9g} s")
+
+
+@register("plant", "fmu", "an FMI 2.0 or 3.0 FMU run by FMPy, co-simulation or model exchange (needs --allow-plugins: "
+                          "an FMU is code)")
 def fmu_plant(params: FmuParams) -> FmuPlant:
     """The plant of ``plant: {type: fmu, ...}``: the FMU unpacked (and a source FMU compiled) once, then loaded: an
     :class:`FmuPlant` (co-simulation) or a :class:`~netsim.plant.nonlinear.NonlinearPlant` over the FMU's
@@ -358,7 +420,10 @@ def fmu_plant(params: FmuParams) -> FmuPlant:
     if kind == "model_exchange":
         from netsim.plant.fmu_exchange import exchange_plant
 
-        return exchange_plant(folder, md, ins, outs, params.parameters, name=params.name)
+        try:
+            return exchange_plant(folder, md, ins, outs, params.parameters, name=params.name)
+        except ConfigError as exc:  # an FMI 3.0 FMU with a time event or a request to terminate at initialisation
+            raise BuildError(exc.message, path="plant.interface") from None
     return FmuPlant(folder, md, ins, outs, states, params.parameters, name=params.name)
 
 

@@ -9,7 +9,9 @@ returns an unpacked folder holding the shared library for this platform:
 * a *source* FMU (``sources/`` and no library for this platform, FMPy's source FMUs): copied into the cache
   folder and compiled there once with FMPy's CMake project (:func:`fmpy.build.create_cmake_settings`, the
   ``cmake`` that FMPy installs, and the machine's C compiler), keyed by the SHA-256 of the description and the
-  sources. A machine without a C compiler gets an error that says so.
+  sources. FMI 2.0 lists its source files in ``modelDescription.xml``, FMI 3.0 in
+  ``sources/buildDescription.xml``; FMPy's project compiles both against the FMI headers it ships. A machine
+  without a C compiler gets an error that says so.
 
 The cache folder is ``$NETSIM_CACHE_DIR/fmu`` (default ``$XDG_CACHE_HOME/netsim/fmu`` or ``~/.cache/netsim/fmu``),
 beside the plugin index (:func:`netsim.registry.index.cache_path`). A build goes to a temporary folder renamed
@@ -29,7 +31,8 @@ from typing import Any
 
 from netsim.errors import ConfigError
 
-__all__ = ["NO_FMPY", "binary_folder", "cache_folder", "compiler", "has_binary", "identifier", "read_description"]
+__all__ = ["NO_FMPY", "binary_folder", "cache_folder", "compiler", "has_binary", "identifier", "read_description",
+           "supported"]
 
 _log = logging.getLogger(__name__)
 
@@ -53,14 +56,14 @@ def cache_folder() -> Path:
 
 
 def read_description(path: Path) -> Any:
-    """FMPy's ``ModelDescription`` of the FMI 2.0 FMU at ``path`` (archive or folder), checked against the FMI
-    schema (FMPy's validation); reads XML only.
+    """FMPy's ``ModelDescription`` of the FMI 2.0 or 3.0 FMU at ``path`` (archive or folder), checked against the
+    FMI schema (FMPy's validation); reads XML only (an FMI 3.0 source FMU's ``sources/buildDescription.xml`` too).
 
     Raises
     ------
     ConfigError
-        When the file is missing, its description cannot be read (FMPy's reason, in one line), or it is not an
-        FMI 2.0 FMU (FMI 1.0 or 3.0).
+        When the file is missing, its description cannot be read (FMPy's reason, in one line), or it is neither
+        an FMI 2.0 nor an FMI 3.0 FMU (FMI 1.0).
     """
     fmpy = _fmpy()
     if not path.exists():
@@ -70,15 +73,20 @@ def read_description(path: Path) -> Any:
         raise ConfigError(f"{path} is a folder without modelDescription.xml: not an unpacked FMU")
     try:
         version, interfaces = _kind(path)
-        if version == "2.0" and interfaces:
+        if supported(version) and interfaces:
             return fmpy.read_model_description(str(path))  # with FMPy's checks against the FMI schema
     except Exception as exc:  # noqa: BLE001 - FMPy's reasons (bad zip, schema errors) reported in one line
         text = " ".join(str(exc).split())
         raise ConfigError(f"cannot read the FMU's modelDescription.xml ({path}): {text[:300]}") from None
-    if version != "2.0":
-        raise ConfigError(f"the FMU {path.name} is FMI {version}; the fmu plant runs FMI 2.0 FMUs (co-simulation or "
-                          "model exchange): export the model as FMI 2.0")
+    if not supported(version):
+        raise ConfigError(f"the FMU {path.name} is FMI {version}; the fmu plant runs FMI 2.0 and 3.0 FMUs "
+                          "(co-simulation or model exchange): export the model as FMI 2.0 or 3.0")
     raise ConfigError(f"the FMU {path.name} declares neither co-simulation nor model exchange")
+
+
+def supported(version: str) -> bool:
+    """True for the FMI versions the fmu plant runs: 2.0 and 3.x (FMPy's reader takes every 3.x)."""
+    return version == "2.0" or version.startswith("3.")
 
 
 def _kind(path: Path) -> tuple[str, bool]:
@@ -104,9 +112,14 @@ def identifier(description: Any, interface: str = "co_simulation") -> str:
 def has_binary(folder: Path, description: Any, interface: str = "co_simulation") -> bool:
     """True when the unpacked FMU ``folder`` holds the library of ``interface`` for this platform."""
     fmpy = _fmpy()
-    sub = fmpy.platform if description.fmiVersion == "2.0" else fmpy.platform_tuple
     ident = identifier(description, interface)
-    return (folder / "binaries" / sub / f"{ident}{fmpy.sharedLibraryExtension}").is_file()
+    return (folder / "binaries" / _platform(description) / f"{ident}{fmpy.sharedLibraryExtension}").is_file()
+
+
+def _platform(description: Any) -> str:
+    """The ``binaries/`` subfolder of this platform: ``x86_64-linux`` (FMI 3.0's tuple) or ``linux64`` (FMI 2.0)."""
+    fmpy = _fmpy()
+    return str(fmpy.platform if description.fmiVersion == "2.0" else fmpy.platform_tuple)
 
 
 def compiler() -> str | None:
@@ -174,9 +187,8 @@ def binary_folder(path: Path, description: Any, interface: str = "co_simulation"
         return folder
     sources = _source_files(folder) if (folder / "sources").is_dir() else []
     if not sources:
-        fmpy = _fmpy()
-        raise ConfigError(f"the FMU {path.name} has no binary for this platform ({fmpy.platform}) and no sources to "
-                          "build one from")
+        raise ConfigError(f"the FMU {path.name} has no binary for this platform ({_platform(description)}) and no "
+                          "sources to build one from")
     target = cache_folder() / f"build-{_digest([folder / 'modelDescription.xml', *sources])}"
     if target.is_dir() and has_binary(target, description, interface):
         return target

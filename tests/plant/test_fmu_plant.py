@@ -219,9 +219,10 @@ def test_a_sweep_over_an_fmu_scenario_finds_the_fmu_beside_its_base(tmp_path, mo
 
 
 # ------------------------------------------------------------------------------------------------ bad input
-def _with_description(tmp_path: Path, edit: Any) -> Path:
+def _with_description(tmp_path: Path, edit: Any, source: Path = SOURCE_FMU) -> Path:
+    """A copy of the source FMU ``source`` whose modelDescription.xml is ``edit(text)``."""
     folder = tmp_path / "edited"
-    shutil.copytree(SOURCE_FMU, folder)
+    shutil.copytree(source, folder)
     md = folder / "modelDescription.xml"
     md.write_text(edit(md.read_text(encoding="utf-8")), encoding="utf-8")
     return folder
@@ -243,7 +244,7 @@ def test_a_bad_fmu_field_is_one_problem_at_its_path(where, value, path, words):
 
 
 @pytest.mark.parametrize(("edit", "words"), [
-    (lambda s: s.replace('fmiVersion="2.0"', 'fmiVersion="3.0"'), "FMI 3.0; the fmu plant runs FMI 2.0 FMUs"),
+    (lambda s: s.replace('fmiVersion="2.0"', 'fmiVersion="1.0"'), "FMI 1.0; the fmu plant runs FMI 2.0 and 3.0 FMUs"),
     (lambda s: s.replace("<ModelVariables>", "<ModelVariables"), "cannot read the FMU's modelDescription.xml"),
 ])
 def test_a_wrong_kind_of_fmu_is_refused_at_plant_path(tmp_path, edit, words):
