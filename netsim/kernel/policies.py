@@ -13,6 +13,8 @@ Built-in policies (registered under kind ``"policy"``):
 ``edf``    earliest deadline first: key = absolute deadline of the job (none: last)
 ``np_fp``  ``fp`` without preemption between tasks (handlers still preempt)
 ``np_edf`` ``edf`` without preemption between tasks
+``tt``     time-triggered: a static schedule table (:mod:`netsim.kernel.timetable`) activates
+           tasks at their slots; the latest activation runs first, other tasks in the gaps
 ========== ==============================================================================
 
 Custom policies subclass :class:`Policy` and override :meth:`Policy.key` (and optionally
@@ -52,6 +54,7 @@ __all__ = [
     "EarliestDeadlineFirst",
     "NonPreemptiveFixedPriority",
     "NonPreemptiveEDF",
+    "TimeTriggered",
     "BUILTIN_POLICIES",
     "find_policy",
     "is_builtin_policy",
@@ -172,17 +175,41 @@ class NonPreemptiveEDF(EarliestDeadlineFirst):
     preemptive = False
 
 
+@register("policy", "tt", "time-triggered: the node's static schedule table activates tasks at their slots")
+class TimeTriggered(Policy):
+    """Time-triggered dispatch (TrueTime's time-triggered dispatcher, OSEKtime): a
+    :class:`~netsim.kernel.timetable.Timetable` activates its tasks at their slot starts.
+
+    Among the jobs of slotted tasks the latest activation is the most urgent (OSEKtime's stack order: a job that
+    overruns its slot is preempted by the next slot's activation and resumes after it); jobs of other tasks
+    (released by messages, program code or their own period) run in the gaps, first come first served.
+
+    Attributes
+    ----------
+    slotted : frozenset[str]
+        The tasks the node's table activates (set by :func:`~netsim.kernel.timetable.create_timetable`).
+    """
+
+    name = "tt"
+    slotted: frozenset[str] = frozenset()
+
+    def key(self, job: "Job") -> Any:
+        if job.task_name in self.slotted:
+            return (0, -job.release)
+        return (1, job.release)
+
+
 #: The built-in policies by name (resolved without loading every plugin of the registry).
 BUILTIN_POLICIES: dict[str, type[Policy]] = {
     cls.name: cls
     for cls in (FixedPriority, RateMonotonic, DeadlineMonotonic, EarliestDeadlineFirst,
-                NonPreemptiveFixedPriority, NonPreemptiveEDF)
+                NonPreemptiveFixedPriority, NonPreemptiveEDF, TimeTriggered)
 }
 
 
 def is_builtin_policy(name: Any) -> bool:
     """True when ``name`` is one of the kernel's own policies (``fp``, ``rm``, ``dm``, ``edf``, ``np_fp``,
-    ``np_edf``): resolving it runs no code from outside netsim."""
+    ``np_edf``, ``tt``): resolving it runs no code from outside netsim."""
     return isinstance(name, str) and name in BUILTIN_POLICIES
 
 

@@ -16,7 +16,7 @@ def test_builtin_names_resolve_to_their_classes_without_an_instance():
         assert find_policy(name) is cls
         assert is_builtin_policy(name)
         assert cls.name == name
-    assert set(BUILTIN_POLICIES) == {"fp", "rm", "dm", "edf", "np_fp", "np_edf"}
+    assert set(BUILTIN_POLICIES) == {"fp", "rm", "dm", "edf", "np_fp", "np_edf", "tt"}
     assert not is_builtin_policy("netsim.kernel.policies:FixedPriority")
     assert not is_builtin_policy(None)
 
