@@ -428,7 +428,7 @@ class SignalSpec(PluginSpec):
 #: The order of a task's keys in a resolved scenario (as written before the kernel's TaskSpec became the YAML task).
 _TASK_KEYS = ("name", "program", "params", "period", "offset", "deadline", "priority", "execution", "wcet", "release",
               "preemptible", "wcet_handler", "deadline_handler", "release_jitter", "min_interarrival",
-              "extra_interarrival", "abort_on_miss", "set_period")
+              "extra_interarrival", "abort_on_miss", "set_period", "core")
 
 
 #: The order of a handler's keys in a resolved scenario.
@@ -467,12 +467,13 @@ class TaskSpec(PluginSpec, KernelTaskSpec):
     priority: int | None = None  # YAML priorities are integers (Python may pass floats)
     wcet_handler: Name | None = None  # YAML names a handler (Python may pass a callable)
     deadline_handler: Name | None = None
+    core: int | None = Field(None, ge=0, description="the core the task runs on (nodes.<n>.multicore: partitioned)")
 
     @model_serializer(mode="wrap")
     def _without_unused_arrivals(self, handler: Any) -> Any:
         data = handler(self)
         if isinstance(data, dict):
-            data = {key: data[key] for key in _TASK_KEYS if key in data}
+            data = {key: data[key] for key in _TASK_KEYS if key in data and (key != "core" or data[key] is not None)}
         return without_unused_arrivals(data)  # resolved scenarios that use none stay as they were
 
     def plugin_name(self) -> str:
@@ -582,6 +583,16 @@ class NodeSpec(SpecModel):
     tasks: list[TaskSpec] = Field(default_factory=list)
     handlers: list[HandlerSpec] = Field(default_factory=list)
     energy: EnergyModel | None = None  # CPU and radio power, battery (issue 20): netsim.energy
+    # several cores and speed scaling (issue 30): netsim.kernel.multicore, netsim.kernel.speed, netsim.kernel.cores
+    cores: int | None = Field(None, ge=1, le=1024, description="identical cores of the node (default 1)")
+    multicore: Literal["global", "partitioned"] | None = Field(None, description=(
+        "with cores >= 2: global (default: one ready queue, the m most urgent jobs run) or partitioned (each task "
+        "on its tasks[].core)"))
+    migration_cost: Time | None = Field(None, description="kernel time a task job pays when it resumes on another core")
+    speed: float | None = Field(None, gt=0, le=1, description=(
+        "initial CPU speed, a fraction of the nominal clock (execution times are given at 1); enables set_speed"))
+    speed_levels: list[Annotated[float, Field(gt=0, le=1)]] | None = Field(None, min_length=1, description=(
+        "the speeds set_speed accepts (default: any in (0, 1])"))
     sync: SyncSpec | None = None  # mailboxes, semaphores, events, monitors (issue 20): netsim.scenario.schema_sync
 
     def task(self, name: str) -> TaskSpec:
@@ -755,6 +766,9 @@ class Scenario(SpecModel):
                 del node["energy"]
             if node.get("sync", 0) is None:  # the same for the sync objects
                 del node["sync"]
+            for key in ("cores", "multicore", "migration_cost", "speed", "speed_levels"):  # and the CPU (issue 30)
+                if node.get(key, 0) is None:
+                    del node[key]
         if isinstance(data.get("plant"), dict) and data["plant"].get("integrator", 0) is None:
             del data["plant"]["integrator"]  # no integrator chosen: resolved (and hashed) as before (issue 29)
         if data.get("verdict", 0) is None:  # no verdict: block: resolved (and hashed) as before (issue 26)
