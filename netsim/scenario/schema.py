@@ -91,6 +91,7 @@ from netsim.energy.params import EnergyModel
 from netsim.scenario.paths import format_path, parse_path, plain_copy
 from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema_integrator import IntegratorSpec
+from netsim.scenario.schema_servers import ServerDecl, TimetableSpec
 from netsim.scenario.schema_sync import SyncSpec
 from netsim.scenario.schema_verdict import VerdictSpec
 from netsim.scenario.schema_task import without_unused_arrivals
@@ -428,7 +429,7 @@ class SignalSpec(PluginSpec):
 #: The order of a task's keys in a resolved scenario (as written before the kernel's TaskSpec became the YAML task).
 _TASK_KEYS = ("name", "program", "params", "period", "offset", "deadline", "priority", "execution", "wcet", "release",
               "preemptible", "wcet_handler", "deadline_handler", "release_jitter", "min_interarrival",
-              "extra_interarrival", "abort_on_miss", "set_period", "core")
+              "extra_interarrival", "abort_on_miss", "set_period", "core", "server")
 
 
 #: The order of a handler's keys in a resolved scenario.
@@ -468,12 +469,14 @@ class TaskSpec(PluginSpec, KernelTaskSpec):
     wcet_handler: Name | None = None  # YAML names a handler (Python may pass a callable)
     deadline_handler: Name | None = None
     core: int | None = Field(None, ge=0, description="the core the task runs on (nodes.<n>.multicore: partitioned)")
+    server: Name | None = Field(None, description="the node's CBS or TBS (nodes.<n>.servers) that serves the task")
 
     @model_serializer(mode="wrap")
     def _without_unused_arrivals(self, handler: Any) -> Any:
         data = handler(self)
         if isinstance(data, dict):
-            data = {key: data[key] for key in _TASK_KEYS if key in data and (key != "core" or data[key] is not None)}
+            data = {key: data[key] for key in _TASK_KEYS
+                    if key in data and (key not in ("core", "server") or data[key] is not None)}
         return without_unused_arrivals(data)  # resolved scenarios that use none stay as they were
 
     def plugin_name(self) -> str:
@@ -594,6 +597,8 @@ class NodeSpec(SpecModel):
     speed_levels: list[Annotated[float, Field(gt=0, le=1)]] | None = Field(None, min_length=1, description=(
         "the speeds set_speed accepts (default: any in (0, 1])"))
     sync: SyncSpec | None = None  # mailboxes, semaphores, events, monitors (issue 20): netsim.scenario.schema_sync
+    servers: list[ServerDecl] = Field(default_factory=list)  # CBS/TBS (issue 30): netsim.scenario.schema_servers
+    timetable: TimetableSpec | None = None  # a time-triggered schedule table for policy tt (issue 30)
 
     def task(self, name: str) -> TaskSpec:
         """The task called ``name`` (KeyError if none)."""
@@ -766,6 +771,10 @@ class Scenario(SpecModel):
                 del node["energy"]
             if node.get("sync", 0) is None:  # the same for the sync objects
                 del node["sync"]
+            if not node.get("servers", 1):  # and for servers and tables (issue 30)
+                del node["servers"]
+            if node.get("timetable", 0) is None:
+                del node["timetable"]
             for key in ("cores", "multicore", "migration_cost", "speed", "speed_levels"):  # and the CPU (issue 30)
                 if node.get(key, 0) is None:
                     del node[key]
