@@ -311,6 +311,11 @@ class TotalBandwidthServer(Server):
 def _check_node(kernel: Kernel, name: str) -> None:
     if not isinstance(name, str) or not name:
         raise BuildError(f"node '{kernel.name}': a server name must be a non-empty string, got {name!r}")
+    from netsim.kernel.dispatch import Dispatcher
+
+    if type(kernel)._dispatch is not Dispatcher._dispatch:  # a multicore or speed-scaling kernel
+        raise BuildError(f"node '{kernel.name}': server '{name}' needs a single-core node without speed scaling "
+                         "(the servers' budget accounting is the single-core dispatcher's)")
     if kernel.policy.name != "edf":
         raise BuildError(f"node '{kernel.name}': server '{name}' needs policy 'edf' (a server's deadline ranks its "
                          f"jobs among the node's EDF jobs); the node's policy is '{kernel.policy.name}'")
