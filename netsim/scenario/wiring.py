@@ -74,6 +74,10 @@ def wire_kernels(scenario: Scenario, env: SimEnv, body: BodyFn,
             checked_call(kernel.add_task, tpath, t, body(t, kernel, node_name, tpath, t.period))
             if t.release_network is not None:
                 bindings.append((node_name, t.release_network, t.name))
+        if node.servers or node.timetable is not None or node.policy == "tt" or any(t.server for t in node.tasks):
+            from netsim.scenario.schema_servers import wire_servers  # CBS/TBS and time-triggered tables (issue 30)
+
+            wire_servers(kernel, node, npath)
         # triggers after every handler exists
         for i, h in enumerate(node.handlers):
             hpath = f"{npath}.handlers[{i}]"
