@@ -389,19 +389,25 @@ def _task_entry(node: str, index: int, spec: Any, summary: dict[str, Any], progr
 
 
 def _state_feedback_tasks(scenario: Scenario) -> list[tuple[str, int, Any]]:
-    from netsim import registry
-    from netsim.programs.state_feedback import StateFeedbackProgram
+    import sys
 
-    out = []
+    from netsim import registry
+
+    found = []
     for node, spec in scenario.nodes.items():
         for i, task in enumerate(spec.tasks):
             try:
                 cls = registry.lookup("program", task.program)
             except ConfigError:  # an unknown program is validate's problem, not a design
                 continue
-            if isinstance(cls, type) and issubclass(cls, StateFeedbackProgram):
-                out.append((node, i, task))
-    return out
+            found.append((node, i, task, cls))
+    # a subclass of StateFeedbackProgram exists only once its module is imported: a scenario without one does not
+    # import it (nor the control parts it loads, ~0.1 s of `netsim validate` and `run`, issue 29)
+    module = sys.modules.get("netsim.programs.state_feedback")
+    if module is None:
+        return []
+    base = module.StateFeedbackProgram
+    return [(node, i, task) for node, i, task, cls in found if isinstance(cls, type) and issubclass(cls, base)]
 
 
 def static_designs(scenario: Scenario, plant: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
@@ -487,7 +493,7 @@ def run_warnings(sim: Any) -> list[str]:
 
 def nominal_warnings_at(scenario: Scenario, plant: Any) -> list[tuple[str, str]]:
     """The same warnings for ``netsim validate``: ``(YAML path, message)`` at each task's ``params.law``
-    (:mod:`netsim.scenario.static_build` makes them warning problems)."""
+    (:mod:`netsim.build.dry_run` makes them warning problems)."""
     designs = static_designs(scenario, plant, margin=False)
     out = []
     for key, d in sorted(designs.items()):
