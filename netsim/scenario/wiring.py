@@ -49,13 +49,15 @@ def wire_kernels(scenario: Scenario, env: SimEnv, body: BodyFn,
         With the YAML path (``nodes.<n>.tasks[i].<field>``) of what the kernel refused.
     """
     from netsim.kernel import Kernel
+    from netsim.kernel.cores import cpu_options
 
     kernels: dict[str, Any] = {}
     bindings: list[tuple[str, str, str]] = []
     for node_name, node in scenario.nodes.items():
         npath = f"nodes.{node_name}"
+        options = cpu_options(node, npath)  # cores, multicore, speed (issue 30), checked at their YAML paths
         try:
-            kernel = Kernel(env, node_name, policy=node.policy, context_switch=node.context_switch)
+            kernel = Kernel(env, node_name, policy=node.policy, context_switch=node.context_switch, **options)
         except NetsimError as exc:
             raise BuildError(str(exc), path=npath) from None
         kernels[node_name] = kernel
