@@ -159,9 +159,11 @@ def _structure_problems(raw: dict[str, Any], line_of: LineOf | None) -> Iterator
                 yield Problem(format_path(["nodes", node_name]),
                               f"node '{node_name}' runs no task and no handler (messages sent to it are dropped); "
                               "add a task or a handler if it should do something", severity=WARNING)
+        slotted = [_d(s).get("task") for s in _l(_d(node.get("timetable")).get("slots"))]  # a tt table releases them
         for i, task in enumerate(_l(node.get("tasks"))):
             if (isinstance(task, dict) and task.get("period") is None and task.get("release") is None
-                    and task.get("min_interarrival") is None):  # a sporadic task releases itself
+                    and task.get("min_interarrival") is None  # a sporadic task releases itself
+                    and not (isinstance(task.get("name"), str) and task.get("name") in slotted)):
                 yield Problem(format_path(["nodes", node_name, "tasks", i]),
                               f"task '{_short(str(task.get('name')))}' has no period and no release, so "
                               "nothing would ever release it; add e.g. 'period: 10 ms' or "
