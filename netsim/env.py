@@ -46,7 +46,7 @@ with the same order of everything (issue 19: nothing can happen before the conti
 dictionary look-up, not a function call.
 
 Two loops run the same heap in the same order. :func:`run_events` (and :meth:`SimEnv.run`, and
-:meth:`netsim.scenario.builder.Simulation.run`) is netsim's fast loop: every entry up to and *including*
+:meth:`netsim.build.builder.Simulation.run`) is netsim's fast loop: every entry up to and *including*
 ``t_end``. simpy's own :meth:`simpy.Environment.run` works too, through the overridden :meth:`EventLoop.step`:
 ``sim.run(until=t_end + 1)`` processes the same entries (simpy stops *before* ``until``) and leaves the clock
 at ``t_end + 1``, as :meth:`SimEnv.run` does; ``sim.run()`` runs until the heap is empty (never, with a

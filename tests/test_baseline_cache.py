@@ -9,7 +9,7 @@ import yaml
 
 import netsim.runner as runner
 from netsim.programs.event_triggered import EtController, EtSensor
-from netsim.scenario.builder import build
+from netsim.build.builder import build
 from netsim.scenario.loader import load_scenario
 
 SCEN = Path(__file__).resolve().parents[1] / "scenarios"

@@ -14,7 +14,7 @@ from netsim.env import ARBITRATE, DEADLINE, DISPATCH, NORMAL, EventLoop, SimEnv,
 from netsim.kernel import Kernel
 from netsim.network import Message, make_network
 from netsim.results import jobs_table, messages_table, signals_table
-from netsim.scenario.builder import build
+from netsim.build.builder import build
 from netsim.scenario.loader import load_scenario
 from netsim.timebase import MS, S, US
 

@@ -116,6 +116,9 @@ class ProgramContext:
         The task's period in ns (``None`` for aperiodic tasks and handlers).
     spec : Any
         The task's or handler's own validated YAML entry.
+    dry_run : bool
+        True when ``netsim validate``'s dry run builds the program (:mod:`netsim.build.dry_run`): it never runs,
+        so what it makes for the run (a control design) is left for the run's program to take.
     """
 
     env: SimEnv
@@ -127,6 +130,7 @@ class ProgramContext:
     scenario: Scenario | None = None
     period: int | None = None
     spec: Any = None
+    dry_run: bool = False
 
     def record(self, name: str, value: Any, t_ns: int | None = None) -> None:
         """Record a signal sample (see :meth:`netsim.env.SimEnv.record`)."""

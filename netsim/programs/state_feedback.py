@@ -267,7 +267,8 @@ class StateFeedbackProgram:
         plant = ctx.env.components.get("plant")
         self.period = ctx.period
         self.offset = int(getattr(node, "offset", 0) or 0)
-        made = claim_design(params, ctx.scenario, plant, ctx.period, path, ctx.node)
+        design = task_design if ctx.dry_run else claim_design  # a dry run leaves the design to the run
+        made = design(params, ctx.scenario, plant, ctx.period, path, ctx.node)
         self.task_design = made
         self.design, self.per_source, self.rows = made.design, made.per_source, made.rows
         self.law, self.fed_state = made.law, made.fed_state

@@ -47,7 +47,7 @@ def _plant_names(scenario: Mapping[str, Any] | None) -> tuple[str, list[str], li
         return None
     from netsim.errors import NetsimError
     from netsim.scenario import load_scenario
-    from netsim.scenario.builder import make_plant
+    from netsim.build.builder import make_plant
 
     try:
         spec = load_scenario(dict(scenario)).plant

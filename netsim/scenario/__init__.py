@@ -8,7 +8,7 @@ Examples
 broken.yaml:12: nodes.controller.tasks[1].period: unknown unit 'usec'; did you mean 'us'?
 
 The runtime side (turning a scenario into kernels, networks and a plant) is in
-:mod:`netsim.scenario.builder`, imported only when :func:`build` is called.
+:mod:`netsim.build.builder`, imported only when :func:`build` is called.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from netsim.scenario.problems import Problem, ScenarioError
 from netsim.scenario.schema import Scenario
 
 if TYPE_CHECKING:
-    from netsim.scenario.builder import Simulation
+    from netsim.build.builder import Simulation
 
 __all__ = [
     "build",
@@ -62,7 +62,7 @@ def build(source: Any, *, allow_plugins: bool | None = None) -> "Simulation":
     BuildError
         When a valid description cannot be turned into runtime objects.
     """
-    from netsim.scenario import builder
+    from netsim.build import builder
 
     if not isinstance(source, Scenario):
         from netsim.plant.described import resolve_plant_object

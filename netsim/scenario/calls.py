@@ -11,7 +11,7 @@ not checked.
 ========== ===================================== ================================================
 kind       build calls                           where
 ========== ===================================== ================================================
-plant      ``factory(params)``                   :func:`netsim.scenario.builder.make_plant`
+plant      ``factory(params)``                   :func:`netsim.build.builder.make_plant`
 signal     ``cls(params)``                       ``builder._make_signals``
 program    ``cls(ctx, params)``                  ``builder._program``
 network    ``cls(env, name, params)``            :func:`netsim.network.make_network`

@@ -10,7 +10,7 @@ is a problem to place (:class:`LineIndex` parses the text a second time, keeping
 Validation runs in three layers that all run even when an earlier one finds problems: the base schema
 (:mod:`netsim.scenario.schema`, once), every plugin's own ``Params`` model, and the cross references
 (:mod:`netsim.scenario.validate`); a scenario that passes them then goes through build's own kernel and network
-checks (:mod:`netsim.scenario.static_build`). A scenario with ``baseline: {overrides: ...}`` has its baseline
+checks (:mod:`netsim.build.dry_run`: the run's own build on a dry-run environment, once). A scenario with ``baseline: {overrides: ...}`` has its baseline
 validated the same way, once, while it loads; :meth:`Scenario.baseline_scenario` returns it.
 
 A mapping from Python is made plain first (:mod:`netsim.scenario.python_values`: numpy arrays and scalars as lists
@@ -229,9 +229,9 @@ def _validate(raw: dict[str, Any], line_of: Any) -> tuple[list[Problem], Scenari
         if path in validated:
             spec.attach_validated(validated[path])
     scenario._raw = raw
-    from netsim.scenario.static_build import build_problems
+    from netsim.build.dry_run import build_problems
 
-    problems += build_problems(scenario)  # what build checks with its runtime objects, nothing simulated
+    problems += build_problems(scenario)  # the run's build on a dry-run environment, nothing simulated
     if any(p.severity == ERROR for p in problems):
         return problems, None
     return problems, scenario

@@ -1,7 +1,7 @@
 """The scenario schema: pydantic models of a netsim YAML scenario.
 
 A scenario is a frozen, validated description (the SimSo split: static description here, runtime objects
-in :mod:`netsim.scenario.builder`). This module is pure data: it imports no loader and no checker (they import
+in :mod:`netsim.build.builder`). This module is pure data: it imports no loader and no checker (they import
 it); :func:`netsim.scenario.load_scenario` fills what only it knows (validated plugin parameters, the raw data,
 the baseline scenario) into private attributes.
 

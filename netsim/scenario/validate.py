@@ -43,7 +43,8 @@ What is checked
   registered plant that does not declare its ports is built (build's own ``make_plant``) for the io check.
 
 A scenario that passes all of these then goes through build's kernel and network construction
-(:mod:`netsim.scenario.static_build`), so ``validate`` refuses what ``run`` would refuse while building.
+(:mod:`netsim.build.dry_run`: the run's own build on a dry-run environment), so ``validate`` refuses what ``run``
+would refuse while building.
 
 Why this module is long: one checker walks the raw scenario once, section by section, and the cross references
 it checks tie the sections together (a task's network and receiver, a metric's recorded signals and tasks, a
@@ -269,7 +270,7 @@ class _Checker:
         ``build`` would report it.
         """
         from netsim.registry import is_builtin
-        from netsim.scenario.builder import make_plant
+        from netsim.build.builder import make_plant
 
         if not isinstance(model, str) or not is_builtin(factory):
             return inputs, outputs
@@ -415,7 +416,7 @@ class _Checker:
                 self.one_receiver(node_name, net, at, [*at, "release"])
         refused = self.kernel_checks(node_name, node, model, at)
         table = getattr(model.execution, "table", None) if model is not None else None
-        if table is not None:  # an empirical execution time read from a CSV file: build reads it (builder._execution)
+        if table is not None:  # an empirical execution time read from a CSV file: build reads it (netsim.build.builder._execution)
             try:
                 table()
             except ConfigError as exc:
@@ -442,16 +443,15 @@ class _Checker:
 
         if model is None:
             return set()
-        name = model.name
         policy_name = node.get("policy", "fp")
         try:
             spec = model.checked(node_name)
             if is_builtin_policy(policy_name):
                 resolve_policy(policy_name, node_name).check(node_name, spec)
         except BuildError as exc:
-            field = getattr(exc, "field", None)
-            prefix = f"node '{node_name}', task '{name}', field '{field}': "
-            self.error([*at, field] if field else at, exc.message.removeprefix(prefix))
+            field = getattr(exc, "field", None)  # netsim.kernel.task.task_error's field and reason: the path's
+            reason = getattr(exc, "reason", None)  # last key and the message at it
+            self.error([*at, field] if field else at, reason if isinstance(reason, str) else exc.message)
             return {field} if field else set()
         return set()
 

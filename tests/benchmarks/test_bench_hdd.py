@@ -23,7 +23,7 @@ import pytest
 import yaml
 
 from netsim.runner import clear_baseline_cache, run, run_point
-from netsim.scenario.builder import build
+from netsim.build.builder import build
 from netsim.scenario.loader import load_scenario
 
 SCEN = Path(__file__).resolve().parents[2] / "scenarios"

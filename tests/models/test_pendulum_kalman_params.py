@@ -17,7 +17,7 @@ import pytest
 import netsim  # noqa: F401 - pins BLAS before numpy work
 from netsim.models.pendulum.model import PendulumParams, dynamics
 from netsim.errors import ConfigError
-from netsim.scenario.builder import build
+from netsim.build.builder import build
 from netsim.scenario.loader import load_scenario
 
 control = pytest.importorskip("control")

@@ -7,7 +7,7 @@ import pytest
 
 from netsim.errors import BuildError
 from netsim.registry import register
-from netsim.scenario.builder import build
+from netsim.build.builder import build
 from netsim.scenario.loader import load_scenario
 from netsim.units import StrictModel
 
@@ -122,7 +122,7 @@ def test_the_builder_takes_only_a_validated_scenario_and_names_the_loading_build
     from pathlib import Path
 
     from netsim.scenario import build as build_from_source
-    from netsim.scenario.builder import build as build_scenario
+    from netsim.build.builder import build as build_scenario
 
     with pytest.raises(TypeError, match="netsim.scenario.build"):
         build_scenario({"name": "x"})

@@ -93,8 +93,9 @@ def test_the_schema_imports_no_loader_or_checker():
     tree = ast.parse((ROOT / "netsim" / "scenario" / "schema.py").read_text())
     imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module}
     imported |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
-    above = {f"netsim.scenario.{m}" for m in ("loader", "validate", "messages", "static_build", "builder", "limits",
-                                              "safe_yaml")}
+    above = {f"netsim.scenario.{m}" for m in ("loader", "validate", "messages", "limits", "safe_yaml")}
+    above |= {f"netsim.build.{m}" for m in ("builder", "wiring", "dry_run")}
+    assert not any(name == "netsim.build" or name.startswith("netsim.build.") for name in imported)
     assert imported & above == set()
 
 

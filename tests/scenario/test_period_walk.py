@@ -18,7 +18,7 @@ import pytest
 import netsim.timebase
 from netsim.kernel.task import TaskSpec
 from netsim.scenario import load_scenario
-from netsim.scenario.builder import build
+from netsim.build.builder import build
 
 PERIOD = "7.25 ms"  # a text no other field of the scenario uses
 PERIOD_NS = 7_250_000

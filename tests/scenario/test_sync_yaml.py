@@ -11,7 +11,7 @@ from netsim.kernel.node_sync import MailboxName
 from netsim.registry import register
 from netsim.runner import simulate
 from netsim.scenario import check_scenario, load_scenario
-from netsim.scenario.builder import build
+from netsim.build.builder import build
 from netsim.scenario.loader import read_yaml
 
 from netsim.units import StrictModel

@@ -1,11 +1,13 @@
-"""Kernels and networks of a scenario, wired exactly as :func:`netsim.scenario.builder.build` makes them.
+"""Kernels and networks of a scenario, wired as :func:`netsim.build.builder.build` makes them (steps 5 and 6).
 
 :func:`wire_kernels` creates one kernel per node (its policy by name, resolved by
 :func:`netsim.kernel.policies.find_policy`), adds each task and handler from its kernel description
 (a task or handler entry is the kernel's ``TaskSpec`` or ``HandlerSpec`` itself) and creates the timers, external triggers and
 periodic loads; :func:`build_networks` creates the networks and attaches them; :func:`bind_receivers` binds
-message receptions. ``netsim validate`` runs the same functions with placeholder bodies
-(:mod:`netsim.scenario.static_build`), so it refuses what the kernel would refuse, at the same YAML path.
+message receptions. ``netsim validate`` runs them within the same build, on a dry-run environment
+(:mod:`netsim.build.dry_run`), so it refuses what the kernel would refuse, at the same YAML path:
+:func:`checked_call` places a kernel error at the field it names (the error's ``field`` and ``reason``
+attributes, :func:`netsim.kernel.task.task_error`), never by reading its message.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from netsim.kernel.task import HandlerSpec, TaskSpec
 if TYPE_CHECKING:
     from netsim.scenario.schema import Scenario
 
-__all__ = ["BodyFn", "wire_kernels", "bind_receivers", "build_networks", "checked_call", "SPEC_FIELDS"]
+__all__ = ["BodyFn", "wire_kernels", "bind_receivers", "build_networks", "checked_call", "located", "SPEC_FIELDS"]
 
 #: ``body(spec, kernel, node, path, period)``: the program body of a task or handler entry.
 BodyFn = Callable[[Any, Any, str, str, "int | None"], Any]
@@ -28,13 +30,13 @@ BodyFn = Callable[[Any, Any, str, str, "int | None"], Any]
 def wire_kernels(scenario: Scenario, env: SimEnv, body: BodyFn,
                  attach: Callable[[Any], None] | None = None) -> tuple[dict[str, Any], list[tuple[str, str, str]]]:
     """One kernel per node with its handlers, tasks and triggers, exactly as
-    :func:`~netsim.scenario.builder.build` creates them.
+    :func:`~netsim.build.builder.build` creates them.
 
     Parameters
     ----------
     body
         ``body(spec, kernel, node, path, period)`` returns the program body of a task or handler spec
-        (``netsim validate`` passes placeholders, so every kernel check runs without building programs).
+        (a dry run passes a placeholder for a program it does not build).
     attach
         Called with each new kernel before its tasks are created (the builder attaches the io channels).
 
@@ -118,24 +120,36 @@ SPEC_FIELDS = frozenset([*TaskSpec.model_fields, *HandlerSpec.model_fields])
 
 
 def checked_call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -> Any:
-    """Call a kernel/network/plant constructor, turning its user errors into BuildErrors with ``path`` (and the
-    field a kernel error names, when it is a key of the task or handler at ``path``)."""
+    """Call a kernel/network/plant constructor, turning its user errors into BuildErrors with ``path``.
+
+    A kernel's task error (:func:`netsim.kernel.task.task_error`) names its field: when that is a key of the task
+    or handler at ``path``, the error is placed at ``<path>.<field>``; at the entry's path, its message is the
+    kernel's reason alone (the path names the node, the entry and the field).
+    """
     try:
         return fn(*args, **kwargs)
     except ConfigError as exc:
         if exc.path is None:
-            field = getattr(exc, "field", None)
-            where = f"{path}.{field}" if field in SPEC_FIELDS and path.endswith("]") else path
-            err = BuildError(exc.message, path=where)
-            for attr in ("node", "task", "field"):
-                if hasattr(exc, attr):
-                    setattr(err, attr, getattr(exc, attr))
-            raise err from None
+            raise located(exc, path) from None
         raise
     except NetsimError as exc:
         raise BuildError(str(exc), path=path) from None
     except (ValueError, TypeError) as exc:
         raise BuildError(str(exc), path=path) from exc
+
+
+def located(exc: ConfigError, path: str) -> BuildError:
+    """``exc`` (raised without a path) as a BuildError at ``path``, or at ``<path>.<field>`` for a kernel error
+    naming a field of the entry at ``path`` (see :func:`checked_call`)."""
+    field = getattr(exc, "field", None)  # the structured attributes of netsim.kernel.task.task_error
+    reason = getattr(exc, "reason", None)
+    entry = path.endswith("]")  # nodes.<n>.tasks[i] or nodes.<n>.handlers[i]
+    where = f"{path}.{field}" if entry and field in SPEC_FIELDS else path
+    err = BuildError(reason if entry and isinstance(reason, str) else exc.message, path=where)
+    for attr in ("node", "task", "field", "reason"):
+        if hasattr(exc, attr):
+            setattr(err, attr, getattr(exc, attr))
+    return err
 
 
 def build_networks(scenario: Scenario, env: SimEnv, kernels: dict[str, Any]) -> dict[str, Any]:

@@ -21,129 +21,41 @@ What :func:`build` does, in order:
    the energy meters of the nodes with ``energy:`` (:mod:`netsim.energy`);
 7. recording of the scenario signals named in ``record:`` (at 0 and at every jump; continuous ones on the grid).
 
-Steps 5 and 6 are :mod:`netsim.scenario.wiring` (shared with ``netsim validate``); its names are re-exported here.
+Steps 5 and 6 are :mod:`netsim.build.wiring`; its names are re-exported here.
+
+``netsim validate`` runs this same :func:`build` once, with ``dry_run=True``: on a :class:`DryRunEnv` (an
+environment that is never run), and without running code a scenario brings along (issue 14): a plant, signal or
+network is built only when it comes from netsim's own plugin modules (:func:`netsim.registry.is_builtin`), the
+kernels only when every node uses a built-in policy, and a program only when it is netsim's own and the plant
+was built; anything else is left out (a program gets a placeholder body). :mod:`netsim.build.dry_run` turns the
+first error into a problem at its YAML path.
 """
 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
 from collections.abc import Generator
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
+from netsim.build.simulation import PROGRESS_SLICES, DryRunEnv, ProgressFn, SeedWatchEnv, Simulation
+from netsim.build.wiring import bind_receivers, build_networks, checked_call, wire_kernels
 from netsim.energy import attach_energy
-from netsim.env import SimEnv, run_events
+from netsim.env import SimEnv
 from netsim.errors import BuildError, ConfigError, NetsimError
-from netsim.scenario.wiring import bind_receivers, build_networks, checked_call, wire_kernels
 from netsim.timebase import MS
 
 if TYPE_CHECKING:
     from netsim.scenario.schema import Scenario
 
-__all__ = ["Simulation", "build", "make_plant", "wire_kernels", "build_networks", "bind_receivers", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
+__all__ = ["Simulation", "build", "DryRunEnv", "make_plant", "wire_kernels", "build_networks", "bind_receivers", "DEFAULT_SIGNAL_GRID", "ProgressFn", "PROGRESS_SLICES"]
 
 log = logging.getLogger(__name__)
 
 #: Grid on which continuous (not piecewise-constant) disturbances and recorded signals are refreshed.
 DEFAULT_SIGNAL_GRID = 1 * MS
-
-#: A progress callback ``fn(t_ns, t_end_ns)`` of :meth:`Simulation.run`.
-ProgressFn = Callable[[int, int], None]
-
-#: Number of progress reports per run (one per 1 % of simulated time).
-PROGRESS_SLICES = 100
-
-
-@dataclass
-class Simulation:
-    """Everything :func:`build` created, ready to run.
-
-    Attributes
-    ----------
-    scenario, env, plant
-        The scenario, the environment and the plant (None when the scenario has none).
-    signals : dict[str, Callable[[int], float]]
-    channels : dict[str, Any]
-        ``io`` channel objects by name (ADC, DAC, Encoder).
-    kernels : dict[str, Kernel]
-    networks : dict[str, Network]
-    duration : int
-        Simulated time in ns.
-    """
-
-    scenario: Scenario
-    env: SimEnv
-    plant: Any = None
-    signals: dict[str, Callable[[int], float]] = field(default_factory=dict)
-    channels: dict[str, Any] = field(default_factory=dict)
-    kernels: dict[str, Any] = field(default_factory=dict)
-    networks: dict[str, Any] = field(default_factory=dict)
-    programs: dict[str, Any] = field(default_factory=dict)
-    duration: int = 0
-    energy: dict[str, Any] = field(default_factory=dict)  # node -> EnergyMeter (nodes with an energy model)
-    finished_at: int | None = None
-
-    def run(self, until: int | None = None, progress: ProgressFn | None = None) -> int:
-        """Run to ``until`` ns (default: the scenario duration); returns the time reached.
-
-        Parameters
-        ----------
-        until
-            End time in ns (events at ``until`` are processed).
-        progress
-            Optional ``progress(t_ns, t_end_ns)``, called at the start, after every 1 % of simulated time and
-            at the end. The event loop then runs in 100 slices ``(k-1) t_end/100 < t <= k t_end/100``: the
-            same events in the same order as one pass (no extra event is scheduled), so results are identical
-            with and without it; with ``None`` the loop is not sliced at all.
-
-        Exceptions from the model (e.g. :class:`~netsim.errors.DivergenceError`) propagate; the finalizers
-        (plant flush, open schedule intervals) are then run at the current time by :meth:`finish`, so the
-        tables hold everything up to the failure.
-        """
-        t_end = self.duration if until is None else int(until)
-        try:
-            if progress is None:
-                run_events(self.env.sim, t_end)
-            else:
-                _run_sliced(self.env, t_end, progress)
-        except BaseException:
-            self.finish(self.env.now)
-            raise
-        self.finish(t_end)
-        return t_end
-
-    def used_seed(self) -> bool:
-        """True if the run so far depended on the scenario seed (read it, or drew from a random stream).
-
-        False means the same scenario gives the same results with any seed (results caches use this).
-        """
-        used = getattr(self.env, "used_seed", None)
-        return True if used is None else bool(used())
-
-    def finish(self, t_ns: int) -> None:
-        """Run the env's end-of-run finalizers at ``t_ns`` after an aborted run (each at most once)."""
-        if self.finished_at is not None:
-            return
-        self.finished_at = int(t_ns)
-        for fn in list(getattr(self.env, "_finalizers", [])):
-            try:
-                fn(int(t_ns))
-            except Exception:  # noqa: BLE001 - collecting after a failure must not raise again
-                log.debug("finalizer failed after an aborted run", exc_info=True)
-
-
-def _run_sliced(env: SimEnv, t_end: int, progress: ProgressFn, slices: int = PROGRESS_SLICES) -> None:
-    """:func:`netsim.env.run_events` to ``t_end`` in ``slices`` steps of simulated time, reporting after each."""
-    start = int(env.now)
-    progress(start, t_end)
-    span = max(t_end - start, 0)
-    for k in range(1, slices + 1):
-        t = start + span * k // slices  # integer ns; the last slice ends exactly at t_end
-        run_events(env.sim, t)
-        progress(t, t_end)
-
 
 # --------------------------------------------------------------------------------------------- pieces
 def _record_filter(scenario: Scenario) -> set[str] | None:
@@ -349,8 +261,15 @@ def _program(spec: Any, ctx: Any, path: str) -> Any:
     return body
 
 
+def _placeholder(job: Any) -> Any:
+    """The body of a program a dry run does not build (the kernel only checks that bodies are generator
+    functions); it never runs."""
+    return
+    yield  # pragma: no cover - makes this a generator function
+
+
 def _build_kernels(scenario: Scenario, env: SimEnv, signals: dict[str, Any], channels: dict[str, Any],
-                   plant: Any) -> tuple[dict[str, Any], dict[str, Any], list[tuple[str, str, str]]]:
+                   plant: Any, reach: _Reach) -> tuple[dict[str, Any], dict[str, Any], list[tuple[str, str, str]]]:
     """Kernels with their tasks and handlers; returns also the (node, network, target) receive bindings."""
     if not scenario.nodes:
         return {}, {}, []
@@ -359,9 +278,11 @@ def _build_kernels(scenario: Scenario, env: SimEnv, signals: dict[str, Any], cha
     programs: dict[str, Any] = {}
 
     def body(spec: Any, kernel: Any, node_name: str, path: str, period: int | None) -> Any:
-        ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=spec.name,
-                             execution=_execution(spec, path), signals=signals, scenario=scenario,
-                             period=period, spec=spec)
+        execution = _execution(spec, path)
+        if not reach.program(spec):
+            return _placeholder
+        ctx = ProgramContext(env=env, kernel=kernel, node=node_name, task=spec.name, execution=execution,
+                             signals=signals, scenario=scenario, period=period, spec=spec, dry_run=reach.dry)
         made = _program(spec, ctx, path)
         programs[f"{node_name}.{spec.name}"] = made
         return made
@@ -369,7 +290,7 @@ def _build_kernels(scenario: Scenario, env: SimEnv, signals: dict[str, Any], cha
     def attach(kernel: Any) -> None:
         _attach_io(kernel, scenario, channels, plant, env)
 
-    kernels, bindings = wire_kernels(scenario, env, body, attach)
+    kernels, bindings = wire_kernels(scenario, env, body, attach if reach.plant else None)
     return kernels, programs, bindings
 
 
@@ -386,53 +307,75 @@ def _record_signals(scenario: Scenario, env: SimEnv, signals: dict[str, Any]) ->
 
 
 # --------------------------------------------------------------------------------------------- build
-class _SeedWatchEnv(SimEnv):
-    """A :class:`SimEnv` that notes whether the run used its seed (for :meth:`Simulation.used_seed`).
+def _lookup(kind: str, name: str) -> Any:
+    from netsim import registry
 
-    The seed counts as used when code read ``env.seed`` itself (instead of asking for a named stream) or when
-    any named stream produced a number. A run that used neither gives the same results for every seed.
+    try:
+        return registry.lookup(kind, name)
+    except ConfigError:
+        return None
+
+
+@dataclass(frozen=True)
+class _Reach:
+    """What a build makes: everything for a run; for a dry run, only what netsim's own code makes.
+
+    Attributes
+    ----------
+    dry
+        True for a dry run.
+    plant
+        Build the signals, the plant and the io channels (a dry run: when each comes from netsim's own modules).
+    kernels
+        Build the kernels (a dry run: when every node uses a built-in policy).
+    networks
+        Build the networks (a dry run: when each network type is one of netsim's own Network classes).
     """
 
-    def __init__(self, seed: int = 0, record: set[str] | None = None) -> None:
-        self.seed_read = False
-        self._initial: dict[str, Any] = {}
-        self._in_rng = False
-        super().__init__(seed, record)
-        self.seed_read = False  # SimEnv.__init__ itself does not count
+    dry: bool = False
+    plant: bool = True
+    kernels: bool = True
+    networks: bool = True
 
-    @property
-    def seed(self) -> int:
-        if not self._in_rng:
-            self.seed_read = True
-        return self._seed
+    @classmethod
+    def of(cls, scenario: Scenario, dry_run: bool) -> _Reach:
+        if not dry_run:
+            return cls()
+        from netsim.kernel.policies import is_builtin_policy
+        from netsim.network.pipeline import Network
+        from netsim.registry import is_builtin
 
-    @seed.setter
-    def seed(self, value: int) -> None:
-        self._seed = value
+        objs = [_lookup("signal", s.type) for s in scenario.signals.values()]
+        if scenario.plant is not None:
+            objs.append(_lookup("plant", scenario.plant.model))
+        nets = [_lookup("network", n.type) for n in scenario.networks.values()]
+        return cls(dry=True,
+                   plant=all(o is not None and is_builtin(o) for o in objs),
+                   kernels=all(is_builtin_policy(node.policy) for node in scenario.nodes.values()),
+                   networks=all(isinstance(c, type) and issubclass(c, Network) and is_builtin(c) for c in nets))
 
-    def rng(self, name: str) -> np.random.Generator:
-        gen = self._streams.get(name)
-        if gen is None:
-            self._in_rng = True
-            try:
-                gen = super().rng(name)
-            finally:
-                self._in_rng = False
-            self._initial[name] = gen.bit_generator.state
-        return gen
-
-    def used_seed(self) -> bool:
-        """True if the seed was read directly or a named stream was drawn from."""
-        if self.seed_read:
+    def program(self, spec: Any) -> bool:
+        """Whether the program of a task or handler entry is built (a dry run: netsim's own, with the plant)."""
+        if not self.dry:
             return True
-        return any(gen.bit_generator.state != self._initial.get(name) for name, gen in self._streams.items())
+        from netsim.registry import is_builtin
+
+        return self.plant and is_builtin(_lookup("program", spec.program))
 
 
-def build(scenario: Scenario) -> Simulation:
+def build(scenario: Scenario, *, dry_run: bool = False) -> Simulation:
     """Create and connect every runtime object of a validated :class:`~netsim.scenario.schema.Scenario`.
 
     To build from a file, a dict or a python-control system, use :func:`netsim.scenario.build`, which loads and
     validates first (this module never loads: loading validates by building, so the two stay one-way).
+
+    Parameters
+    ----------
+    scenario
+        The validated scenario.
+    dry_run
+        Build on a :class:`DryRunEnv` and only what netsim's own code makes (see the module docstring): what
+        ``netsim validate`` checks. The result is never run.
 
     Raises
     ------
@@ -446,16 +389,26 @@ def build(scenario: Scenario) -> Simulation:
     if not isinstance(scenario, Scenario):
         raise TypeError(f"builder.build takes a validated Scenario, not {type(scenario).__name__}; use "
                         f"netsim.scenario.build(path_or_dict) or netsim.scenario.load_scenario first")
-    env = _SeedWatchEnv(seed=scenario.seed, record=_record_filter(scenario))
-    signals = _make_signals(scenario)
-    plant = _build_plant(scenario, env, signals)
-    if plant is not None:
-        env.components["plant"] = plant
-    channels = _build_io(scenario, env, plant)
-    kernels, programs, bindings = _build_kernels(scenario, env, signals, channels, plant)
-    networks = build_networks(scenario, env, kernels)
-    bind_receivers(kernels, networks, bindings)
-    energy = attach_energy(scenario, env, kernels, networks)
+    reach = _Reach.of(scenario, dry_run)
+    env: SimEnv = (DryRunEnv if dry_run else SeedWatchEnv)(seed=scenario.seed, record=_record_filter(scenario))
+    signals: dict[str, Callable[[int], float]] = {}
+    plant, channels = None, {}
+    if reach.plant:
+        signals = _make_signals(scenario)
+        plant = _build_plant(scenario, env, signals)
+        if plant is not None:
+            env.components["plant"] = plant
+        channels = _build_io(scenario, env, plant)
+    kernels: dict[str, Any] = {}
+    programs: dict[str, Any] = {}
+    networks: dict[str, Any] = {}
+    energy: dict[str, Any] = {}
+    if reach.kernels:
+        kernels, programs, bindings = _build_kernels(scenario, env, signals, channels, plant, reach)
+        if reach.networks:
+            networks = build_networks(scenario, env, kernels)
+            bind_receivers(kernels, networks, bindings)
+            energy = attach_energy(scenario, env, kernels, networks)
     _record_signals(scenario, env, signals)
     return Simulation(scenario=scenario, env=env, plant=plant, signals=signals, channels=channels,
                       kernels=kernels, networks=networks, programs=programs, duration=scenario.duration,
