@@ -109,10 +109,10 @@ def format_designs(name: str, designs: dict[str, dict[str, Any]]) -> str:
 
 def scenario_designs(scenario: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """:func:`static_designs` of a valid scenario, its plant and io channels built as ``netsim validate`` builds
-    them (:mod:`netsim.scenario.static_build`); what ``netsim design`` prints."""
+    them (:mod:`netsim.build.dry_run`); what ``netsim design`` prints."""
     from netsim.env import SimEnv
     from netsim.programs.design_summary import static_designs
-    from netsim.scenario.builder import _build_io, _build_plant, _make_signals
+    from netsim.build.builder import _build_io, _build_plant, _make_signals
 
     env = SimEnv(seed=scenario.seed, record=None if scenario.record is None else set(scenario.record))
     plant = _build_plant(scenario, env, _make_signals(scenario))
