@@ -145,6 +145,26 @@ def test_x0_sets_the_fmi3_state_before_its_first_step():
         plant.set_state([0.0, 0.0])
 
 
+def test_an_fmi3_fmu_archive_runs_as_its_folder(tmp_path):
+    # a .fmu (zip) holding the compiled library under binaries/<FMI 3 platform tuple> is unpacked into the cache
+    # and gives the same outputs as the source folder it was built from
+    import zipfile
+
+    from netsim.plant.fmu_files import binary_folder, read_description
+
+    built = binary_folder(SOURCE_FMU, read_description(SOURCE_FMU))
+    archive = tmp_path / "dc_motor3.fmu"
+    with zipfile.ZipFile(archive, "w") as z:
+        for p in built.rglob("*"):
+            if p.is_file() and "sources" not in p.parts:  # a binary FMU: no sources to build from
+                z.write(p, p.relative_to(built).as_posix())
+    one = _plant({"outputs": ["theta"]})
+    two = _plant({"path": str(archive), "outputs": ["theta"]})
+    for p in (one, two):
+        p.set_input("u", 0.5, 0)
+    assert one.output(123_456_789)[0] == two.output(123_456_789)[0] != 0.0
+
+
 def test_an_fmi3_step_that_asks_to_terminate_or_returns_early_stops_the_run_with_the_instant():
     # FMPy's doStep result: (eventHandlingNeeded, terminateSimulation, earlyReturn, lastSuccessfulTime)
     from netsim.plant.fmu import _check_fmi3_step
