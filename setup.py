@@ -18,8 +18,11 @@ for name, folder in _MAPPED.items():
     packages += [name] + [f"{name}.{sub}" for sub in find_packages(where=folder)]
 packages += list(_DATA)
 
+# the case-study reports' prose templates (models/**/*.md, read next to their modules)
+_TEMPLATES = {name: ["*.md"] for name in packages if name.startswith("netsim.models")}
+
 setup(
     packages=packages,
     package_dir={**_MAPPED, **{name: folder for name, (folder, _) in _DATA.items()}},
-    package_data={name: patterns for name, (_, patterns) in _DATA.items()},
+    package_data={**_TEMPLATES, **{name: patterns for name, (_, patterns) in _DATA.items()}},
 )

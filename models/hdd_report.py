@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from netsim.casestudy import Quotes, fmt, md_table
+from netsim.casestudy import Quotes, fill, fmt, load_templates, md_table
 from netsim.casestudy import sweep as run_study_sweep
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
@@ -121,87 +121,11 @@ VARIANTS = _variants()
 
 
 # ------------------------------------------------------------------------------------------ prose
-#: Prose templates. Every number is a ``{placeholder}`` filled from the quoted values; the only digits
-#: allowed in a template are labels matching :data:`LABEL_PATTERNS`.
-TEXT: dict[str, str] = {
-    "reason1": "ISE {c1_ISE} vs the paper's {p1_ISE}, overshoot {c1_OS} %, with the MRCI wired as section "
-               "3.2.3 describes (down-sample e at k = m j, then delay); with the own-instant wiring ISE "
-               "{c1own_ISE}, overshoot {c1own_OS} %, and with the plain C(z) (no interlacing) ISE {plainC_ISE}. "
-               "The reference is not stated (we use a unit step at t = 0); the plant reading (unit-gain "
-               "resonances, attenuating notch) is documented in models/hdd.py.",
-    "reason2": "Nsc {c2_Nsc}, Nca {c2_Nca}, ISEP {c2_ISEP}, NE {c2_NE} vs the paper's {p2_Nsc}, {p2_Nca}, "
-               "{p2_ISEP}, {p2_NE} ({c2_off}): the controller steps only when a measurement arrives and its state "
-               "is frozen in between. The next row's reading reproduces the table; why this one is the default: "
-               "see \"Case 2 between measurements\" below.",
-    "reason2ev": "The other reading, `step_on: every_period`: the controller runs every T on the last "
-                 "received measurement and checks eq (22) every T. Nsc {c2ev_Nsc}, Nca {c2ev_Nca}, ISEP "
-                 "{c2ev_ISEP}, NE {c2ev_NE} ({c2ev_off} from the paper's); it runs {c2ev_jobs} controller jobs, "
-                 "i.e. Cc {c2ev_Ccjobs} % counted by jobs, where the column (eq (28) from Uc) says {c2ev_Cc} %.",
-    "reason3": "h = {c3_h} covers the run (longest run of periods one packet has to cover: {c3_gap}; periods "
-               "played past a packet's end: {c3_past}; largest N {c3_Nmax}); Uc {c3_Uc} vs {p3_Uc}, Ua {c3_Ua} vs "
-               "{p3_Ua}, NE {c3_NE} (not printed; the paper says the TTS output is achieved). With the other "
-               "cases' h = {c3h_h} eq (22) holds packets back for up to {c3h_gap} periods, the actuator plays "
-               "{c3h_past} periods past its packet's end holding the last value, and NE is {c3h_NE}.",
-    "reason4": "Noise std {noise_std} and Cov(w) = {w_var} are our choices (unstated); Uc {c4_dir} from Case 3's "
-               "{c3_Uc} to {c4_Uc} (paper {p3_Uc} to {p4_Uc}); NE {c4_NE} vs the paper's {p4_NE}.",
-    "reason5": "Narrower thresholds: Uc {c5_Uc} ({c5_dirUc} from Case 4), Ua {c5_Ua} ({c5_dirUa}), NE {c5_NE} "
-               "({c5_dirNE}); the paper's direction is up, up, down. Our Uc is {c5_vs} the paper's "
-               "{p5_Uc}: with the squared-norm reading of eq (6) the threshold sqrt(delta_s + sigma_s y^2) at y = "
-               "r is {c5_thr}, {c5_thr_vs} our noise std {noise_std}.",
-    "reason6": "NE {c6_NE} vs Case 5's {c5_NE} (paper {p6_NE} vs {p5_NE}), Uc {c6_Uc} vs {c5_Uc} (paper {p6_Uc} "
-               "vs {p5_Uc}), Nca {c6_Nca} vs {c5_Nca} (paper {p6_Nca} vs {p5_Nca}: more controller->actuator "
-               "packets with the DOB). The DOB is the H-infinity problem (17) in its estimator form (stable D by "
-               "construction); the closed-loop LFT of eq (18) gives an unstable D for this plant and is refused "
-               "at build time (models/hdd.py). The paper gives no weights for (17); ours (bandwidth "
-               "{dob_bw} Hz, low-frequency error {dob_dc}) were chosen before the run. Over seeds {seed_lo}-"
-               "{seed_hi}: NE {c6_NE_lo}-{c6_NE_hi} (Case 5: {c5_NE_lo}-{c5_NE_hi}); DOB bandwidth {bw_a} Hz / "
-               "{bw_b} Hz (seeds {s_lo}-{s_hi}): NE {bwa_NE_lo}-{bwa_NE_hi} / {bwb_NE_lo}-{bwb_NE_hi} (Ua "
-               "{bwa_Ua} / {bwb_Ua}); without the DOB the plant-only NUMRE gives NE {nodob_NE_lo}-{nodob_NE_hi}.",
-    "wiring": "Section 3.2.3: \"a down-sampling operator is required at the input of each Cs_i(z^m) to pick "
-              "up the error signal at every m instances of the fast rate, and later, the consequent signal is "
-              "delayed z^-(i-1)\". The text describes the `delayed` wiring (the default, "
-              "`design_params.mrci_wiring`): mode i, updated at k = m j + i - 1, is fed e at k = m j. "
-              "`own_instant` feeds it e at its own update instant (netsim's only wiring before). Case 1: ISE "
-              "{c1_ISE} / {c1own_ISE}, overshoot {c1_OS} % / {c1own_OS} % (delayed / own-instant; paper ISE "
-              "{p1_ISE}, overshoot not printed).",
-    "case2": "The default is `step_on: arrival`. Neither of our two readings matches both the paper's Case 2 "
-             "text and its table, and where the paper leaves a choice open the default follows its text, which "
-             "describes a "
-             "controller that works only when a measurement arrives: section 1 (\"the control stage is not "
-             "needed to work at any synchronous time but only when a measurement is received, resulting in less "
-             "device usage\"), section 2 (the controller-side condition \"is evaluated only when a measurement "
-             "is received\"), section 3.2.4 (the control signal is generated at each received measurement) and section 5.2 "
-             "itself, whose Cc = {p2_Cc} % (a {p2_Ccdrop} percentage point decrease from the TTS) is eq (28) "
-             "applied to Uc: computation in proportion to the received measurements. A controller that runs "
-             "every T, as `step_on: every_period` does, computes at every period ({c2ev_jobs} jobs: Cc "
-             "{c2ev_Ccjobs} % by jobs, as much as the TTS's {c1_Cc} %), which the text rules out. That reading reproduces "
-             "the table ({c2ev_off}, against {c2_off} for `arrival`), so both rows are in the headline table. "
-             "`step_on: every_period` is a periodic task released {ev_offset} us after each sampling instant. "
-             "Both count transmissions the same way (the messages table, by tag); the controller's jobs come "
-             "from the jobs table.",
-    "case3": "The shipped Case 3 uses h = {c3_h} (every gap of the run covered) with jumbo frames "
-             "(max_frame_bits {jumbo_bits}) at {c3_rate} Gbit/s: its packet of {c3_bits} bits does not fit a "
-             "standard frame ({std_bits} bits), and at {slow_rate} Gbit/s it takes {c3j_delay} us from "
-             "controller to actuator, more than T = {T_us} us, so it arrives late and NE rises to {c3j_NE}. "
-             "Metrics: `et.played_past_packet` (periods played past a packet's end; a warning is logged when "
-             "it is not zero), `et.N_max` (largest N), `et.u_gap_max` (longest run of periods one packet "
-             "covers; h >= u_gap_max - 1 is needed).",
-    "gpi": "Sweep `scenarios/hdd_gpi_sweep.yaml` ({gpi_n} points, base Case 3; in this report run {gpi_exec} "
-           "points were run and {gpi_res} resumed from reports/hdd/runs/gpi, in {gpi_wall} s on {gpi_workers} "
-           "workers): the minimum GPI {gpi_min} lies at sigma_s = {gpi_ss}, sigma_c = {gpi_sc} (grid index "
-           "{gpi_i}, {gpi_j}); the paper's optimum is sigma_s = {p_ss}, sigma_c = {p_sc}, where our GPI is "
-           "{gpi_at_paper}. At our minimum the three terms of eq (29) are W1 Uc = {gpi_t1}, W2 Ua = {gpi_t2}, "
-           "W3 NE = {gpi_t3}: {gpi_dom} dominates. Over the grid NE lies between {gpi_NE_lo} and {gpi_NE_hi} and "
-           "W3 = {w3}; {gpi_why} {gpi_edge} The paper reads its optimum off the lowest GPI of Fig. 5, at the "
-           "thresholds above.",
-    "gpi4": "The same surface on Case 4 (noise and the eq (32) disturbance; `scenarios/hdd_gpi_sweep_case4.yaml`, "
-            "a coarser grid of {gpi4_n} points over the same ranges, {gpi4_exec} run and {gpi4_res} resumed in "
-            "{gpi4_wall} s): minimum GPI {gpi4_min} at sigma_s = {gpi4_ss}, sigma_c = {gpi4_sc} (grid index "
-            "{gpi4_i}, {gpi4_j}); at the paper's optimum GPI is {gpi4_at_paper}. Terms at the minimum: W1 Uc = "
-            "{gpi4_t1}, W2 Ua = {gpi4_t2}, W3 NE = {gpi4_t3} ({gpi4_dom} dominates); NE over the grid "
-            "{gpi4_NE_lo}-{gpi4_NE_hi}. {gpi4_edge} Case 4 keeps h at the other cases' value, and "
-            "{gpi4_past_n} points play periods past a packet's end (wide thresholds leave gaps longer than h).",
-}
+#: The report's templates (``models/hdd_report.md``): the README's layout (``readme``, ``readme_gpi``) and the
+#: prose (:data:`TEXT`), whose numbers are all ``{placeholder}``s filled from the quoted values; the only digits
+#: allowed in the prose are labels matching :data:`LABEL_PATTERNS`.
+TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
+TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items() if not k.startswith("readme")}
 
 #: Digits a template may hold (labels, not results).
 LABEL_PATTERNS = (
@@ -215,8 +139,8 @@ Quoted = Quotes
 
 
 def render(key: str, texts: dict[str, str]) -> str:
-    """Template ``key`` of :data:`TEXT` filled with ``texts`` (a missing value is an error)."""
-    return TEXT[key].format(**texts)
+    """Template ``key`` of :data:`TEMPLATES` filled with ``texts`` (a missing value is an error naming it)."""
+    return fill(TEMPLATES[key], texts, f"hdd_report.md [[{key}]]")
 
 
 # ------------------------------------------------------------------------------------------ runs
@@ -508,45 +432,33 @@ def _readme(table: pd.DataFrame, readings: pd.DataFrame, texts: dict[str, str], 
             has_gpi: bool) -> str:
     from netsim.figure_style import current_format
 
-    fmt = current_format()
     cols = ["Nsc", "Nca", "Uc", "Ua", "Cc_pct", "ISE", "ISEP", "NE"]
-    lines = ["# HDD case study: reproduction of Cuenca, Zheng, Tomizuka, Sanchez, section 5", "",
-             "Generated by `netsim report hdd` (models/hdd_report.py). Scenarios: `scenarios/hdd_case1..6.yaml`;",
-             "choices for values the paper leaves unstated are in the scenario headers, readings of the printed",
-             "model parameters in the docstring of `models/hdd.py`. Every number below comes from the runs",
-             "(`quoted.csv` names the run of each number in the prose; `readings.csv` holds every run).", "",
-             "| case | reading | " + " | ".join(f"{c} paper / ours" for c in cols) + " | overshoot % |",
-             "|---" * (len(cols) + 3) + "|"]
+    head = ["| case | reading | " + " | ".join(f"{c} paper / ours" for c in cols) + " | overshoot % |",
+            "|---" * (len(cols) + 3) + "|"]
     for _, r in table.iterrows():
         cells = [f"{_fmt(r.get(c + '_paper', np.nan))} / {_fmt(r[c + '_ours'])}" for c in cols]
-        lines.append(f"| {int(r['case'])} | {_reading(r)} | " + " | ".join(cells) + f" | {_fmt(r['OS_pct_ours'])} |")
-    lines += ["", "Case 2 has two rows: the paper leaves open what its controller does between measurements "
-              "(\"Case 2 between measurements\" below says why `arrival` is the default).", "",
-              "## Why the numbers differ", ""]
-    for _, r in table.iterrows():
-        label = f"Case {int(r['case'])}" + (f", {_reading(r)}" if _reading(r) else "")
-        lines.append(f"- **{label}**: {r['reason']}")
-    lines += ["", "## Readings the paper leaves open", "", "### Interlacing wiring (section 3.2.3)", "",
-              render("wiring", texts), ""]
+        head.append(f"| {int(r['case'])} | {_reading(r)} | " + " | ".join(cells) + f" | {_fmt(r['OS_pct_ours'])} |")
+    reasons = [f"- **Case {int(r['case'])}" + (f", {_reading(r)}" if _reading(r) else "") + f"**: {r['reason']}"
+               for _, r in table.iterrows()]
     wir = readings[readings["run"].str.fullmatch(r"case\d(_own)?")].copy()
     wir["wiring"] = np.where(wir["run"].str.endswith("_own"), "own_instant", "delayed (default)")
-    lines += _md_table(wir.sort_values(["case", "wiring"]), ["case", "wiring", "ISE", "OS_pct", "Nsc", "Nca", "NE"])
-    lines += ["", "### Case 2 between measurements", "", render("case2", texts), ""]
     c2 = readings[readings["run"].isin(["case2", "case2_every"])].copy()
     c2["reading"] = c2["run"].map(HEADLINE_READINGS)
-    lines += _md_table(c2, ["reading", "Nsc", "Nca", "Uc", "Ua", "ISEP", "NE", "ctrl_jobs"])
-    lines += ["", "### Case 3 and the horizon h", "", render("case3", texts), ""]
     c3 = readings[readings["run"].isin(["case3", "case3_h100", "case3_jumbo1g", "case3_allsent"])].copy()
     c3["variant"] = np.where(c3["run"] == "case3", "shipped (h 464, 10 Gbit/s, jumbo)", c3["variant"])
-    lines += _md_table(c3, ["variant", "N_max", "u_gap_max", "played_past_packet", "u_delay_max_us", "Nsc", "Nca",
-                            "NE"])
-    if has_gpi:
-        lines += ["", "## GPI surface (Fig. 5)", "", render("gpi", texts), "", f"![gpi.{fmt}](gpi.{fmt})", "",
-                  render("gpi4", texts), "", f"![gpi4.{fmt}](gpi4.{fmt})"]
-    lines += ["", "Thresholds (for sweeps): `nodes.sensor.handlers[0].params.sigma_s`, `...delta_s`,",
-              "`nodes.controller.tasks[0].params.sigma_c`, `...delta_c`.", "", "## Figures", ""]
-    lines += [f"![{f}]({f})" for f in figs]
-    return "\n".join(lines) + "\n"
+    blocks = {
+        "headline_table": head, "reasons": reasons,
+        "wiring_table": _md_table(wir.sort_values(["case", "wiring"]), ["case", "wiring", "ISE", "OS_pct", "Nsc",
+                                                                        "Nca", "NE"]),
+        "case2_table": _md_table(c2, ["reading", "Nsc", "Nca", "Uc", "Ua", "ISEP", "NE", "ctrl_jobs"]),
+        "case3_table": _md_table(c3, ["variant", "N_max", "u_gap_max", "played_past_packet", "u_delay_max_us", "Nsc",
+                                      "Nca", "NE"]),
+        "figures": ["", *(f"![{f}]({f})" for f in figs)] if figs else []}
+    all_texts = {**texts, **{k: "\n".join(v) for k, v in blocks.items()}, "fig_format": current_format()}
+    all_texts.update({k: render(k, all_texts) for k in ("wiring", "case2", "case3", "gpi", "gpi4") if has_gpi
+                      or not k.startswith("gpi")})
+    all_texts["gpi_section"] = "\n" + render("readme_gpi", all_texts) if has_gpi else ""
+    return render("readme", all_texts) + "\n"
 
 
 def collect(names=None, *, gpi: bool = True, workers: int | None = 2,

@@ -10,7 +10,10 @@ One place for what every reproduction report needs besides its own study:
   named by a fingerprint of the study's own code (:func:`code_fingerprint`);
 * :class:`Quotes` -- the numbers a report's prose quotes (``key, value, text, source``), each formatted once,
   filling ``{key}`` templates (:meth:`Quotes.fill`) or marked inline (:meth:`Quotes.mark`);
-* :func:`fmt` -- the one number formatter (significant digits, text for a missing value).
+* :func:`fmt` -- the one number formatter (significant digits, text for a missing value);
+* :func:`load_templates` and :func:`fill` -- a report's prose is data: named templates in a text file next to its
+  module (``models/**/*.md``, package data), ``{key}`` placeholders filled with quoted texts and nothing run
+  from a template; a missing quote is an error naming the placeholder (:class:`MissingQuote`).
 
 :func:`digits_outside_labels` is the check the reports' tests make on their templates: a template holds no
 digit besides ``{key}`` placeholders and labels (equation, figure and section numbers).
@@ -29,7 +32,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, TypeVar
 
-__all__ = ["fmt", "Quotes", "fill", "digits_outside_labels", "md_table", "splice", "run_all", "log_progress",
+__all__ = ["fmt", "Quotes", "fill", "MissingQuote", "placeholders", "unused_quotes", "load_templates",
+           "digits_outside_labels", "md_table", "splice", "run_all", "log_progress",
            "Progress", "sweep", "RunCache", "scenario_key", "code_fingerprint"]
 
 log = logging.getLogger(__name__)
@@ -67,15 +71,75 @@ def fmt(x: Any, digits: int = 3, *, missing: str = "nan", sci: bool = False) -> 
     return f"{v:.{digits}g}"
 
 
-def fill(template: str, texts: Mapping[str, str]) -> str:
-    """``template`` with each ``{key}`` (letters, digits, ``_`` and ``.``) replaced by ``texts[key]``.
+#: A placeholder: ``{key}`` with letters, digits, ``_`` and ``.`` (other braces are text: ``{model: inband}``).
+PLACEHOLDER = re.compile(r"\{([A-Za-z0-9_.]+)\}")
+#: The line that starts a named template in a template file (:func:`load_templates`).
+TEMPLATE_START = re.compile(r"^\[\[([A-Za-z0-9_.-]+)\]\]$")
+
+
+class MissingQuote(KeyError):
+    """A placeholder of a template without a quoted text (its message names the placeholder and the template)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0])
+
+
+def fill(template: str, texts: Mapping[str, str], where: str = "template") -> str:
+    """``template`` with each ``{key}`` replaced by ``texts[key]``; nothing else of the template is read (no
+    expression, no format spec, no code). A text is put in as it is, so it is never filled again.
+
+    Texts no placeholder names are left unused without complaint: one set of quotes fills several templates
+    (:func:`unused_quotes` lists those no template names).
 
     Raises
     ------
-    KeyError
-        A placeholder without a text.
+    MissingQuote
+        A placeholder without a text: ``"<where>: no quoted value for the placeholder {key}"``.
     """
-    return re.sub(r"\{([A-Za-z0-9_.]+)\}", lambda m: texts[m.group(1)], template)
+    def one(m: re.Match[str]) -> str:
+        key = m.group(1)
+        if key not in texts:
+            raise MissingQuote(f"{where}: no quoted value for the placeholder {{{key}}}")
+        return texts[key]
+
+    return PLACEHOLDER.sub(one, template)
+
+
+def placeholders(template: str) -> list[str]:
+    """The keys ``template`` names, in order, each once."""
+    return list(dict.fromkeys(PLACEHOLDER.findall(template)))
+
+
+def unused_quotes(templates: Iterable[str], texts: Iterable[str]) -> list[str]:
+    """The keys of ``texts`` that none of ``templates`` names (in the order of ``texts``)."""
+    named = {k for t in templates for k in PLACEHOLDER.findall(t)}
+    return [k for k in texts if k not in named]
+
+
+def load_templates(path: Path) -> dict[str, str]:
+    """The named templates of the text file ``path`` (a report's prose, kept as data next to its module).
+
+    A line ``[[name]]`` starts the template ``name``; it runs to the next such line, without its trailing blank
+    lines. Lines before the first name are a comment for the reader.
+
+    Raises
+    ------
+    ValueError
+        A name given twice, or a file without any.
+    """
+    out: dict[str, list[str]] = {}
+    current: list[str] | None = None
+    for line in Path(path).read_text(encoding="utf-8").split("\n"):
+        m = TEMPLATE_START.match(line)
+        if m:
+            if m.group(1) in out:
+                raise ValueError(f"{path}: template [[{m.group(1)}]] is given twice")
+            current = out.setdefault(m.group(1), [])
+        elif current is not None:
+            current.append(line)
+    if not out:
+        raise ValueError(f"{path}: no template (a line [[name]] starts one)")
+    return {k: "\n".join(v).rstrip("\n") for k, v in out.items()}
 
 
 def digits_outside_labels(template: str, labels: Iterable[str]) -> list[str]:
