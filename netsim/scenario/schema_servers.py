@@ -51,7 +51,7 @@ class ServerDecl(_Decl):
     ``hard: true`` to suspend its tasks when the budget runs out) or ``type: tbs`` (total bandwidth server:
     ``utilization``; its tasks need a ``wcet``). Tasks name it with ``server:``."""
 
-    name: _Name
+    name: _Name = Field(description="the server's name, which tasks[].server names")
     type: Literal["cbs", "tbs"] = Field(description="cbs (constant bandwidth server) or tbs (total bandwidth "
                                                     "server)")
     budget: Duration | None = Field(None, description="cbs: execution time per period (TrueTime's Qs)")
@@ -84,19 +84,21 @@ class SlotDecl(_Decl):
     """A slot of a time-triggered table: ``task`` is activated at ``start`` (from the cycle's start) every cycle
     and should finish within ``length``."""
 
-    start: Time
-    task: _Name
-    length: Duration
+    start: Time = Field(description="activation time from the cycle's start")
+    task: _Name = Field(description="the task the slot activates (a task of the node without its own release)")
+    length: Duration = Field(description="the slot's length: the job's deadline is the slot's end")
 
 
 class TimetableSpec(_Decl):
     """A static schedule table (``policy: tt``): the slots repeat every ``cycle``; ``overrun`` says what happens
     to a job still running at its slot's end (``continue``: a deadline miss, it goes on; ``kill``: it is killed)."""
 
-    cycle: Duration
-    slots: list[SlotDecl] = Field(min_length=1)
+    cycle: Duration = Field(description="the table's period: the slots repeat every cycle")
+    slots: list[SlotDecl] = Field(min_length=1, description="the slots, inside the cycle and not overlapping")
     offset: Time = Field(0, description="start of the first cycle")
-    overrun: Literal["continue", "kill"] = "continue"
+    overrun: Literal["continue", "kill"] = Field("continue", description=(
+        "a job still running at its slot's end: continue (a deadline miss, it goes on, preempted by the next "
+        "activation) or kill (killed at the slot's end)"))
 
 
 def wire_servers(kernel: Kernel, node: Any, npath: str) -> None:
