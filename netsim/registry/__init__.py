@@ -91,6 +91,7 @@ KINDS = (
     "network",
     "path_loss",
     "policy",
+    "server",
     "program",
     "signal",
     "metric",
