@@ -23,6 +23,7 @@ LIST_KINDS: dict[str, str] = {
     "estimators": "estimator",
     "networks": "network",
     "policies": "policy",
+    "servers": "server",
     "programs": "program",
     "signals": "signal",
     "metrics": "metric",
