@@ -40,7 +40,8 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from netsim.casestudy import Quotes, fmt as _fmt, log_progress, md_table, run_all as _run_pool, splice
+from netsim.casestudy import (Quotes, fill, fmt as _fmt, load_templates, log_progress, md_table, run_all as _run_pool,
+                              splice)
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
@@ -300,165 +301,20 @@ def delay_table(runs: pd.DataFrame, noise_margins: dict[str, tuple[float, float]
 
 
 # ------------------------------------------------------------------------------------------------ prose
-#: Prose templates: every number is a ``{placeholder}`` filled from the quoted values; the only digits
-#: allowed are labels matching :data:`LABEL_PATTERNS`.
-TEXT: dict[str, str] = {
-    "model": ("Plant: the nonlinear Furuta pendulum with the DC motor (Lagrange equations, `models/pendulum/model.py`) "
-              "with the nominal values of the Quanser QUBE-Servo 2 rotary pendulum (Quanser's `qube2_rotpen_param.m`). "
-              "Linearised about the upright, its unstable pole is at {unstable_pole} rad/s; the ZOH model at Ts = "
-              "{ts_ms} ms has the observability rank {rank} with y = [theta, alpha] (the slides: full rank, {n_states})."),
-    "luenberger": ("Luenberger observer at the slides' poles {poles}: the error eigenvalues of the predictor form "
-                   "(A - L C) and of the current form ((I - L C) A) equal the requested poles to {pole_err} "
-                   "(largest distance)."),
-    "printed": ("The printed update x[k] = (A - L C) x[k-1] + B u[k-1] + L y[k] does not have the stated error "
-                "dynamics: substituting the model gives e[k] = (A - L C) e[k-1] - L C (x[k] - x[k-1]). Noise-free on "
-                "the linear model in motion (LQR plus a sine input, alpha_dot RMS {motion_rms_ad} rad/s), the "
-                "consistent forms' velocity error vanishes (current form: alpha_dot RMS error {cur_err_ad} rad/s, "
-                "predictor form {pred_err_ad}) while the printed one keeps {printed_err_ad} rad/s on alpha_dot and "
-                "{printed_err_td} rad/s on theta_dot. The study uses the current form; `luenberger_printed` is the "
-                "printed one."),
-    "kalman": ("Steady-state Kalman filter: the slides' code (solve_discrete_are(Ad', C', Qn, Rn), K = Pi C' (C Pi C' "
-               "+ Rn)^-1) is consistent with the printed correction x[k] = x[k|k-1] + K (y[k] - C x[k|k-1]) (Pi is the "
-               "prior covariance); the toolbox's filter gives the same gain (largest difference {kal_diff}). Its error "
-               "eigenvalues have the largest modulus {kal_rho}: with Qn from the small voltage disturbance it is "
-               "the slowest estimator."),
-    "hold_still": ("Hold still: the simulated std of the velocity estimates equals the Lyapunov value within "
-                   "{hs_max_dev} % (largest relative difference over the estimators and both velocities). Raw "
-                   "finite differences give alpha_dot noise {hs_fd_raw} rad/s, low-pass {hs_fd_lp}, Luenberger "
-                   "{hs_lu}, Kalman {hs_kal}: the slides' claim that observers give smoother velocities holds."),
-    "closed_loop": ("From a tilt of {tilt} rad every estimator balances the pendulum under LQR and MPC in {stable_runs} "
-                    "of {all_runs} runs. The control chatter (u std after the first second) is {chat_fd_raw} V with "
-                    "raw FD, {chat_fd_lp} V low-pass, {chat_lu} V Luenberger and {chat_kal} V Kalman (LQR, mean over "
-                    "{n_seeds} seeds). The lowest LQG cost per step under LQR over the whole run is the {best_lqg} "
-                    "estimator's ({best_lqg_val}; Kalman {kal_lqg}, Luenberger {lu_lqg}, raw FD {fd_lqg}). Counted "
-                    "from the first second on it is the {best_lqg1} estimator's ({best_lqg1_val}; Kalman {kal_lqg1}, "
-                    "Luenberger {lu_lqg1}, raw FD {fd_lqg1}). Every estimator starts from a zero estimate; the Kalman "
-                    "filter's angle estimates take {kal_conv} s to come within {est_tol} rad of the true angles "
-                    "(Luenberger {lu_conv} s), so it loses the transient. The stationary expected cost of the linear "
-                    "loop (`lqg_cost_analytic`, `netsim.analysis.lqg` with the task's delay) is lowest for the "
-                    "{best_ana} estimator ({best_ana_val}; Kalman {kal_ana}, Luenberger {lu_ana}, raw FD {fd_ana}); "
-                    "after the first second the runs still carry the end of the transient (the Kalman runs: "
-                    "{kal_lqg1} against {kal_ana}), the section on delay compares the two in stationary runs."),
-    "mpc": ("MPC against LQR: the MPC's input never leaves the limit (largest |u| {mpc_max_u} V over every MPC run); "
-            "the limit is active at {mpc_active} samples of the Kalman run (seed one), where the LQR would ask for "
-            "more at {lqr_exceed} samples; where neither is at the limit after the transient the two laws differ by "
-            "at most {mpc_lqr_diff} V on the same estimate."),
-    "delay": ("Delay margin: with the controller on its own node and u sent over a link, the total sample-to-"
-              "actuation delay is swept (`pendulum_delay_sweep.yaml`: from upright, {dsw_seeds} seeds per point; "
-              "and from the tilt, one seed). Predicted from the linear model, as phase margin over crossover "
-              "frequency: {dl_fd_pred} ms (raw FD), {dl_lp_pred} (low-pass FD), {dl_lu_pred} (Luenberger), "
-              "{dl_kal_pred} (Kalman); the delay at which the expected cost of `netsim.analysis.lqg` becomes "
-              "infinite (the loop stops being mean-square stable): {dq_fd}, {dq_lp}, {dq_lu}, {dq_kal} ms, the "
-              "same to {dq_pm_diff} ms (one crossover each, so the phase margin is exact for a constant delay). "
-              "Simulated from upright, every seed stays balanced up to {dn_fd_ok} ms with raw FD (a seed fails at "
-              "{dn_fd_fail}), {dn_lp_ok} with low-pass FD (fails at {dn_lp_fail}), {dn_lu_ok} with Luenberger "
-              "(fails at {dn_lu_fail}) and {dn_kal_ok} with Kalman (fails at {dn_kal_fail}): {dn_bracket}. From the tilt the actuator saturates, which the linear prediction does not know: "
-              "the loop holds up to {dl_fd_ok} ms with raw FD, {dl_lu_ok} ms with Luenberger (fails at "
-              "{dl_lu_fail}) and {dl_kal_ok} ms with Kalman (fails at {dl_kal_fail})."),
-    "delay_cost": ("Cost under delay (delay_cost.csv): the stationary cost per sample of the runs from upright "
-                   "(after the first second, mean over the seeds with its {ci_pct} % Monte-Carlo interval) beside the "
-                   "expected cost from `netsim.analysis.lqg` (models/pendulum/analysis.py: the linearised loop, "
-                   "the input disturbance as white process noise, the encoder noise, the delay as a delay line "
-                   "plus a fraction of a period). At the smallest delay ({dc_min_delay} ms): raw FD {dc_fd_sim} "
-                   "({dc_fd_lo} to {dc_fd_hi}) against {dc_fd_ana}, low-pass FD {dc_lp_sim} ({dc_lp_lo} to "
-                   "{dc_lp_hi}) against {dc_lp_ana}, Luenberger {dc_lu_sim} ({dc_lu_lo} to {dc_lu_hi}) against "
-                   "{dc_lu_ana}, Kalman {dc_kal_sim} ({dc_kal_lo} to {dc_kal_hi}) against {dc_kal_ana}. Over every "
-                   "point where all seeds stayed balanced, the analytic cost lies inside the interval at "
-                   "{dc_inside} of {dc_points} points; the largest relative difference is {dc_max_rel} % "
-                   "({dc_max_rel_where}). At the largest delay where every seed stayed balanced: raw FD "
-                   "{dc_fd_last_sim} against {dc_fd_last_ana} at {dc_fd_last} ms, low-pass FD {dc_lp_last_sim} "
-                   "against {dc_lp_last_ana} at {dc_lp_last} ms, Luenberger {dc_lu_last_sim} against "
-                   "{dc_lu_last_ana} at {dc_lu_last} ms, Kalman {dc_kal_last_sim} against {dc_kal_last_ana} at "
-                   "{dc_kal_last} ms (the analytic cost is infinite from the margin on)."),
-    "loss": ("Measurement loss (prediction-only steps; RMS alpha after the first second): with half the "
-             "measurements lost (Bernoulli) the Kalman loop has {loss_kal_b5} rad against {loss_kal_0} rad without "
-             "loss, the Luenberger loop {loss_lu_b5} against {loss_lu_0}, low-pass FD {loss_fd_b5} against "
-             "{loss_fd_0} (FD holds its last estimate on a lost sample); with Gilbert-Elliott bursts (mean burst "
-             "{ge_burst} samples, {ge_loss} % lost) Kalman {loss_kal_ge}, Luenberger {loss_lu_ge}, low-pass FD "
-             "{loss_fd_ge}."),
-    "mpc_timing": ("MPC solve time as execution time (Luenberger + MPC): at {mpt_fast} ms per solver iteration the "
-                   "worst response is "
-                   "{mpt_fast_resp} ms; at {mpt_slow} ms per iteration it is {mpt_slow_resp} ms with "
-                   "{mpt_slow_miss} deadline misses, and a horizon of {mpt_short_h} samples at the same cost per "
-                   "iteration brings it to {mpt_short_resp} ms with {mpt_short_miss} misses (RMS alpha after the "
-                   "first second {mpt_fast_rms}, {mpt_slow_rms} and {mpt_short_rms} rad)."),
-    "sweeps": ("The slides' 'try Qn, Rn' and 'try several pole sets' (tuning.csv; the runs of "
-               "`netsim sweep scenarios/pendulum_kalman_sweep.yaml` and `pendulum_poles_sweep.yaml`, "
-               "{sw_seeds} seeds per point, from the tilt under LQR). Qn scaled by {sw_q_lo} to {sw_q_hi} and Rn by "
-               "{sw_r_lo} to {sw_r_hi}: the gain depends only on the ratio of the two (grid points with the same "
-               "ratio have gains that agree to {sw_gain_diff}; their runs differ only by the seeds), which spans "
-               "{sw_ratio_lo} to {sw_ratio_hi}. At the smallest ratio the filter trusts its model: held-still "
-               "alpha_dot noise (Lyapunov) {sw_rlo_noise} rad/s, but its slowest error eigenvalue is {sw_rlo_rho} "
-               "(time constant {sw_rlo_tau} ms) and the angle estimates take {sw_rlo_conv} s to converge (its "
-               "chatter after the first second, {sw_rlo_u} V, includes that convergence). At the study's ratio: noise {sw_rmid_noise}, chatter {sw_rmid_u}, "
-               "eigenvalue {sw_rmid_rho} ({sw_rmid_tau} ms), convergence {sw_rmid_conv} s. At the largest: noise "
-               "{sw_rhi_noise}, chatter {sw_rhi_u}, eigenvalue {sw_rhi_rho} ({sw_rhi_tau} ms), convergence "
-               "{sw_rhi_conv} s. Below the study's ratio the filter is slower, as the slides say; above it, it "
-               "gets noisier but hardly faster. The LQG cost per step goes from {sw_rlo_cost} (smallest ratio) "
-               "over {sw_rmid_cost} to {sw_rhi_cost} (largest) over the whole run, lowest at {sw_best_cost}; after "
-               "the first second from {sw_rlo_cost1} over {sw_rmid_cost1} to {sw_rhi_cost1}, lowest at "
-               "{sw_best_cost1}. Luenberger poles from the fastest set to the slowest: error radius {sw_pf_rho} to "
-               "{sw_ps_rho}, alpha_dot noise {sw_pf_noise} to {sw_ps_noise} rad/s, convergence {sw_pf_conv} s to "
-               "{sw_ps_conv} s, chatter {sw_pf_u} to {sw_ps_u} V, cost {sw_pf_cost} to {sw_ps_cost} (after the "
-               "first second {sw_pf_cost1} to {sw_ps_cost1}): the slides' trade, faster estimation against more "
-               "noise."),
-    "claims": ("| the slides say | we got | verdict |\n|---|---|---|\n"
-               "| rank of the observability matrix is full with y = [theta, alpha] | rank {rank} of {n_states} | holds |\n"
-               "| the printed Luenberger update has the error dynamics e[k] = (A - L C) e[k-1] | in motion, noise-free, "
-               "it keeps {printed_err_ad} rad/s of alpha_dot error; the predictor and current forms {pred_err_ad} and "
-               "{cur_err_ad} | does not hold for the printed form (it compares y[k] with C x[k-1]); holds for both "
-               "consistent forms |\n"
-               "| finite differences amplify noise; observers give smoother velocities | held still, alpha_dot noise "
-               "{hs_fd_raw} (raw FD), {hs_fd_lp} (low-pass), {hs_lu} (Luenberger), {hs_kal} (Kalman) rad/s: low-pass "
-               "FD has {ord_noise_lp_lu} times the Luenberger noise, Luenberger {ord_noise_lu_kal} times the Kalman "
-               "noise | holds |\n"
-               "| noisy velocity estimates cause oscillatory PWM commands | u std once balanced {chat_fd_raw} V (raw "
-               "FD), {chat_fd_lp} (low-pass), {chat_lu} (Luenberger), {chat_kal} (Kalman); the smallest low-pass FD "
-               "seed is {ord_chat_lp_lu} times the largest Luenberger seed, the smallest Luenberger seed "
-               "{ord_chat_lu_kal} times the largest Kalman seed | holds on every seed |\n"
-               "| poles that are too fast amplify measurement noise | alpha_dot noise {sw_pf_noise} rad/s (fastest "
-               "set) against {sw_ps_noise} (slowest set) | holds |\n"
-               "| larger Qn (or smaller Rn): the filter follows the measurement faster, less smoothly | Qn/Rn from "
-               "{sw_ratio_lo} to {sw_ratio_hi}: alpha_dot noise {sw_rlo_noise} to {sw_rhi_noise} rad/s; the estimates "
-               "converge in {sw_rlo_conv} s at the smallest ratio, {sw_rmid_conv} s at the study's, {sw_rhi_conv} s "
-               "at the largest | holds up to the study's ratio; beyond it the filter gets noisier but hardly faster "
-               "(slowest error eigenvalue {sw_rmid_rho} to {sw_rhi_rho}) |\n"
-               "| the Kalman observer balances prediction and measurement optimally (lowest LQG cost) | lowest cost "
-               "over the whole run from the tilt: {best_lqg} (Kalman {ord_kal_whole} times it); after the first "
-               "second: {best_lqg1} (the next estimator's best seed {ord_lqg1_margin} times its worst); stationary, "
-               "analytic: {best_ana} (next {ord_ana_margin} times); stationary, simulated from upright: {best_stat} "
-               "(lower end of the next one's {ci_pct} % interval over upper end of its own: {ord_stat_margin}) | holds in "
-               "stationary operation (the design's setting); over the whole run it does not: from a zero initial "
-               "estimate the Kalman filter is the slowest to converge |"),
-    "delay_aware": ("Estimation that knows the delay (`delay_aware.csv`, `delay_aware_margins.csv`; "
-                    "`pendulum_delay_aware_sweep.yaml`: {da_seeds} runs per point from upright, seeds of their own). "
-                    "The state_feedback task's `input_delay` is set to the total sample-to-actuation delay, so the "
-                    "estimator predicts each period with the input the pendulum really holds (the exact ZOH split of "
-                    "the period at the instant the input arrives, with the inputs still on their way: the augmented "
-                    "model of Astrom & Wittenmark); the LQR law is unchanged, u = -K x_hat[k|k]. Kalman filter: "
-                    "unaware of the delay, {da_kal_unaware}; told the delay, {da_kal_aware}. Luenberger observer: "
-                    "unaware, {da_lu_unaware}; told the delay, {da_lu_aware}. Measured by the largest delay with "
-                    "every run balanced, knowing the delay moves the limit from {da_kal_unaware_ok} to "
-                    "{da_kal_aware_ok} ms (Kalman) and from {da_lu_unaware_ok} to {da_lu_aware_ok} ms (Luenberger). "
-                    "What remains is the delay margin of the law itself, which still feeds back the estimate of "
-                    "x[k] to a plant that gets u later: fed the true state, the LQR loop loses stability at "
-                    "{da_law} ms (`law_delay_margin` in models/pendulum/analysis.py; with an exact model the loop "
-                    "of an estimator told the delay has the law's eigenvalues and those of the estimation error, so "
-                    "this is the linear limit of every row told the delay), and raw finite differences (no model "
-                    "prediction to get wrong) keep every run balanced up to {da_fd_ok} ms. At {da_cost_delay} ms, where "
-                    "both Kalman rows have every run balanced, the stationary cost is {da_kal_cost_unaware} unaware "
-                    "and {da_kal_cost_aware} told the delay."),
-    "quantised": ("Encoder quantisation as the noise instead of Gaussian noise of the same variance: u std "
-                  "{q_kal} V against {q_kal_ref} V with Kalman, {q_lu} against {q_lu_ref} with Luenberger, "
-                  "{q_fd} against {q_fd_ref} with low-pass FD."),
-}
+#: The report's templates (``models/pendulum/report.md``): the README's layout (``readme*``, ``delay_cost_figure``)
+#: and the prose (:data:`TEXT`), whose numbers are all ``{placeholder}``s filled from the quoted values; the only
+#: digits allowed in the prose are labels matching :data:`LABEL_PATTERNS`.
+TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
+TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items() if not k.startswith(("readme", "delay_cost_figure"))}
+#: The delay-aware section's first and last lines (``netsim report pendulum_delay_aware`` splices between them).
+DELAY_AWARE_MARK = (TEMPLATES["readme_delay_aware"].split("\n")[0], TEMPLATES["readme_delay_aware"].split("\n")[-1])
 LABEL_PATTERNS = (r"QUBE-Servo \d", r"qube2_rotpen_param", r"y\[k\]", r"x\[k-1\]", r"x\[k\]", r"u\[k-1\]",
                   r"e\[k-1\]", r"e\[k\]", r"\^-1", r"x\[k\|k-1\]")
 
 
 def render(key: str, values: dict[str, str]) -> str:
-    """The template ``key`` filled with the quoted texts."""
-    return TEXT[key].format(**values)
+    """The template ``key`` filled with the quoted texts (a missing one is an error naming it)."""
+    return fill(TEMPLATES[key], values, f"pendulum/report.md [[{key}]]")
 
 
 def fmt(x: float, digits: int = 3) -> str:
@@ -674,48 +530,18 @@ def _md_table(df: pd.DataFrame) -> list[str]:
 def write_readme(out: Path, quoted: pd.DataFrame, tables: dict[str, pd.DataFrame]) -> None:
     """``README.md`` from the templates and the tables."""
     texts = dict(zip(quoted["key"], quoted["text"].astype(str)))
-    L = ["# The rotary inverted pendulum (seed 002): finite differences, Luenberger and Kalman under LQR and MPC",
-         "", "Regenerate with `netsim report pendulum` (every number below comes from the runs; `quoted.csv` names "
-         "the source of each number in the prose, `runs.csv` holds every run).", "",
-         "## The slides' claims", "", render("claims", texts), "",
-         "## Model and choices", "", render("model", texts), "",
-         "Every other choice (Ts, sensor noise from the encoder resolution, the input disturbance, Q/R, the MPC "
-         "horizon and input limit, the initial tilt) is stated in `models/pendulum/model.py` and in the header of "
-         "`scenarios/pendulum_lqr.yaml`; the slides give none of them.", "",
-         "## The slides' designs and their printed equations", "",
-         "- " + render("luenberger", texts), "- " + render("printed", texts), "- " + render("kalman", texts), "",
-         "## Hold still (velocity-estimate noise)", "", render("hold_still", texts), ""]
-    L += _md_table(tables["hold_still"]) + [""]
-    L += ["## Closed loop from a small tilt (estimator x controller, mean over seeds; table.csv)", "",
-          render("closed_loop", texts), "", render("mpc", texts), ""]
-    L += _md_table(tables["table"][TABLE_COLUMNS]) + [""]
-    if (out / "closed_loop_lqr.png").exists():
-        L += ["![alpha and u under LQR, seed 1](closed_loop_lqr.png)", ""]
-    L += ["## Pole sets, Qn and Rn (the slides' tuning advice; tuning.csv)", "", render("sweeps", texts), ""]
-    L += _md_table(tables["tuning"][TUNING_COLUMNS]) + [""]
-    L += ["## What only a timing simulator shows", "", "### Delay margin (delay.csv)", "", render("delay", texts), ""]
-    L += _md_table(tables["delay"]) + [""]
-    L += ["### Cost under delay: analysis beside simulation (delay_cost.csv)", "", render("delay_cost", texts), ""]
-    L += _md_table(tables["delay_cost"][DELAY_COST_COLUMNS]) + [""]
-    if (out / "delay_cost.png").exists():
-        L += [f"![stationary cost against delay: runs ({texts['ci_pct']} % intervals) and analysis](delay_cost.png)", ""]
-    if "delay_aware" in tables:
-        L += delay_aware_lines(texts, tables["delay_aware"], tables["delay_aware_margins"])
-    L += ["### Loss, solve time, quantisation", "",
-          "- " + render("loss", texts), "", "- " + render("mpc_timing", texts), "", "- " + render("quantised", texts),
-          "", "## Differences from the slides, and why", "",
-          "- The slides run hardware; here the plant is a model with published nominal values, so absolute numbers "
-          "(noise levels, costs) are this model's, not the lab's. The orderings are what carries over.",
-          "- The printed Luenberger update is inconsistent with its stated error dynamics (above); we use the "
-          "current form, which uses the newest measurement as the printed one intends.",
-          "- The slides design the Kalman filter for stationary operation; the runs start from a tilt with a zero "
-          "estimate, where its slow convergence costs more than its low noise saves. The claims table gives the "
-          "cost per window.",
-          "- The speed benchmark is `tests/models/test_pendulum_speed.py` (opt-in, prints its figures).", ""]
-    (out / "README.md").write_text("\n".join(L))
-
-
-DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report pendulum_delay_aware -->", "<!-- /delay-aware -->")
+    blocks = {"hold_still_table": tables["hold_still"], "closed_loop_table": tables["table"][TABLE_COLUMNS],
+              "tuning_table": tables["tuning"][TUNING_COLUMNS], "delay_table": tables["delay"],
+              "delay_cost_table": tables["delay_cost"][DELAY_COST_COLUMNS]}
+    texts.update({k: "\n".join(_md_table(v)) for k, v in blocks.items()})
+    texts.update({k: render(k, texts) for k in TEXT if k != "delay_aware"})
+    texts["closed_loop_figure"] = ("![alpha and u under LQR, seed 1](closed_loop_lqr.png)\n\n"
+                                   if (out / "closed_loop_lqr.png").exists() else "")
+    texts["delay_cost_figure"] = render("delay_cost_figure", texts) + "\n\n" if (out / "delay_cost.png").exists() else ""
+    texts["delay_aware_section"] = ("\n".join(delay_aware_lines(texts, tables["delay_aware"],
+                                                               tables["delay_aware_margins"])) + "\n"
+                                    if "delay_aware" in tables else "")
+    (out / "README.md").write_text(render("readme", texts) + "\n")
 
 
 def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame) -> pd.DataFrame:
@@ -761,11 +587,9 @@ DELAY_AWARE_COLUMNS = ["estimator", "estimation", "total_delay_ms", "seed_count"
 
 def delay_aware_lines(texts: dict[str, str], da: pd.DataFrame, margins: pd.DataFrame) -> list[str]:
     """The README section of the delay-aware estimators, between :data:`DELAY_AWARE_MARK`."""
-    L = [DELAY_AWARE_MARK[0], "### Estimation that knows the delay (delay_aware.csv)", "", render("delay_aware", texts),
-         ""]
-    L += _md_table(margins) + [""]
-    L += _md_table(da[DELAY_AWARE_COLUMNS]) + [DELAY_AWARE_MARK[1], ""]
-    return L
+    blocks = {"delay_aware": render("delay_aware", texts), "delay_aware_margins_table": "\n".join(_md_table(margins)),
+              "delay_aware_table": "\n".join(_md_table(da[DELAY_AWARE_COLUMNS]))}
+    return render("readme_delay_aware", {**texts, **blocks}).split("\n") + [""]
 
 
 @register("report", "pendulum_delay_aware",
