@@ -23,8 +23,9 @@ Semantics (those of the one-core kernel, per core, except as said here)
   sleep or a block) first runs ``migration_cost`` ns of kernel time on the new core (with the context switch
   if one is due), charged to the job like a context switch (its ``cpu_time``, ``Kernel.switch_time``).
   ``Kernel.migrations`` counts the moves (with any cost, zero included).
-- **Schedule trace**: with ``m > 1`` each ``"running"`` interval carries a fifth element, the core
-  (``(task, "running", t0, t1, core)``); other intervals keep four. With one core the trace is unchanged.
+- **Schedule trace**: with ``m > 1`` every interval carries a fifth element, the core of a ``"running"``
+  interval (``(task, "running", t0, t1, core)``; ``None`` for ``"ready"`` and ``"blocked"``), the ``core``
+  column of ``schedule.csv``. With one core the trace is unchanged.
 - **Speed scaling** (:mod:`netsim.kernel.speed`) applies to every core at once.
 - Not available here: periodic loads in closed form (``trigger: {periodic_load: ...}``); use a timer-driven
   handler. Monitors work, with their one-processor protocols.
@@ -383,11 +384,19 @@ class MulticoreDispatcher:
         super()._block(job, on, now)  # type: ignore[misc]
 
     def _finish(self: Any, job: Job, now: int, killed: bool) -> None:
+        if self.trace:
+            self._close(job._task, now)
         if job._core >= 0:
-            if self.trace:
-                self._close_running(job._task, now)
             self._free(job)
         super()._finish(job, now, killed)  # type: ignore[misc]
+
+    def _make_ready(self: Any, job: Job, now: int) -> None:
+        job._state = READY
+        self._seq = seq = self._seq + 1
+        job._seq = seq
+        heappush(self._ready, (job._rank, seq, job))
+        if self.trace:
+            self._trace(job._task, "ready", now)
 
     def _kill(self: Any, job: Job) -> None:
         if job._core >= 0 and job._in_seg:
@@ -396,14 +405,17 @@ class MulticoreDispatcher:
 
     # ================================================================= trace and accounting
     def _trace(self: Any, ent: Any, state: str | None, now: int) -> None:
-        if ent.trace_state == "running":
-            self._close_running(ent, now)
+        if ent.trace_state != state:
+            self._close(ent, now)
         super()._trace(ent, state, now)  # type: ignore[misc]
 
-    def _close_running(self: Any, ent: Any, now: int) -> None:
-        """With several cores, end ``ent``'s open running interval at ``now`` with its core."""
-        if self.cores > 1 and ent.trace_state == "running" and now > ent.trace_since:
-            self.schedule.append((ent.name, "running", ent.trace_since, now, self._trace_core[ent.name]))
+    def _close(self: Any, ent: Any, now: int) -> None:
+        """With several cores, end ``ent``'s open interval at ``now`` as ``(task, state, t0, t1, core)``, the
+        core of a running interval (``None`` for the other states); with one core the base trace does it."""
+        state = ent.trace_state
+        if self.cores > 1 and state is not None and now > ent.trace_since:
+            core = self._trace_core[ent.name] if state == "running" else None
+            self.schedule.append((ent.name, state, ent.trace_since, now, core))
             ent.trace_since = now
 
     @property
@@ -439,7 +451,7 @@ class MulticoreDispatcher:
         if self.trace:
             for ent in [*self.tasks.values(), *self.handlers.values()]:
                 if t_end > ent.trace_since:
-                    self._close_running(ent, t_end)
+                    self._close(ent, t_end)
         for job, part in parts:  # the records of the jobs on the cores count their segment up to the end
             job.cpu_time += part
         try:

@@ -191,14 +191,22 @@ def schedule_csv_chunks(kernels: Iterable[tuple[str, Iterable[Any]]], chunk_rows
     import csv
     import io
 
-    yield SCHEDULE_HEADER + "\n"
+    kernels = list(kernels)
+    # a multicore kernel's intervals carry their core (netsim.kernel.multicore): then a 'core' column, empty
+    # where there is none; without one the file is as it always was
+    cores = any(intervals and len(intervals[0]) > 4 for _, intervals in kernels)  # type: ignore[arg-type,index]
+    yield SCHEDULE_HEADER + (",core\n" if cores else "\n")
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     n = 0
     for node, intervals in kernels:
         for iv in intervals:
             task, state, t0, t1 = iv[:4]
-            writer.writerow((node, task, state, int(t0), int(t1)))
+            if cores:
+                core = iv[4] if len(iv) > 4 else None
+                writer.writerow((node, task, state, int(t0), int(t1), "" if core is None else int(core)))
+            else:
+                writer.writerow((node, task, state, int(t0), int(t1)))
             n += 1
             if n % chunk_rows == 0:
                 yield buf.getvalue()
@@ -224,6 +232,9 @@ def read_schedule(path: Path) -> pd.DataFrame:
                                      "end_ns": "int64"}, keep_default_na=False)
     if frame.empty:
         return pd.DataFrame(columns=SCHEDULE_COLUMNS)
-    return pd.DataFrame({"node": frame["node"], "task": frame["task"], "state": frame["state"],
-                         "start_s": _ns_column(frame["start_ns"].tolist()), "end_s": _ns_column(frame["end_ns"].tolist())},
-                        columns=SCHEDULE_COLUMNS)
+    out = pd.DataFrame({"node": frame["node"], "task": frame["task"], "state": frame["state"],
+                        "start_s": _ns_column(frame["start_ns"].tolist()), "end_s": _ns_column(frame["end_ns"].tolist())},
+                       columns=SCHEDULE_COLUMNS)
+    if "core" in frame.columns:  # a multicore node's running intervals say which core ran them
+        out["core"] = pd.to_numeric(frame["core"].replace("", None)).astype("Int64")
+    return out

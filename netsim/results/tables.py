@@ -256,20 +256,27 @@ def messages_table(records: Iterable[Any]) -> pd.DataFrame:
 
 def schedule_table(node: str, intervals: Iterable[Any]) -> pd.DataFrame:
     """Schedule trace ``(task, state, t0, t1)`` of one kernel as a table in seconds."""
-    tasks, states, t0s, t1s = [], [], [], []
+    tasks, states, t0s, t1s, cores = [], [], [], [], []
+    with_core = False  # a multicore kernel's intervals carry their core (netsim.kernel.multicore)
     for iv in intervals:
         if isinstance(iv, (tuple, list)):
             task, state, t0, t1 = iv[:4]
+            with_core = with_core or len(iv) > 4
+            cores.append(iv[4] if len(iv) > 4 else None)
         else:
             task, state, t0, t1 = (_field(iv, k) for k in ("task", "state", "t0", "t1"))
+            cores.append(None)
         tasks.append(task)
         states.append(state)
         t0s.append(t0)
         t1s.append(t1)
     if not tasks:
         return pd.DataFrame([], columns=SCHEDULE_COLUMNS)
-    return pd.DataFrame({"node": [node] * len(tasks), "task": tasks, "state": states, "start_s": _ns_column(t0s),
-                         "end_s": _ns_column(t1s)}, columns=SCHEDULE_COLUMNS)
+    frame = pd.DataFrame({"node": [node] * len(tasks), "task": tasks, "state": states, "start_s": _ns_column(t0s),
+                          "end_s": _ns_column(t1s)}, columns=SCHEDULE_COLUMNS)
+    if with_core:
+        frame["core"] = pd.array(cores, dtype="Int64")
+    return frame
 
 
 def summary_table(rows: list[dict[str, Any]], columns: list[str]) -> pd.DataFrame:
