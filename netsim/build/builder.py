@@ -342,13 +342,14 @@ class _Reach:
         if not dry_run:
             return cls()
         from netsim.kernel.policies import is_builtin_policy
-        from netsim.network.pipeline import Network
         from netsim.registry import is_builtin
 
         objs = [_lookup("signal", s.type) for s in scenario.signals.values()]
         if scenario.plant is not None:
             objs.append(_lookup("plant", scenario.plant.model))
         nets = [_lookup("network", n.type) for n in scenario.networks.values()]
+        if nets:  # the network classes only when there are networks (issue 29: start-up)
+            from netsim.network.pipeline import Network
         return cls(dry=True,
                    plant=all(o is not None and is_builtin(o) for o in objs),
                    kernels=all(is_builtin_policy(node.policy) for node in scenario.nodes.values()),
