@@ -50,6 +50,7 @@ from netsim.kernel.events import NORMAL
 from netsim.kernel.monitor import refresh_rank
 from netsim.kernel.states import BLOCKED, READY
 from netsim.kernel.task import did_you_mean
+from netsim.registry import register
 from netsim.timebase import format_time
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -131,6 +132,8 @@ class Server:
         return f"<{type(self).__name__} {self.name} on {self.kernel.name}: tasks {[t.name for t in self.tasks]}>"
 
 
+@register("server", "cbs", "constant bandwidth server (Abeni & Buttazzo): budget per period, soft or hard; "
+          "nodes.<n>.servers")
 class ConstantBandwidthServer(Server):
     """A constant bandwidth server (see the module notes). Made by :func:`create_cbs`.
 
@@ -279,6 +282,8 @@ class ConstantBandwidthServer(Server):
         kernel._request_dispatch()
 
 
+@register("server", "tbs", "total bandwidth server (Spuri & Buttazzo): d_k = max(r_k, d_k-1) + wcet / Us; "
+          "nodes.<n>.servers")
 class TotalBandwidthServer(Server):
     """A total bandwidth server (see the module notes). Made by :func:`create_tbs`.
 

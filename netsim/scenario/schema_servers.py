@@ -115,11 +115,12 @@ def wire_servers(kernel: Kernel, node: Any, npath: str) -> None:
     served = [(i, t) for i, t in enumerate(node.tasks) if t.server is not None]
     if servers or served:
         from netsim.kernel.servers import attach_server, create_cbs, create_tbs
+        from netsim.registry import lookup
 
         for i, s in enumerate(servers):
             path = f"{npath}.servers[{i}]"
             try:
-                if s.type == "cbs":
+                if lookup("server", s.type).kind == "cbs":  # the registered server types (netsim list servers)
                     create_cbs(kernel, s.name, s.budget, s.period, hard=s.hard)
                 else:
                     create_tbs(kernel, s.name, s.utilization)
