@@ -62,44 +62,74 @@ def test_bench_cli_run_dc_servo_can_10s(tmp_path):
     assert (tmp_path / "cli" / "signals.csv").exists()
 
 
-def _child_cpu(cmd: list[str]) -> float:
-    """CPU time (user + system) of one child process running ``cmd``."""
+def _child_times(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
+    """(CPU time (user + system), wall time) of one child process running ``cmd``."""
     import resource
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    t0 = time.perf_counter()
+    subprocess.run(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), wall
+
+
+def _cached_bytecode_env(cache: Path) -> dict[str, str]:
+    """The environment with bytecode cached in ``cache`` (PYTHONPYCACHEPREFIX) even where PYTHONDONTWRITEBYTECODE
+    is set (as on some CI machines): every command then starts from compiled bytecode after its warm-up run. The
+    plugin index cache (netsim.registry.index) is private to the benchmark too, so that another process sharing
+    the user's cache (a test run, another checkout) cannot make a timed run parse every plugin module again."""
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPYCACHEPREFIX"] = str(cache / "bytecode")
+    env["NETSIM_CACHE_DIR"] = str(cache / "netsim")
+    return env
 
 
 @pytest.mark.benchmark
 def test_bench_cli_start_up_against_numpy_scipy_import(tmp_path):
-    """Issue 19: `netsim run dc_servo_ideal` <= 1.6x and `netsim validate dc_servo_can` <= 1.0x the CPU of
-    `python -c "import numpy, scipy.linalg"`, whole processes, interleaved rounds (best and median printed)."""
+    """Issue 19/29: `netsim run dc_servo_ideal` <= 1.6x and `netsim validate dc_servo_can` <= 1.0x the CPU of
+    `python -c "import numpy, scipy.linalg"`, bytecode cached: whole processes, one warm-up each (it fills the
+    bytecode cache), then interleaved rounds; medians (and CPU best) printed with the load average."""
+    import os
     import statistics
 
+    env = _cached_bytecode_env(tmp_path / "cache")
     netsim_cmd = [sys.executable, "-m", "netsim"]
     cmds = {
         "reference": [sys.executable, "-c", "import numpy, scipy.linalg"],
         "run": netsim_cmd + ["run", "scenarios/dc_servo_ideal.yaml", "--out", str(tmp_path / "run")],
         "validate": netsim_cmd + ["validate", "scenarios/dc_servo_can.yaml"],
-        # floors, for reading the ratios: what the run's tables (pandas) and validation's schema (pydantic) cost alone
+        # floors, for reading the ratios: pandas (no longer on the run path), and numpy with pydantic's model
+        # machinery (what a validation cannot do without: `import pydantic` alone is lazy)
         "pandas": [sys.executable, "-c", "import pandas"],
-        "numpy+pydantic": [sys.executable, "-c", "import numpy, pydantic"],
+        "numpy+pydantic": [sys.executable, "-c", "import numpy, pydantic\nclass M(pydantic.BaseModel):\n x: int"],
     }
-    times: dict[str, list[float]] = {k: [] for k in cmds}
-    for _ in range(5):
+    for cmd in cmds.values():  # warm-up: compiles into the cache
+        _child_times(cmd, env)
+    load = os.getloadavg()
+    times: dict[str, list[tuple[float, float]]] = {k: [] for k in cmds}
+    rounds = 7
+    for _ in range(rounds):
         for name, cmd in cmds.items():
-            times[name].append(_child_cpu(cmd))
-    ref_best, ref_med = min(times["reference"]), statistics.median(times["reference"])
+            times[name].append(_child_times(cmd, env))
+
+    def med(name: str, i: int) -> float:
+        return statistics.median(t[i] for t in times[name])
+
+    ref_cpu, ref_wall = med("reference", 0), med("reference", 1)
+    print(f"\n[bench] start-up, bytecode cached, {rounds} interleaved rounds, load average before "
+          f"{load[0]:.2f} / after {os.getloadavg()[0]:.2f}; reference `import numpy, scipy.linalg` CPU median "
+          f"{ref_cpu:.3f} s, wall median {ref_wall:.3f} s")
     for name, target in (("run", 1.6), ("validate", 1.0)):
-        best, med = min(times[name]), statistics.median(times[name])
-        print(f"\n[bench] netsim {name}: CPU best {best:.3f} s, median {med:.3f} s; reference best {ref_best:.3f} s "
-              f"-> ratio {best / ref_best:.2f}x best, {med / ref_med:.2f}x median (target <= {target}x)")
+        cpu, wall = med(name, 0), med(name, 1)
+        best = min(t[0] for t in times[name])
+        print(f"[bench] netsim {name}: CPU median {cpu:.3f} s (best {best:.3f} s), wall median {wall:.3f} s "
+              f"-> ratio CPU {cpu / ref_cpu:.2f}x, wall {wall / ref_wall:.2f}x (target <= {target}x)")
     for name in ("pandas", "numpy+pydantic"):
-        print(f"[bench] python -c 'import {name.replace('+', ', ')}': CPU best {min(times[name]):.3f} s "
-              f"-> {min(times[name]) / ref_best:.2f}x the reference")
-    assert all(t > 0 for v in times.values() for t in v)
+        print(f"[bench] floor {name}: CPU median {med(name, 0):.3f} s -> {med(name, 0) / ref_cpu:.2f}x the reference")
+    assert all(t[0] > 0 for v in times.values() for t in v)
 
 
 _PEAK_RSS = """
