@@ -362,13 +362,16 @@ class RunCache:
         The code's fingerprint (:func:`code_fingerprint`); another one starts an empty cache.
 
     A key is a run's scenario hash (:func:`scenario_key`), with a prefix where the same scenario is computed
-    another way. Values are JSON (numbers, strings, NaN), written atomically; ``reused`` counts the hits.
+    another way. Values are JSON (numbers, strings, NaN), written atomically; ``reused`` counts the hits. Arrays
+    go beside them as ``<key>.npz`` (:meth:`put_arrays`), read back with ``allow_pickle=False``: nothing of the
+    cache is unpickled.
     """
 
     def __init__(self, folder: Path | None, code: str = "") -> None:
         self.folder = None if folder is None else Path(folder) / (code or "any")
         self.reused = 0
         self._memory: dict[str, dict[str, Any]] = {}
+        self._memory_arrays: dict[str, dict[str, Any]] = {}
 
     def _path(self, key: str) -> Path | None:
         if not re.fullmatch(r"[A-Za-z0-9_.-]+", key):
@@ -402,3 +405,34 @@ class RunCache:
         tmp = path.with_suffix(f".{os.getpid()}.tmp")
         tmp.write_text(json.dumps(dict(row), allow_nan=True, default=_plain), encoding="utf-8")
         tmp.replace(path)
+
+    def get_arrays(self, key: str) -> dict[str, Any] | None:
+        """The arrays kept under ``key`` (``<key>.npz``, read without pickled objects), or ``None``."""
+        import numpy as np
+
+        path = self._path(key)
+        if path is None:
+            arrays = self._memory_arrays.get(key)
+            return None if arrays is None else dict(arrays)
+        path = path.with_suffix(".npz")
+        if not path.is_file():
+            return None
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                return {name: z[name] for name in z.files}
+        except (OSError, ValueError):
+            log.warning("run cache: %s is unreadable; the runs are made again", path)
+            return None
+
+    def put_arrays(self, key: str, arrays: Mapping[str, Any]) -> None:
+        """Keep numeric ``arrays`` (name -> array) under ``key``, as ``<key>.npz``."""
+        import numpy as np
+
+        path = self._path(key)
+        if path is None:
+            self._memory_arrays[key] = {k: np.asarray(v) for k, v in arrays.items()}
+            return
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f"{key}.{os.getpid()}.tmp.npz")
+        np.savez(tmp, **{k: np.asarray(v) for k, v in arrays.items()})
+        tmp.replace(path.with_suffix(".npz"))

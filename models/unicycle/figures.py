@@ -36,40 +36,39 @@ def _blackout(ax: Any, label: bool = False) -> None:
     ax.axvspan(*BLACKOUT_S, color="0.88", lw=0, zorder=0, label="both sensors off" if label else None)
 
 
+def _band_figure(sig: Any, height: float, panels: list[tuple[str, str, str, str]], color: str,
+                 labels: tuple[str, str], ncols: int, blackout: bool) -> Any:
+    """One panel per ``(mean, sd, reference, ylabel)`` column names of ``sig``: the mean with its 95 % band
+    (1.96 sd) against the dashed reference; ``labels`` name the mean and the reference in the legend."""
+    from netsim.figure_style import TIME_LABEL
+
+    fig, ax = _figure(height, len(panels))
+    tt = sig.index.to_numpy(float)
+    for j, (mean, sd_col, ref, ylabel) in enumerate(panels):
+        m, sd = sig[mean].to_numpy(float), sig[sd_col].to_numpy(float)
+        if blackout:
+            _blackout(ax[j], j == 0)
+        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color=color, alpha=0.25, lw=0, label="95 % band")
+        ax[j].plot(tt, m, color, label=labels[0])
+        ax[j].plot(tt, sig[ref].to_numpy(float), "--", color="k", lw=0.8, label=labels[1])
+        ax[j].set_ylabel(ylabel)
+    ax[-1].set_xlabel(TIME_LABEL)
+    fig.legend(*ax[0].get_legend_handles_labels(), loc="outside lower center", ncols=ncols)
+    return fig
+
+
 def bands_figure(sig: Any) -> Any:
     """The estimate of each state with its 95 % band against the truth (``sig``: the run's signals indexed by
     time in seconds, with ``xhat[j]``, ``sd[j]`` and the true ``x``, ``y``, ``theta``)."""
-    from netsim.figure_style import TIME_LABEL
-
-    fig, ax = _figure(3.6, 3)
-    tt = sig.index.to_numpy(float)
-    for j, (s, sym, unit) in enumerate(STATES):
-        m, sd = sig[f"xhat[{j}]"].to_numpy(float), sig[f"sd[{j}]"].to_numpy(float)
-        _blackout(ax[j], j == 0)
-        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C0", alpha=0.25, lw=0, label="95 % band")
-        ax[j].plot(tt, m, "C0", label="estimate")
-        ax[j].plot(tt, sig[s].to_numpy(float), "--", color="k", lw=0.8, label="truth")
-        ax[j].set_ylabel(f"{sym} ({unit})")
-    ax[-1].set_xlabel(TIME_LABEL)
-    fig.legend(*ax[0].get_legend_handles_labels(), loc="outside lower center", ncols=2)
-    return fig
+    panels = [(f"xhat[{j}]", f"sd[{j}]", s, f"{sym} ({unit})") for j, (s, sym, unit) in enumerate(STATES)]
+    return _band_figure(sig, 3.6, panels, "C0", ("estimate", "truth"), 2, True)
 
 
 def measurements_figure(sig: Any) -> Any:
     """The predicted reading of each distance sensor with its 95 % band against the noiseless reading."""
-    from netsim.figure_style import TIME_LABEL
-
-    fig, ax = _figure(2.8, 2)
-    tt = sig.index.to_numpy(float)
-    for j, (col, name) in enumerate((("z_front", "front"), ("z_side", "side"))):
-        m, sd = sig[f"zhat[{j}]"].to_numpy(float), sig[f"zsd[{j}]"].to_numpy(float)
-        ax[j].fill_between(tt, m - 1.96 * sd, m + 1.96 * sd, color="C1", alpha=0.25, lw=0, label="95 % band")
-        ax[j].plot(tt, m, "C1", label="predicted reading")
-        ax[j].plot(tt, sig[col].to_numpy(float), "--", color="k", lw=0.8, label="noiseless reading")
-        ax[j].set_ylabel(f"{name} distance (m)")
-    ax[-1].set_xlabel(TIME_LABEL)
-    fig.legend(*ax[0].get_legend_handles_labels(), loc="outside lower center", ncols=3)
-    return fig
+    panels = [(f"zhat[{j}]", f"zsd[{j}]", col, f"{name} distance (m)")
+              for j, (col, name) in enumerate((("z_front", "front"), ("z_side", "side")))]
+    return _band_figure(sig, 2.8, panels, "C1", ("predicted reading", "noiseless reading"), 3, False)
 
 
 def qr_rms_figure(qr: dict[str, list[dict]], t: np.ndarray) -> Any:

@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import json
 import math
-import pickle
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from netsim.casestudy import code_fingerprint, fmt, splice, sweep
+from netsim.casestudy import RunCache, code_fingerprint, fmt, splice, sweep
 from netsim.models.unicycle import studies as S
 from netsim.models.unicycle.design import PHASES
 from netsim.lazy_import import lazy_module
@@ -120,17 +119,7 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
     facts["zigbee"] = netsim.run(_SCEN / "unicycle_zigbee.yaml").metrics
     # ---------------------------------------------------------------- Monte-Carlo (numpy loop)
     t = np.arange(int(round(10 / 0.01)) + 1) * 0.01
-    cache = out / "runs" / f"mc_{runs}_{_code_hash()}.pkl"
-    if cache.is_file():
-        with open(cache, "rb") as fh:
-            mc = pickle.load(fh)
-        facts.update(mc["facts"])
-        qr_runs = mc["qr_runs"]
-    else:
-        qr_runs = _monte_carlo(facts, runs, workers, t)
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        with open(cache, "wb") as fh:
-            pickle.dump({"facts": {k: facts[k] for k in ("qr", "zcover", "printed_side")}, "qr_runs": qr_runs}, fh)
+    qr_runs = cached_monte_carlo(facts, runs, workers, t, out / "runs")
     # ---------------------------------------------------------------- netsim sweeps
     for key, name in (("net", "unicycle_net_sweep"), ("delay", "unicycle_lqr_delay"), ("burst", "unicycle_burst_sweep"),
                       ("radio_mc", "unicycle_radio_mc"), ("radio_delay", "unicycle_radio_delay"),
@@ -153,8 +142,6 @@ def unicycle_report(out_dir: Path | None = None, plots: bool = True, *, runs: in
 
         report_figures(out, base, qr_runs, t)
     facts["wall_s"] = time.perf_counter() - t0
-    with open(out / "runs" / "facts.pkl", "wb") as fh:  # to rewrite the README without running (not kept in git)
-        pickle.dump(facts, fh)
     text = write_readme(out, T, facts)
     T.frame().to_csv(out / "table.csv", index=False)
     return {"table": T.frame(), "readme": pd.DataFrame({"text": [text]})}
@@ -217,6 +204,21 @@ def _code_hash() -> str:
     """Fingerprint of the study's numeric code: a cached Monte-Carlo result is reused only for the same code."""
     here = Path(__file__).parent
     return code_fingerprint(here / n for n in ("model.py", "design.py", "reference.py", "studies.py", "metrics.py"))
+
+
+def cached_monte_carlo(facts: dict[str, Any], runs: int, workers: int | None, t: np.ndarray,
+                       folder: Path | None) -> dict[str, list[dict]]:
+    """:func:`_monte_carlo`, or its facts (JSON) and each run's error ``e`` (``.npz``) from the run cache in
+    ``folder`` (:class:`netsim.casestudy.RunCache`, for this code: :func:`_code_hash`); the figures need only ``e``."""
+    cache, key = RunCache(folder, _code_hash()), f"monte_carlo_{runs}_runs"
+    kept, arrays = cache.get(key), cache.get_arrays(key)
+    if kept is not None and arrays is not None:
+        facts.update(kept)
+        return {name: [{"e": e} for e in arrays[f"e{i}"]] for i, name in enumerate(S.QR_SETTINGS)}
+    qr_runs = _monte_carlo(facts, runs, workers, t)
+    cache.put(key, {k: facts[k] for k in ("qr", "zcover", "printed_side")})
+    cache.put_arrays(key, {f"e{i}": np.stack([r["e"] for r in qr_runs[name]]) for i, name in enumerate(S.QR_SETTINGS)})
+    return qr_runs
 
 
 def _monte_carlo(facts: dict[str, Any], runs: int, workers: int | None, t: np.ndarray) -> dict[str, list[dict]]:
