@@ -290,11 +290,10 @@ class MulticoreDispatcher:
                 heappop(ready)
                 continue
             c = self._idle_core(job)
-            if c < 0:
-                worst = None
-                for i, held in enumerate(cores):
-                    if worst is None or (held._rank, held._seq) > (worst._rank, worst._seq):
-                        worst, c = held, i
+            if c < 0:  # every core is busy: the least urgent running job, the last to become ready among equals
+                busy: list[Job] = cores
+                c = max(range(len(busy)), key=lambda i: (busy[i]._rank, busy[i]._seq))
+                worst = busy[c]
                 if not job._rank < worst._rank:
                     return
                 self._preempt(worst, now)

@@ -194,7 +194,7 @@ def schedule_csv_chunks(kernels: Iterable[tuple[str, Iterable[Any]]], chunk_rows
     kernels = list(kernels)
     # a multicore kernel's intervals carry their core (netsim.kernel.multicore): then a 'core' column, empty
     # where there is none; without one the file is as it always was
-    cores = any(intervals and len(intervals[0]) > 4 for _, intervals in kernels)  # type: ignore[arg-type,index]
+    cores = any(intervals and len(intervals[0]) > 4 for _, intervals in kernels)  # type: ignore[index]
     yield SCHEDULE_HEADER + (",core\n" if cores else "\n")
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
