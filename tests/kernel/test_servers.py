@@ -202,3 +202,32 @@ def test_a_node_without_servers_schedules_as_before():
     env.run(30 * MS)
     assert _spans(k, "A") == [(3, 6), (10, 12)]
     assert k.servers == {}
+
+
+def test_context_switches_are_not_charged_to_the_server_budget():
+    # CBS Qs=2, Ts=10 serving A (T=10, C=2) with a 0.5 ms context switch: each job switches 0-0.5 and executes
+    # 0.5-2.5, using exactly its 2 ms of budget: it finishes as the budget reaches 0, so no replenishment
+    env = SimEnv(seed=1)
+    k = Kernel(env, "cpu", policy="edf", context_switch=MS // 2)
+    k.create_task("A", _periodic(2), period=10 * MS)
+    srv = create_cbs(k, "cbs", 2 * MS, 10 * MS)
+    attach_server(k, "A", "cbs")
+    env.run(15 * MS)
+    assert _spans(k, "A")[:2] == [(0, 2.5), (10, 12.5)]
+    assert [e.what for e in srv.events] == ["reset", "reset"] and srv.replenishments == 0
+
+
+def test_a_job_killed_while_its_hard_server_waits_leaves_the_server_working():
+    # hard CBS Qs=2, Ts=10 serving A (T=10, C=3): A#0 runs 0-2 and waits for the replenishment at 10 (d=20); it is
+    # killed at 5. At 10 A#1 arrives at an idle server with c=0, d=20: 0 >= (20-10)*2/10 fails, c and d kept; the
+    # replenishment at 10 gives c=2: A#1 runs 10-12, waits until 20 (d=30), runs 20-21.
+    env = SimEnv(seed=1)
+    k = Kernel(env, "cpu", policy="edf")
+    k.create_task("A", _periodic(3), period=10 * MS)
+    create_cbs(k, "cbs", 2 * MS, 10 * MS, hard=True)
+    attach_server(k, "A", "cbs")
+    schedule_call(env.sim, 5 * MS, NORMAL, lambda _ev: k.kill_job(k.tasks["A"].active))
+    env.run(25 * MS)
+    recs = [r for r in k.job_records if r.task == "A"]
+    assert (recs[0].killed, recs[0].finish) == (True, 5 * MS)
+    assert (recs[1].start, recs[1].finish) == (10 * MS, 21 * MS)
