@@ -91,13 +91,30 @@ def _package_versions() -> dict[str, str]:
     out = {"python": platform.python_version()}
     for pkg in _VERSION_PACKAGES:
         try:
-            out[pkg] = metadata.version(pkg)
+            out[pkg] = _version(pkg)
         except metadata.PackageNotFoundError:
             if pkg == "netsim":
                 import netsim
 
                 out[pkg] = netsim.__version__
     return out
+
+
+def _version(package: str) -> str:
+    """``importlib.metadata.version(package)``, read from the ``Version:`` line of the metadata's header.
+
+    The header is parsed as e-mail by ``metadata.version``, which costs more than the rest of the look-up (issue
+    29, start-up); a header without a plain ``Version:`` line still goes through it.
+    """
+    dist = metadata.distribution(package)
+    text = dist.read_text("METADATA") or dist.read_text("PKG-INFO") or ""
+    for line in text.splitlines():
+        if not line.strip():  # the end of the header
+            break
+        key, sep, value = line.partition(":")
+        if sep and key.strip().lower() == "version" and value.strip():
+            return value.strip()
+    return dist.version
 
 
 def default_out_dir(name: str, scenario_hash: str, root: str | Path = "reports") -> Path:
