@@ -192,6 +192,14 @@ def schedule_figure(schedule: pd.DataFrame, jobs: pd.DataFrame | None = None, *,
                 c = colours.get(state, "tab:green")
                 # an edge as wide as a thin line: a bar narrower than a pixel still shows
                 ax.broken_barh(bars, (i - h / 2, h), facecolors=c, edgecolors=c, linewidth=0.5, label=once(state))
+        if "core" in sel.columns:  # a multicore node: the core that ran each running interval (c0, c1, ...)
+            run = sel[(sel["state"] == "running") & sel["core"].notna()]
+            if len(run) <= 300:
+                for s, e, core in zip(run["start_s"], run["end_s"], run["core"]):
+                    a, b = max(s, t0), min(e, t1)
+                    if b > a:
+                        ax.text((a + b) / 2, i, f"c{int(core)}", ha="center", va="center", fontsize=6,
+                                color="white", clip_on=True)
         if jobs is None:
             continue
         mine = ((jobs["node"] == node) & (jobs["task"] == task)).to_numpy()
