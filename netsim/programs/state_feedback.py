@@ -114,7 +114,6 @@ from netsim.units import QuietDefaultsModel, StrictModel, Time
 
 if TYPE_CHECKING:
     from netsim.kernel.job import Job
-    from netsim.scenario.schema import Scenario
 
 __all__ = ["AppliedInputSource", "MeasurementSource", "ModelSpec", "SolveTime", "StateFeedbackProgram"]
 
@@ -523,14 +522,6 @@ class StateFeedbackProgram:
             out["mpc_solver_calls"] = float(m.get("solver_calls", 0.0))
             out["mpc_solver_iterations"] = float(m.get("solver_iterations", 0.0))
         return out
-
-    @staticmethod
-    def check_design(scenario: Scenario, node: str, index: int, spec: Any, plant: Any) -> None:
-        """What building this task checks, without a kernel (``netsim validate``); raises ConfigError with a path."""
-        params = spec.validated_params()
-        path = f"nodes.{node}.tasks[{index}]"
-        period = spec.period if spec.release_kind == "periodic" else None
-        task_design(params, scenario, plant, period, path, node)
 
 
 def _task_path(ctx: ProgramContext) -> str:
