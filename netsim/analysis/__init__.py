@@ -8,6 +8,9 @@
   blocking by one lower-priority frame).
 - :mod:`netsim.analysis.lqg`: the expected quadratic cost of a sampled LTI loop under random input-output delay
   and sampling jitter (Jitterbug-style covariance computation; imported on its own, it needs scipy).
+- :mod:`netsim.analysis.from_scenario`: a scenario's tasks, handlers and CAN message streams as the types above.
+- :mod:`netsim.analysis.loops`: a scenario's PID and static state-feedback loops and the expected ISE of each over
+  a run, from :mod:`netsim.analysis.lqg` with the run's timing (imported on its own, as lqg).
 """
 
 from netsim.analysis.blocking import CriticalSection, blocking_terms

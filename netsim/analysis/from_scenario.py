@@ -23,12 +23,15 @@ Mapping rules
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from netsim.analysis.can import CanMessage, can_analysis
 from netsim.analysis.rta import RTATask, response_times
 from netsim.analysis.sync_terms import NodeSyncAnalysis
 from netsim.timebase import parse_time
+
+if TYPE_CHECKING:
+    from netsim.scenario.schema import HandlerSpec, NodeSpec, TaskSpec
 
 __all__ = ["ISR_PRIORITY", "NodeTasks", "interface_delay", "message_period", "node_tasks", "response_bounds",
            "wcet_ns"]
@@ -37,10 +40,11 @@ __all__ = ["ISR_PRIORITY", "NodeTasks", "interface_delay", "message_period", "no
 ISR_PRIORITY = -1_000_000
 
 
-def wcet_ns(entry: Any) -> int | None:
+def wcet_ns(entry: TaskSpec | HandlerSpec) -> int | None:
     """Largest execution time of a scenario task or handler (ns), ``None`` when unbounded."""
-    if getattr(entry, "wcet", None) is not None:
-        base = int(entry.wcet)
+    wcet = getattr(entry, "wcet", None)  # a task's own bound (a handler has none)
+    if wcet is not None:
+        base = int(wcet)
     else:
         ex = entry.execution_time()
         bound = 0 if ex is None else ex.upper_bound()
@@ -61,24 +65,24 @@ class NodeTasks:
     ----------
     items
         ISR loads, handlers and tasks as :class:`RTATask` (blocking terms included).
+    sync
+        The node's sync analysis (blocking notes, tasks without a bound of their own).
     notes
         Task -> how it was mapped, where that differs from the plain RTA.
     skipped
         ``(task, why)`` for the tasks that get no bound.
     how
         The analysis the node's policy calls for (``"FP RTA"``, ``"non-preemptive FP RTA"`` ...).
-    sync
-        The node's sync analysis (blocking notes, tasks without a bound of their own).
     """
 
     items: list[RTATask]
+    sync: NodeSyncAnalysis
     notes: dict[str, str] = field(default_factory=dict)
     skipped: list[tuple[str, str]] = field(default_factory=list)
     how: str = ""
-    sync: Any = None
 
 
-def node_tasks(node: Any, loads: dict[str, Any], min_gap: Callable[[str], int | None]) -> NodeTasks:
+def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], int | None]) -> NodeTasks:
     """The analysis' view of one scenario node.
 
     Parameters
@@ -152,7 +156,7 @@ def node_tasks(node: Any, loads: dict[str, Any], min_gap: Callable[[str], int | 
             prio = float(deadline)
         items.append(RTATask(t.name, c + 2 * cs, period, deadline=deadline, priority=prio, jitter=jitter))
     items, skipped = sync.apply(items, skipped)
-    return NodeTasks(items, notes, skipped, how, sync)
+    return NodeTasks(items, sync, notes=notes, skipped=skipped, how=how)
 
 
 def response_bounds(policy: str, items: list[RTATask]) -> dict[str, int | None]:
@@ -165,7 +169,7 @@ def response_bounds(policy: str, items: list[RTATask]) -> dict[str, int | None]:
     return response_times(items)
 
 
-def message_period(node: Any, network: str, priority: int, bounds: dict[tuple[str, str], tuple[int, int]],
+def message_period(node: NodeSpec, network: str, priority: int, bounds: dict[tuple[str, str], tuple[int, int]],
                    node_name: str) -> tuple[int | None, int, str]:
     """``(period, jitter, note)`` of a CAN message stream from its sending task on ``node``.
 

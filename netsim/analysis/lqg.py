@@ -102,7 +102,8 @@ class TimingDistribution:
         return cls(tuple(vals), (1.0,) * n)
 
     @classmethod
-    def empirical(cls, samples_s: Sequence[float], resolution_s: float = 1e-6) -> "TimingDistribution":
+    def empirical(cls, samples_s: Sequence[float] | np.ndarray,
+                  resolution_s: float = 1e-6) -> "TimingDistribution":
         """The distribution of measured times, each rounded to ``resolution_s`` (equal values merged)."""
         s = np.asarray(samples_s, dtype=float)
         if s.size == 0 or not np.all(np.isfinite(s)):

@@ -15,15 +15,18 @@ job, its critical sections and what it may block on. From them:
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from netsim.analysis.blocking import CriticalSection, blocking_terms
 from netsim.analysis.rta import RTATask
 
+if TYPE_CHECKING:
+    from netsim.scenario.schema import NodeSpec, TaskSpec
+
 __all__ = ["program_timing", "with_blocking", "NodeSyncAnalysis"]
 
 
-def program_timing(task: Any, execution: int | None, node: Any) -> Any:
+def program_timing(task: TaskSpec, execution: int | None, node: NodeSpec) -> Any:
     """The :class:`SyncTiming` of a scenario task whose program declares ``timing``, else ``None``."""
     try:
         cls = task.plugin()
@@ -44,14 +47,14 @@ class NodeSyncAnalysis:
         The scenario node.
     """
 
-    def __init__(self, node: Any) -> None:
+    def __init__(self, node: NodeSpec) -> None:
         self.node = node
         self.sections: dict[str, dict[str, int]] = {}
         self.suspends: dict[str, str] = {}
         self.notes: dict[str, str] = {}
         self.unbounded: dict[str, str] = {}
 
-    def timing(self, task: Any, execution: int | None) -> int | None:
+    def timing(self, task: TaskSpec, execution: int | None) -> int | None:
         """The task's execution time for the RTA; records its critical sections and what it may block on."""
         timing = program_timing(task, execution, self.node)
         if timing is None:
@@ -83,7 +86,7 @@ class NodeSyncAnalysis:
         return None
 
 
-def with_blocking(items: list[RTATask], node: Any, sections: dict[str, dict[str, int]],
+def with_blocking(items: list[RTATask], node: NodeSpec, sections: dict[str, dict[str, int]],
                   suspends: dict[str, str]) -> tuple[list[RTATask], dict[str, str], dict[str, str]]:
     """The RTA tasks with their blocking terms and suspension jitter.
 

@@ -20,9 +20,9 @@ For one scenario and its run, one row per checked item:
     gap between its messages in the run; the transmission time is the frame's on the bus.
 ``loop``
     A PID loop (``periodic_controller``, or a ``sampler`` / ``controller`` / ``actuator`` chain) on an LTI
-    plant with a square-wave reference: the expected ISE of ``r - y`` over the run from
-    :func:`netsim.analysis.lqg.transient_cost`, fed the sampling offsets and input-output delays the run
-    measured (taken as independent from period to period), vs the run's ``<y>.ISE``.
+    plant with a square-wave reference: the expected ISE of ``r - y`` over the run
+    (:mod:`netsim.analysis.loops`, from :func:`netsim.analysis.lqg.transient_cost`), fed the sampling offsets and
+    input-output delays the run measured (taken as independent from period to period), vs the run's ``<y>.ISE``.
 
 A simulated value above its bound is flagged ``EXCEEDS``: a bug in the simulator or in the analysis.
 """
@@ -30,7 +30,7 @@ A simulated value above its bound is flagged ``EXCEEDS``: a bug in the simulator
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -44,6 +44,11 @@ from netsim.cli.analyze_table import jobs_of as _jobs_of
 from netsim.cli.analyze_table import ms as _ms
 from netsim.cli.analyze_table import row as _row
 
+if TYPE_CHECKING:
+    from netsim.results import RunResult
+    from netsim.scenario import Simulation  # the builder's, as netsim.scenario names it
+    from netsim.scenario.schema import Scenario
+
 __all__ = ["COLUMNS", "analyze_run"]
 
 def _min_gap_ns(times_s: pd.Series) -> int | None:
@@ -54,7 +59,8 @@ def _min_gap_ns(times_s: pd.Series) -> int | None:
     return int(round(gap / NS)) if gap > 0 else None
 
 
-def _task_rows(scenario: Any, sim: Any, jobs: pd.DataFrame) -> tuple[list[dict], dict[tuple[str, str], tuple[int, int]]]:
+def _task_rows(scenario: Scenario, sim: Simulation,
+               jobs: pd.DataFrame) -> tuple[list[dict], dict[tuple[str, str], tuple[int, int]]]:
     """Rows for tasks and EDF nodes; also ``(node, task) -> (response bound, wcet)`` for the message jitter."""
     rows: list[dict] = []
     bounds: dict[tuple[str, str], tuple[int, int]] = {}
@@ -117,7 +123,7 @@ def _unfinished_past(js: pd.DataFrame, bound_ns: int) -> bool:
     return bool(not math.isnan(end) and (rel + bound_ns * NS < end - 1e-12).any())
 
 
-def _message_rows(scenario: Any, sim: Any, jobs: pd.DataFrame, messages: pd.DataFrame,
+def _message_rows(scenario: Scenario, sim: Simulation, jobs: pd.DataFrame, messages: pd.DataFrame,
                   bounds: dict[tuple[str, str], tuple[int, int]]) -> list[dict]:
     rows: list[dict] = []
     for net_name, net in scenario.networks.items():
@@ -130,15 +136,16 @@ def _message_rows(scenario: Any, sim: Any, jobs: pd.DataFrame, messages: pd.Data
         # one stream per (sender, priority); one row per sent message (a broadcast's copies share a msg_id)
         firsts = ms.sort_values("sent_s").drop_duplicates("msg_id")
         streams = []
-        for (sender, prio), group in firsts.groupby(["sender", "priority"], sort=True):
+        for _, group in firsts.groupby(["sender", "priority"], sort=True):
+            sender, prio = str(group["sender"].iloc[0]), int(group["priority"].iloc[0])
             tx = (group["tx_end_s"] - group["tx_start_s"]).max()
             tx_ns = int(round(tx / NS)) if not math.isnan(tx) else None
-            period, jitter, note = message_period(scenario.nodes[sender], net_name, int(prio), bounds, sender)
+            period, jitter, note = message_period(scenario.nodes[sender], net_name, prio, bounds, sender)
             if period is None:
                 period = _min_gap_ns(group["sent_s"])
             if period is None or tx_ns is None:
                 continue
-            streams.append((f"{sender}/p{int(prio)}", sender, int(prio), period, tx_ns, jitter, note, group))
+            streams.append((f"{sender}/p{prio}", sender, prio, period, tx_ns, jitter, note, group))
         results = {r.name: r for r in can_analysis(
             [CanMessage(n, p, T, c, jitter_ns=j) for n, _, p, T, c, j, _, _ in streams], tau_ns=1)}
         for name, sender, _, _, _, _, note, group in streams:
@@ -159,7 +166,7 @@ def _message_rows(scenario: Any, sim: Any, jobs: pd.DataFrame, messages: pd.Data
     return rows
 
 
-def analyze_run(scenario: Any, result: Any) -> pd.DataFrame:
+def analyze_run(scenario: Scenario, result: RunResult) -> pd.DataFrame:
     """The comparison table of ``scenario`` and its run ``result`` (columns :data:`COLUMNS`).
 
     Parameters

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import pandas as pd
 
@@ -15,7 +14,8 @@ COLUMNS = ["kind", "name", "analysis", "simulated", "unit", "verdict", "note"]
 NS = 1e-9
 
 
-def row(kind: str, name: str, analysis: Any, simulated: Any, unit: str, verdict: str, note: str = "") -> dict:
+def row(kind: str, name: str, analysis: float | str, simulated: float | str, unit: str, verdict: str,
+        note: str = "") -> dict:
     """One row of the table."""
     return {"kind": kind, "name": name, "analysis": analysis, "simulated": simulated, "unit": unit,
             "verdict": verdict, "note": note}

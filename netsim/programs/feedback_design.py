@@ -13,11 +13,16 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from netsim.errors import ConfigError
+
+if TYPE_CHECKING:
+    from netsim.control.parts import Design
+    from netsim.programs.state_feedback import _Params as StateFeedbackParams
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["MODEL_SOURCES", "TaskDesign", "as_part", "build_parts", "claim_design", "design_model", "model_source",
            "part_params", "task_design"]
@@ -56,7 +61,7 @@ class _LegacyEstimator:
     def __init__(self, obj: Any) -> None:
         self.obj = obj
 
-    def build(self, params: Any, design: Any, rng: np.random.Generator) -> Any:
+    def build(self, params: Any, design: Design, rng: np.random.Generator) -> Any:
         return self.obj.build(params, design)
 
 
@@ -69,7 +74,7 @@ class _LegacyLaw:
     def __init__(self, obj: Any) -> None:
         self.obj = obj
 
-    def build(self, params: Any, design: Any, rng: np.random.Generator) -> Any:
+    def build(self, params: Any, design: Design, rng: np.random.Generator) -> Any:
         return self.obj.build(params, design)
 
 
@@ -103,7 +108,8 @@ def _out_index(plant: Any, key: int | str, where: str) -> int:
                           + (f" (its outputs: {', '.join(map(str, names))})" if names else "")) from None
 
 
-def _measured_rows(p: Any, scenario: Any, plant: Any, n_out: int) -> tuple[list[list[int]], list[int]]:
+def _measured_rows(p: StateFeedbackParams, scenario: Scenario | None, plant: Any,
+                   n_out: int) -> tuple[list[list[int]], list[int]]:
     """Per source, the model output rows it measures; and all measured rows in order of first appearance."""
     per: list[list[int]] = []
     for i, src in enumerate(p.measurements):
@@ -112,7 +118,7 @@ def _measured_rows(p: Any, scenario: Any, plant: Any, n_out: int) -> tuple[list[
             rows = [_out_index(plant, o, where) for o in src.outputs]
         elif src.channel is not None:
             ch = scenario.io.get(src.channel) if scenario is not None else None
-            if ch is None or getattr(ch, "type", None) not in ("adc", "encoder"):
+            if ch is None or ch.type == "dac":
                 raise ConfigError(f"measurements[{i}].channel: '{src.channel}' is not an adc or encoder channel "
                                   "of the scenario's io")
             rows = [_out_index(plant, ch.output, f"measurements[{i}].channel")]
@@ -143,7 +149,7 @@ MODEL_SOURCES = {
 }
 
 
-def model_source(p: Any, plant: Any) -> str | None:
+def model_source(p: StateFeedbackParams, plant: Any) -> str | None:
     """Which branch of :func:`design_model` gives the model: a key of :data:`MODEL_SOURCES`, or ``None``
     (no model: :func:`design_model` refuses the task)."""
     if p.model is not None:
@@ -157,7 +163,8 @@ def model_source(p: Any, plant: Any) -> str | None:
     return None
 
 
-def design_model(p: Any, scenario: Any, plant: Any, period_ns: int) -> tuple[Any, list[list[int]], list[int]]:
+def design_model(p: StateFeedbackParams, scenario: Scenario | None, plant: Any,
+                 period_ns: int) -> tuple[Design, list[list[int]], list[int]]:
     """The :class:`~netsim.control.parts.Design` of a ``state_feedback`` task, with the measured rows.
 
     Raises
@@ -169,7 +176,7 @@ def design_model(p: Any, scenario: Any, plant: Any, period_ns: int) -> tuple[Any
 
     h = period_ns / 1e9
     source = model_source(p, plant)
-    if source == "params":
+    if p.model is not None:  # source "params"
         from netsim.control.design_checks import (
             as_input_matrix,
             as_matrix,
@@ -228,7 +235,7 @@ def _continuous_model(plant: Any, rows: list[int]) -> Any:
                            n_inputs=int(plant.n_inputs), rows=tuple(rows))
 
 
-def _check_sources(p: Any, scenario: Any, node: str | None, pp: str) -> None:
+def _check_sources(p: StateFeedbackParams, scenario: Scenario | None, node: str | None, pp: str) -> None:
     """Each measurement's channel is an io channel, its network one the node is on, its sender a node there."""
     if scenario is None:
         return
@@ -250,7 +257,8 @@ def _check_sources(p: Any, scenario: Any, node: str | None, pp: str) -> None:
                                   f"{', '.join(net.nodes)})", path=f"{at}.sender")
 
 
-def _check_sender_widths(p: Any, scenario: Any, node: str | None, pp: str, per: list[list[int]]) -> None:
+def _check_sender_widths(p: StateFeedbackParams, scenario: Scenario | None, node: str | None, pp: str,
+                         per: list[list[int]]) -> None:
     """Each ``sensor`` task that sends to this node what a network source takes sends one value per output that
     source measures (a run would stop at the first message: "sent 1 values, it measures 2 outputs")."""
     if scenario is None or node is None:
@@ -300,7 +308,7 @@ class TaskDesign:
         :func:`~netsim.programs.design_summary.summarize` results kept for the run (by their options).
     """
 
-    design: Any
+    design: Design
     per_source: list[list[int]]
     rows: list[int]
     estimator: Any
@@ -311,7 +319,7 @@ class TaskDesign:
     summaries: dict[Any, Any] = field(default_factory=dict)
 
 
-def _key(path: str, node: str | None, period_ns: int, design: Any, plan_key: Any) -> str:
+def _key(path: str, node: str | None, period_ns: int, design: Design, plan_key: Any) -> str:
     """What a design depends on: the task, its period, the model's numbers and the plant's own model."""
     h = hashlib.sha256(f"{path}|{node}|{period_ns}|{plan_key}".encode())
     for M in (design.A, design.B, design.C, design.Cr, design.x0):
@@ -321,8 +329,8 @@ def _key(path: str, node: str | None, period_ns: int, design: Any, plan_key: Any
     return h.hexdigest()
 
 
-def _model(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
-           node: str | None) -> tuple[Any, list[list[int]], list[int]]:
+def _model(p: StateFeedbackParams, scenario: Scenario | None, plant: Any, period_ns: int | None, path: str,
+           node: str | None) -> tuple[Design, list[list[int]], list[int]]:
     pp = f"{path}.params"
     _check_sources(p, scenario, node, pp)
     if period_ns is None:
@@ -342,7 +350,7 @@ def _model(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
     return design, per, rows
 
 
-def _build(kind: str, field_name: str, spec: Any, part: Any, design: Any, rng: np.random.Generator, pp: str,
+def _build(kind: str, field_name: str, spec: Any, part: Any, design: Design, rng: np.random.Generator, pp: str,
            wrap: str | None = None, wrap_path: str | None = None) -> Any:
     """``part.build`` with its errors at the YAML path (``wrap``: the message's lead and path for an estimator
     rebuilt on the model of a delayed input)."""
@@ -361,7 +369,7 @@ def _build(kind: str, field_name: str, spec: Any, part: Any, design: Any, rng: n
         raise ConfigError(f"{field_name} '{spec.type}' cannot be designed: {exc}", path=where) from None
 
 
-def _design_rng(scenario: Any, path: str) -> np.random.Generator:
+def _design_rng(scenario: Scenario | None, path: str) -> np.random.Generator:
     """The random stream a part's ``build`` gets: ``design:<path>`` of the scenario's seed (the same at
     validation and in the run, so a design made once serves both)."""
     from netsim.env import stream_seed
@@ -370,8 +378,8 @@ def _design_rng(scenario: Any, path: str) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(stream_seed(seed, f"design:{path}")))
 
 
-def task_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
-                node: str | None = None) -> TaskDesign:
+def task_design(p: StateFeedbackParams, scenario: Scenario | None, plant: Any, period_ns: int | None,
+                path: str, node: str | None = None) -> TaskDesign:
     """The design of a ``state_feedback`` task at ``path``, made once per model (see the module docstring).
 
     Raises
@@ -409,8 +417,8 @@ def task_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: 
     return made
 
 
-def claim_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
-                 node: str | None = None) -> TaskDesign:
+def claim_design(p: StateFeedbackParams, scenario: Scenario | None, plant: Any, period_ns: int | None,
+                 path: str, node: str | None = None) -> TaskDesign:
     """:func:`task_design` for the program that runs it: the design made at validation when no run has taken
     it yet (its estimator and law have never stepped), else a new one (kept for this run's summaries)."""
     made = task_design(p, scenario, plant, period_ns, path, node)
@@ -423,8 +431,8 @@ def claim_design(p: Any, scenario: Any, plant: Any, period_ns: int | None, path:
     return made
 
 
-def build_parts(p: Any, scenario: Any, plant: Any, period_ns: int | None, path: str,
-                node: str | None = None) -> tuple[Any, ...]:
+def build_parts(p: StateFeedbackParams, scenario: Scenario | None, plant: Any, period_ns: int | None,
+                path: str, node: str | None = None) -> tuple[Any, ...]:
     """``(design, per_source, rows, estimator, law, fed_state)`` of :func:`task_design` (its older form)."""
     made = task_design(p, scenario, plant, period_ns, path, node)
     return made.design, made.per_source, made.rows, made.estimator, made.law, made.fed_state
