@@ -33,6 +33,7 @@ import numpy as np
 
 from netsim.errors import ConfigError
 from netsim.plant.base import Plant
+from netsim.plant.blocks import PartwiseLTI
 from netsim.plant.disturbance import _Source, _StateNoise
 from netsim.plant.noise import is_entry_form
 from netsim.plant.shared import NEVER, _vector, as_matrix, matvec, psd_factor
@@ -156,7 +157,7 @@ class _LTIBase(Plant):
         return np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C), np.asarray(sys.D), sys.dt, names
 
 
-class LTIPlant(_LTIBase):
+class LTIPlant(PartwiseLTI, _LTIBase):
     """A continuous LTI plant ``x' = A x + B u (+ w)``, ``y = C x + D u``, propagated exactly.
 
     Parameters
@@ -236,6 +237,9 @@ class LTIPlant(_LTIBase):
 
     def _build(self, x: np.ndarray) -> None:
         """Append oscillators (sine disturbances) and continuous disturbance models to the state."""
+        if self._blocks is not None:
+            self._unblock()
+            x = self._zu[: self.n_states].copy()
         n, m = self.n_states, self.n_inputs
         blocks_A, z0, q_blocks = [], [x], []
         couple: list[tuple[int | None, np.ndarray]] = []  # (input index, row vector acting on the extra block)
@@ -319,6 +323,7 @@ class LTIPlant(_LTIBase):
 
             raise BuildError(f"plant {self.name}: bind(env) before running a plant with process noise")
         super()._start()
+        self._blocks = self._make_blocks(zoh_transition)
 
     def _update_effective_input(self, t: int) -> None:
         self._zu[self._nz :] = self._piecewise_input() + self._sine_bias
@@ -350,6 +355,10 @@ class LTIPlant(_LTIBase):
     # ---------------------------------------------------------------- propagation
     def advance_to(self, t_ns: int) -> None:
         t = int(t_ns)
+        if not self._started:
+            self._start()
+        if self._blocks is not None:
+            return self._advance_blocks(t)
         if not (self._plain and self._t <= t < self._next_break):
             return super().advance_to(t)
         # Plant.advance_to's work when no disturbance jump lies in (self._t, t]: one step, then a notification
@@ -422,6 +431,7 @@ class LTIPlant(_LTIBase):
         Returns ``(candidate or None, last examined tick, wake-up instant)``; the wake-up instant is the
         last examined tick, or an earlier stochastic disturbance update beyond which nothing is known.
         """
+        self._unblock()
         max_ticks, t_end, barrier = self._prediction_window(t_first, tick, max_ticks)
         if max_ticks == 0:
             return None, t_first - tick, barrier
