@@ -413,10 +413,13 @@ def _state_feedback_tasks(scenario: Scenario) -> list[tuple[str, int, Any]]:
 def static_designs(scenario: Scenario, plant: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a valid scenario, built as validation builds
     them (:func:`~netsim.programs.feedback_design.task_design`: the designs validation made, nothing simulated)."""
+    tasks = _state_feedback_tasks(scenario)
+    if not tasks:  # nothing to design: the design module is not imported (issue 29, start-up)
+        return {}
     from netsim.programs.feedback_design import model_source, task_design
 
     out: dict[str, dict[str, Any]] = {}
-    for node, i, task in _state_feedback_tasks(scenario):
+    for node, i, task in tasks:
         params = task.validated_params()
         period = task.period if task.release_kind == "periodic" else None
         path = f"nodes.{node}.tasks[{i}]"
@@ -429,12 +432,14 @@ def static_designs(scenario: Scenario, plant: Any, *, margin: bool = True) -> di
 def run_designs(sim: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a built simulation, read from the programs
     it runs (their estimator and law objects)."""
+    tasks = _state_feedback_tasks(sim.scenario)
+    if not tasks:  # nothing to summarise: the design module is not imported (issue 29, start-up)
+        return {}
     from netsim.programs.feedback_design import model_source
 
-    scenario = sim.scenario
     plant = sim.env.components.get("plant")
     out: dict[str, dict[str, Any]] = {}
-    for node, i, task in _state_feedback_tasks(scenario):
+    for node, i, task in tasks:
         prog = sim.programs.get(f"{node}.{task.name}")
         if prog is None:
             continue
