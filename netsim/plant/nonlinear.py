@@ -265,6 +265,7 @@ class NonlinearPlant(Plant):
                 ev.terminal = True  # type: ignore[attr-defined]
                 ev.direction = g.direction  # type: ignore[attr-defined]
                 evs.append(ev)
+            sol: Any  # solve_ivp's result, or RkSegments' with the fields read below but the events
             try:
                 if not evs and self._rk_segments is not None:  # solve_ivp's steps without solve_ivp (integrator.py)
                     sol = self._rk_segments.solve(rhs, t, t1, x)
