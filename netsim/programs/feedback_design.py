@@ -1,11 +1,11 @@
 """The control design of a ``state_feedback`` task: the discrete model, the estimator and the law it names.
 
-:func:`task_design` is what ``netsim validate`` (through the program's ``check_design``,
-:mod:`netsim.scenario.static_build`) and building the program both run, so validation refuses what a run would
-refuse, at the same YAML path. It designs once: the result (a :class:`TaskDesign`: the model, the estimator and
-the law, never stepped) is kept on the task's validated parameters, keyed by the numbers it was designed from,
-and the program of the run takes it (:func:`claim_design`) instead of solving the Riccati equations again. A
-second run of the same loaded scenario designs anew (the first run's objects have run). See
+:func:`task_design` is what building the program runs, in ``netsim validate``'s dry run
+(:mod:`netsim.build.dry_run`) as in the run, so validation refuses what a run would refuse, at the same YAML
+path. It designs once: the result (a :class:`TaskDesign`: the model, the estimator and the law, never stepped)
+is kept on the task's validated parameters, keyed by the numbers it was designed from, and the program of the
+run takes it (:func:`claim_design`) instead of solving the Riccati equations again. A second run of the same
+loaded scenario designs anew (the first run's objects have run). See
 :mod:`netsim.programs.state_feedback` for the parameters.
 """
 
@@ -96,47 +96,49 @@ def as_part(kind: str, spec: Any, where: str) -> Any:
 
 # --------------------------------------------------------------------------------------------- design
 def _out_index(plant: Any, key: int | str, where: str) -> int:
+    """The model output row of ``key`` (an index, or a plant output's name); refused at the YAML path ``where``."""
     if plant is None:
         if isinstance(key, int):
             return key
-        raise ConfigError(f"{where}: output '{key}' is a name, but the model is given without a plant; use indices")
+        raise ConfigError(f"output '{key}' is a name, but the model is given without a plant; use indices", path=where)
     try:
         return int(plant.output_index(key))
     except Exception:  # noqa: BLE001 - the plant's own lookup error, reworded with the field
         names = getattr(plant, "output_names", None)
-        raise ConfigError(f"{where}: the plant has no output {key!r}"
-                          + (f" (its outputs: {', '.join(map(str, names))})" if names else "")) from None
+        raise ConfigError(f"the plant has no output {key!r}"
+                          + (f" (its outputs: {', '.join(map(str, names))})" if names else ""), path=where) from None
 
 
 def _measured_rows(p: StateFeedbackParams, scenario: Scenario | None, plant: Any,
-                   n_out: int) -> tuple[list[list[int]], list[int]]:
-    """Per source, the model output rows it measures; and all measured rows in order of first appearance."""
+                   n_out: int, pp: str) -> tuple[list[list[int]], list[int]]:
+    """Per source, the model output rows it measures; and all measured rows in order of first appearance (refused
+    at YAML paths under ``pp``, the task's ``params``)."""
     per: list[list[int]] = []
     for i, src in enumerate(p.measurements):
-        where = f"measurements[{i}].outputs"
+        where = f"{pp}.measurements[{i}].outputs"
         if src.outputs is not None:
             rows = [_out_index(plant, o, where) for o in src.outputs]
         elif src.channel is not None:
             ch = scenario.io.get(src.channel) if scenario is not None else None
             if ch is None or ch.type == "dac":
-                raise ConfigError(f"measurements[{i}].channel: '{src.channel}' is not an adc or encoder channel "
-                                  "of the scenario's io")
-            rows = [_out_index(plant, ch.output, f"measurements[{i}].channel")]
+                raise ConfigError(f"'{src.channel}' is not an adc or encoder channel of the scenario's io",
+                                  path=f"{pp}.measurements[{i}].channel")
+            rows = [_out_index(plant, ch.output, f"{pp}.measurements[{i}].channel")]
         elif len(p.measurements) == 1:
             rows = list(range(n_out))
         else:
-            raise ConfigError(f"{where}: with several measurement sources, say which plant outputs each one "
-                              "measures (e.g. 'outputs: [0]')")
+            raise ConfigError("with several measurement sources, say which plant outputs each one measures (e.g. "
+                              "'outputs: [0]')", path=where)
         for r in rows:
             if not 0 <= r < n_out:
-                raise ConfigError(f"{where}: output {r} does not exist (the model has {n_out} outputs)")
+                raise ConfigError(f"output {r} does not exist (the model has {n_out} outputs)", path=where)
         per.append(rows)
     order: list[int] = []
     for rows in per:
         for r in rows:
             if r in order:
-                raise ConfigError("measurements: output {r} is measured by two sources; give each source its own "
-                                  "outputs (fusing redundant sensors needs a model row per sensor)".replace("{r}", str(r)))
+                raise ConfigError(f"output {r} is measured by two sources; give each source its own outputs (fusing "
+                                  "redundant sensors needs a model row per sensor)", path=f"{pp}.measurements")
             order.append(r)
     return per, order
 
@@ -164,13 +166,15 @@ def model_source(p: StateFeedbackParams, plant: Any) -> str | None:
 
 
 def design_model(p: StateFeedbackParams, scenario: Scenario | None, plant: Any,
-                 period_ns: int) -> tuple[Design, list[list[int]], list[int]]:
+                 period_ns: int, pp: str = "params") -> tuple[Design, list[list[int]], list[int]]:
     """The :class:`~netsim.control.parts.Design` of a ``state_feedback`` task, with the measured rows.
 
     Raises
     ------
     ConfigError
-        With a message naming the parameter (the caller adds the YAML path).
+        At the YAML path of the parameter under ``pp`` (the task's ``params``: ``<pp>.measurements[0].outputs``,
+        ``<pp>.model``, ``<pp>.tracked``); without a path for a matrix of ``model`` that the checks of
+        :mod:`netsim.control.design_checks` refuse (their message names it).
     """
     from netsim.control.parts import Design
 
@@ -189,11 +193,12 @@ def design_model(p: StateFeedbackParams, scenario: Scenario | None, plant: Any,
         Cf = as_matrix("model.C", p.model.C, (None, n))
         Df = np.zeros((Cf.shape[0], B.shape[1]))
     elif plant is None:
-        raise ConfigError("model: the scenario has no plant; give the discrete model as 'model: {A, B, C}'")
+        raise ConfigError("the scenario has no plant; give the discrete model as 'model: {A, B, C}'", path=f"{pp}.model")
     elif source == "discrete_plant":
         if int(plant.dt_ns) != int(period_ns):
-            raise ConfigError(f"model: the discrete plant steps every {plant.dt_ns} ns, the task every {period_ns} ns; "
-                              "give the model at the task period as 'model: {A, B, C}', or make the periods equal")
+            raise ConfigError(f"the discrete plant steps every {plant.dt_ns} ns, the task every {period_ns} ns; give the "
+                              "model at the task period as 'model: {A, B, C}', or make the periods equal",
+                              path=f"{pp}.model")
         A, B, Cf, Df = plant.Ad, plant.Bd, plant.Cd, plant.Dd
     elif source == "zoh":
         import control
@@ -201,19 +206,19 @@ def design_model(p: StateFeedbackParams, scenario: Scenario | None, plant: Any,
         sysd = control.c2d(control.ss(plant.A, plant.B, plant.C, plant.D), h, "zoh")
         A, B, Cf, Df = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (sysd.A, sysd.B, sysd.C, sysd.D))
     else:
-        raise ConfigError(f"model: the plant ({type(plant).__name__}) has no linear model to discretise; give the "
-                          "discrete model at the task period as 'model: {A, B, C}' (e.g. its linearisation)")
-    per, rows = _measured_rows(p, scenario, None if p.model is not None else plant, Cf.shape[0])
+        raise ConfigError(f"the plant ({type(plant).__name__}) has no linear model to discretise; give the discrete "
+                          "model at the task period as 'model: {A, B, C}' (e.g. its linearisation)", path=f"{pp}.model")
+    per, rows = _measured_rows(p, scenario, None if p.model is not None else plant, Cf.shape[0], pp)
     if np.any(Df[rows] != 0):
-        raise ConfigError("measurements: a measured output has feed-through (D != 0); the estimators take y = C x: "
-                          "measure another output or give 'model: {A, B, C}'")
+        raise ConfigError("a measured output has feed-through (D != 0); the estimators take y = C x: measure another "
+                          "output or give 'model: {A, B, C}'", path=f"{pp}.measurements")
     Cr = None
     if p.reference is not None:
         tracked = [rows[0]] if p.tracked is None else [
-            _out_index(None if p.model is not None else plant, t, "tracked") for t in p.tracked]
+            _out_index(None if p.model is not None else plant, t, f"{pp}.tracked") for t in p.tracked]
         for t in tracked:
             if not 0 <= t < Cf.shape[0]:
-                raise ConfigError(f"tracked: output {t} does not exist (the model has {Cf.shape[0]} outputs)")
+                raise ConfigError(f"output {t} does not exist (the model has {Cf.shape[0]} outputs)", path=f"{pp}.tracked")
         Cr = Cf[tracked]
     x0 = None
     if scenario is not None and scenario.plant is not None and scenario.plant.x0 is not None and p.model is None:
@@ -337,14 +342,10 @@ def _model(p: StateFeedbackParams, scenario: Scenario | None, plant: Any, period
         raise ConfigError("state_feedback runs on a sampling grid: give the task a 'period' (release: periodic)",
                           path=f"{path}.period")
     try:
-        design, per, rows = design_model(p, scenario, plant, period_ns)
+        design, per, rows = design_model(p, scenario, plant, period_ns, pp)
     except ConfigError as exc:
-        if exc.path is not None:
+        if exc.path is not None:  # design_model places its own refusals at their parameter's path
             raise
-        where, sep, rest = exc.message.partition(": ")
-        root = where.split(".", 1)[0].split("[", 1)[0]
-        if sep and " " not in where and root in type(p).model_fields:  # "measurements[0].outputs: ..."
-            raise ConfigError(rest, path=f"{pp}.{where}") from None
         raise ConfigError(exc.message, path=pp) from None
     _check_sender_widths(p, scenario, node, pp, per)
     return design, per, rows
