@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Callable
 from netsim.env import SimEnv
 from netsim.errors import BuildError, ConfigError, NetsimError
 from netsim.kernel.task import HandlerSpec, TaskSpec
+from netsim.scenario.paths import parse_path
 
 if TYPE_CHECKING:
     from netsim.scenario.schema import Scenario
@@ -140,11 +141,16 @@ def checked_call(fn: Callable[..., Any], path: str, *args: Any, **kwargs: Any) -
 
 def located(exc: ConfigError, path: str) -> BuildError:
     """``exc`` (raised without a path) as a BuildError at ``path``, or at ``<path>.<field>`` for a kernel error
-    naming a field of the entry at ``path`` (see :func:`checked_call`)."""
+    naming a field of the entry at ``path`` (see :func:`checked_call`).
+
+    A kernel error's message is its ``reason`` when ``path`` lies at or inside a task or handler entry (the path
+    names the node and the entry); at a node's path, the whole message, which names the task.
+    """
     field = getattr(exc, "field", None)  # the structured attributes of netsim.kernel.task.task_error
     reason = getattr(exc, "reason", None)
-    entry = path.endswith("]")  # nodes.<n>.tasks[i] or nodes.<n>.handlers[i]
-    where = f"{path}.{field}" if entry and field in SPEC_FIELDS else path
+    parts = parse_path(path)
+    entry = len(parts) >= 4 and parts[0] == "nodes" and parts[2] in ("tasks", "handlers") and isinstance(parts[3], int)
+    where = f"{path}.{field}" if entry and len(parts) == 4 and field in SPEC_FIELDS else path
     err = BuildError(reason if entry and isinstance(reason, str) else exc.message, path=where)
     for attr in ("node", "task", "field", "reason"):
         if hasattr(exc, attr):

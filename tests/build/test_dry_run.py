@@ -141,5 +141,8 @@ def test_a_kernel_error_is_placed_by_its_field_and_shown_by_its_reason_whatever_
     err.field = "body"  # type: ignore[attr-defined]
     assert (located(err, "nodes.n.tasks[2]").path, located(err, "nodes.n.tasks[2]").message) == \
         ("nodes.n.tasks[2]", "exceeds the period")
+    # inside an entry (a handler's trigger), the reason at that path
+    assert (located(err, "nodes.n.handlers[1].trigger").path, located(err, "nodes.n.handlers[1].trigger").message) == \
+        ("nodes.n.handlers[1].trigger", "exceeds the period")
     # at a node's path (no entry), the whole message: it names the task
     assert (located(err, "nodes.n").path, located(err, "nodes.n").message) == ("nodes.n", "a message in any wording")
