@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from netsim.casestudy import fill, load_templates
 from netsim.models.unicycle.model import TS
 from netsim.models.unicycle.quoting import Quotes
 
@@ -31,10 +32,23 @@ __all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference"
            "delay_aware_frame", "GROWTH", "LOST_E3", "lost_runs", "DELAY_AWARE_MARK", "RADIO_MC_MARK",
            "radio_mc_section", "splice_radio_mc", "loss_params"]
 
+#: The prose of section 5 (``models/unicycle/readme_net.md``): ``{name}`` placeholders filled with quoted texts.
+TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
+
+
+def _text(name: str, **values: str) -> str:
+    return fill(TEMPLATES[name], values, f"unicycle/readme_net.md [[{name}]]")
+
+
+def _marks(name: str) -> tuple[str, str]:
+    lines = TEMPLATES[name].split("\n")
+    return lines[0], lines[-1]
+
+
 #: The README lines of the delay-aware study sit between these (``netsim report unicycle_delay_aware`` splices them).
-DELAY_AWARE_MARK = ("<!-- delay-aware: netsim report unicycle_delay_aware -->", "<!-- /delay-aware -->")
+DELAY_AWARE_MARK = _marks("delay_aware")
 #: The radio Monte-Carlo study's README lines sit between these (``netsim report unicycle_radio_mc`` splices them).
-RADIO_MC_MARK = ("<!-- radio-mc: netsim report unicycle_radio_mc -->", "<!-- /radio-mc -->")
+RADIO_MC_MARK = _marks("radio_mc")
 #: Where that study's lines stood in a README written before the markers: its first and last line begin so.
 RADIO_MC_LEGACY = ("802.15.4 radio (`unicycle_radio_mc.yaml`", "- Loss")
 
@@ -133,57 +147,44 @@ def radio_mc_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
                                                           + rm["control.ekf.filter.fused_side"]))
     g = rm.sort_values(["_fp", "_k"]).groupby(["_fp", "_k"], sort=True)
     se = [_tol(d, f"unicycle.cover_{s}_all") for _, d in g for s in ("x", "y", "theta")]
-    bern = loss_params(rm[rm["_kind"] == "Bernoulli"]["loss_model"].iloc[0]) if (rm["_kind"] == "Bernoulli").any() \
-        else None
-    ge = loss_params(rm[rm["_kind"] == "Gilbert-Elliott bursts"]["loss_model"].iloc[0]) \
-        if (rm["_kind"] == "Gilbert-Elliott bursts").any() else None
+    kinds = set(rm["_kind"])
     model = []
-    if bern is not None:
-        model.append(f"Bernoulli with p = {q.g(bern['p'], 'rm_p')} per attempt")
-    if ge is not None:
+    if "Bernoulli" in kinds:
+        bern = loss_params(rm[rm["_kind"] == "Bernoulli"]["loss_model"].iloc[0])
+        model.append(_text("rm_bernoulli", p=q.g(bern["p"], "rm_p")))
+    if "Gilbert-Elliott bursts" in kinds:
+        ge = loss_params(rm[rm["_kind"] == "Gilbert-Elliott bursts"]["loss_model"].iloc[0])
         gb, bg = float(ge["p_good_to_bad"]), float(ge["p_bad_to_good"])
-        model.append(f"Gilbert-Elliott bursts stepping once per attempt (good -> bad {q.g(gb, 'rm_p_gb')}, bad -> good "
-                     f"{q.g(bg, 'rm_p_bg')}, every attempt lost while bad: {_pct(gb / (gb + bg), 'rm_bad_share')} of "
-                     f"the attempts in bursts of {_f(1 / bg, 2, 'rm_burst_len')} attempts on average)")
-    L = [RADIO_MC_MARK[0],
-         "802.15.4 radio (`unicycle_radio_mc.yaml`, base `unicycle_zigbee.yaml`): both IR sensors at the same rate; "
-         "the loss model erases single transmission attempts, drawn at the end of each reception before the ACK "
-         "(`docs/loss.md`), so an erased frame goes unacknowledged and the MAC sends it again, up to its retry "
-         "limit. Loss models: " + "; ".join(model) + ". IR samples and wheel commands are hit alike; "
-         f"{q.i(rm.groupby(['_fp', '_k']).size().min(), 'radio_runs')} Monte-Carlo runs per point. "
-         f"Monte-Carlo tolerance of a mean coverage: +- {_pct(min(se), 'rm_tol_lo')} to "
-         f"+- {_pct(max(se), 'rm_tol_hi')} (1.96 standard errors of the runs' coverages).", "",
-         "| sensor rate | loss | runs | attempts erased | messages lost | attempts per message | mean delay [ms] | "
-         "coverage x / y / theta | RMS y front part [mm] | RMS theta all [rad] | fused samples | fused late |",
-         "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        model.append(_text("rm_bursts", gb=q.g(gb, "rm_p_gb"), bg=q.g(bg, "rm_p_bg"),
+                           bad=_pct(gb / (gb + bg), "rm_bad_share"), length=_f(1 / bg, 2, "rm_burst_len")))
+    v = {"models": "; ".join(model), "runs": q.i(rm.groupby(["_fp", "_k"]).size().min(), "radio_runs"),
+         "tol_lo": _pct(min(se), "rm_tol_lo"), "tol_hi": _pct(max(se), "rm_tol_hi")}
+    rows = []
     for (fp, _), d in g:
         kind = d["_kind"].iloc[0]
         k = f"rm_{1e3 / fp:g}hz_{short[kind]}"
         fused = d["control.ekf.filter.fused_front"] + d["control.ekf.filter.fused_side"]
-        L.append(f"| {q.g(1e3 / fp, k + '_hz')} Hz | {kind} | {q.i(len(d), k + '_runs')} | "
-                 f"{_pct(d['_erased'].mean(), k + '_erased')} | {_pct(d['net.radio.loss_rate'].mean(), k + '_lost')} | "
-                 f"{_f(d['_apm'].mean(), 3, k + '_apm')} | "
-                 f"{_f(d['net.radio.mean_delay_s'].mean() * 1e3, 3, k + '_delay')} | "
-                 f"{_pct(d['unicycle.cover_x_all'].mean(), k + '_cov_x')} / "
-                 f"{_pct(d['unicycle.cover_y_all'].mean(), k + '_cov_y')} / "
-                 f"{_pct(d['unicycle.cover_theta_all'].mean(), k + '_cov_theta')} | "
-                 f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3, 3, k + '_rms_y')} | "
-                 f"{_f(d['unicycle.rmse_theta_all'].mean(), 3, k + '_rms_theta')} | "
-                 f"{_f(fused.mean(), 3, k + '_fused')} | "
-                 f"{_pct(d['_late'].mean(), k + '_late')} |")
+        rows.append(f"| {q.g(1e3 / fp, k + '_hz')} Hz | {kind} | {q.i(len(d), k + '_runs')} | "
+                    f"{_pct(d['_erased'].mean(), k + '_erased')} | {_pct(d['net.radio.loss_rate'].mean(), k + '_lost')} | "
+                    f"{_f(d['_apm'].mean(), 3, k + '_apm')} | "
+                    f"{_f(d['net.radio.mean_delay_s'].mean() * 1e3, 3, k + '_delay')} | "
+                    f"{_pct(d['unicycle.cover_x_all'].mean(), k + '_cov_x')} / "
+                    f"{_pct(d['unicycle.cover_y_all'].mean(), k + '_cov_y')} / "
+                    f"{_pct(d['unicycle.cover_theta_all'].mean(), k + '_cov_theta')} | "
+                    f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3, 3, k + '_rms_y')} | "
+                    f"{_f(d['unicycle.rmse_theta_all'].mean(), 3, k + '_rms_theta')} | "
+                    f"{_f(fused.mean(), 3, k + '_fused')} | {_pct(d['_late'].mean(), k + '_late')} |")
         for col, name in (("unicycle.cover_theta_all", "coverage theta"), ("unicycle.cover_y_all", "coverage y"),
                           ("unicycle.rmse_theta_all", "RMS theta all [rad]"),
                           ("unicycle.rmse_y_front", "RMS y front part [m]"),
                           ("net.radio.loss_rate", "messages lost"), ("_erased", "attempts erased")):
             T.add("5 radio", f"{1e3 / fp:g} Hz, {kind}, {len(d)} runs", name, d[col].mean(), "", "")
-    L.append("")
     fps = sorted(rm["_fp"].unique())
     at = rm[rm["_fp"] == fps[0]]
-    nan = float("nan")
 
     def _mean(kind: str, col: str, fp: float = fps[0]) -> float:
         d = rm[(rm["_fp"] == fp) & (rm["_kind"] == kind)][col]
-        return float(d.mean()) if len(d) else nan
+        return float(d.mean()) if len(d) else float("nan")
 
     def _diff(kind: str) -> tuple[str, bool]:
         """Mean RMS theta of ``kind`` minus that without loss at the fastest rate, +- two standard errors, and
@@ -191,51 +192,32 @@ def radio_mc_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
         return mean_difference(q, at[at["_kind"] == kind]["unicycle.rmse_theta_all"],
                                at[at["_kind"] == "none"]["unicycle.rmse_theta_all"], f"rm_{short[kind]}")
 
-    be_text, be_sig = _diff("Bernoulli")
-    ge_text, ge_sig = _diff("Gilbert-Elliott bursts")
-    hz = q.g(1e3 / fps[0], "rm_fast_hz")
-    if be_sig and ge_sig:
-        verdict = "With these runs both kinds of loss move the mean heading error beyond two standard errors."
-    elif ge_sig:
-        verdict = ("With these runs bursts move the mean heading error beyond two standard errors; independent "
-                   "loss does not.")
-    elif be_sig:
-        verdict = ("With these runs independent loss moves the mean heading error beyond two standard errors; "
-                   "bursts do not.")
-    else:
-        verdict = ("With these runs neither independent loss nor bursts moves the mean heading error beyond two "
-                   "standard errors.")
-    L += [f"- Rate: from {q.g(1e3 / fps[0], 'rm_rate_hi_hz')} to {q.g(1e3 / fps[-1], 'rm_rate_lo_hz')} Hz without "
-          "loss the RMS y error after the turn goes from "
-          f"{_f(_mean('none', 'unicycle.rmse_y_front') * 1e3, 3, 'rm_y_hi')} "
-          f"to {_f(_mean('none', 'unicycle.rmse_y_front', fps[-1]) * 1e3, 3, 'rm_y_lo')} mm: fewer readings of a weak "
-          "sensor; theta is hardly observed by either rate.",
-          f"- Loss at {hz} Hz: the Bernoulli model erases {_pct(_mean('Bernoulli', '_erased'), 'rm_bern_erased_fast')} "
-          "of the attempts; the MAC sends each erased frame again, and in the end "
-          f"{_pct(_mean('Bernoulli', 'net.radio.loss_rate'), 'rm_bern_lost_fast')} of the messages are lost (without a "
-          f"loss model {_pct(_mean('none', 'net.radio.loss_rate'), 'rm_none_lost_fast')}, the radio's own failed "
-          "attempts), "
-          f"at {_f(_mean('Bernoulli', '_apm'), 3, 'rm_bern_apm_fast')} attempts per message (without "
-          f"{_f(_mean('none', '_apm'), 3, 'rm_none_apm_fast')}) and a mean message delay of "
-          f"{_f(_mean('Bernoulli', 'net.radio.mean_delay_s') * 1e3, 3, 'rm_bern_delay_fast')} ms (without "
-          f"{_f(_mean('none', 'net.radio.mean_delay_s') * 1e3, 3, 'rm_none_delay_fast')} ms), and "
-          f"{_pct(_mean('Bernoulli', '_late'), 'rm_bern_late_fast')} of the fused samples arrive after their sample's "
-          f"filter job (without loss {_pct(_mean('none', '_late'), 'rm_none_late_fast')}; they are fused at their "
-          "sample time). The theta error moves "
-          f"from {_f(_mean('none', 'unicycle.rmse_theta_all'), 3, 'rm_none_theta_fast')} to "
-          f"{_f(_mean('Bernoulli', 'unicycle.rmse_theta_all'), 3, 'rm_bern_theta_fast')} rad (difference {be_text}: "
-          f"{'beyond' if be_sig else 'within'} two standard errors). Bursts erase "
-          f"{_pct(_mean('Gilbert-Elliott bursts', '_erased'), 'rm_burst_erased_fast')} of the attempts and lose "
-          f"{_pct(_mean('Gilbert-Elliott bursts', 'net.radio.loss_rate'), 'rm_burst_lost_fast')} of the messages, "
-          "because the retries of a message sent in a burst fall in the same burst; they give "
-          f"{_f(_mean('Gilbert-Elliott bursts', 'unicycle.rmse_theta_all'), 3, 'rm_burst_theta_fast')} rad "
-          f"(difference {ge_text}: {'beyond' if ge_sig else 'within'} two standard errors) and theta coverage "
-          f"{_pct(_mean('Gilbert-Elliott bursts', 'unicycle.cover_theta_all'), 'rm_burst_cov_theta_fast')} (without "
-          f"loss {_pct(_mean('none', 'unicycle.cover_theta_all'), 'rm_none_cov_theta_fast')}). A lost wheel command "
-          "matters where the command changes (the start and the end of the turn): the drive keeps the old one, a "
-          "burst keeps it for several periods, and the filter, which knows the command it sent but not whether it "
-          "arrived, predicts with the new one. " + verdict, "", RADIO_MC_MARK[1], ""]
-    return L
+    (be_text, be_sig), (ge_text, ge_sig) = _diff("Bernoulli"), _diff("Gilbert-Elliott bursts")
+    b, ge_, no = "Bernoulli", "Gilbert-Elliott bursts", "none"
+    v.update(rows="\n".join(rows), hz=q.g(1e3 / fps[0], "rm_fast_hz"),
+             rate_hi=q.g(1e3 / fps[0], "rm_rate_hi_hz"), rate_lo=q.g(1e3 / fps[-1], "rm_rate_lo_hz"),
+             y_hi=_f(_mean(no, "unicycle.rmse_y_front") * 1e3, 3, "rm_y_hi"),
+             y_lo=_f(_mean(no, "unicycle.rmse_y_front", fps[-1]) * 1e3, 3, "rm_y_lo"),
+             bern_erased=_pct(_mean(b, "_erased"), "rm_bern_erased_fast"),
+             bern_lost=_pct(_mean(b, "net.radio.loss_rate"), "rm_bern_lost_fast"),
+             none_lost=_pct(_mean(no, "net.radio.loss_rate"), "rm_none_lost_fast"),
+             bern_apm=_f(_mean(b, "_apm"), 3, "rm_bern_apm_fast"), none_apm=_f(_mean(no, "_apm"), 3, "rm_none_apm_fast"),
+             bern_delay=_f(_mean(b, "net.radio.mean_delay_s") * 1e3, 3, "rm_bern_delay_fast"),
+             none_delay=_f(_mean(no, "net.radio.mean_delay_s") * 1e3, 3, "rm_none_delay_fast"),
+             bern_late=_pct(_mean(b, "_late"), "rm_bern_late_fast"), none_late=_pct(_mean(no, "_late"), "rm_none_late_fast"),
+             none_theta=_f(_mean(no, "unicycle.rmse_theta_all"), 3, "rm_none_theta_fast"),
+             bern_theta=_f(_mean(b, "unicycle.rmse_theta_all"), 3, "rm_bern_theta_fast"),
+             bern_diff=be_text, bern_sig="beyond" if be_sig else "within",
+             burst_erased=_pct(_mean(ge_, "_erased"), "rm_burst_erased_fast"),
+             burst_lost=_pct(_mean(ge_, "net.radio.loss_rate"), "rm_burst_lost_fast"),
+             burst_theta=_f(_mean(ge_, "unicycle.rmse_theta_all"), 3, "rm_burst_theta_fast"),
+             burst_diff=ge_text, burst_sig="beyond" if ge_sig else "within",
+             burst_cov=_pct(_mean(ge_, "unicycle.cover_theta_all"), "rm_burst_cov_theta_fast"),
+             none_cov=_pct(_mean(no, "unicycle.cover_theta_all"), "rm_none_cov_theta_fast"),
+             verdict=_text({(True, True): "rm_verdict_both", (False, True): "rm_verdict_bursts",
+                            (True, False): "rm_verdict_independent", (False, False): "rm_verdict_neither"}[
+                                (be_sig, ge_sig)]))
+    return _text("radio_mc", **v).split("\n") + [""]
 
 
 def _region(lines: list[str], marks: tuple[str, str], legacy: tuple[str, str]) -> tuple[int, int]:
@@ -290,7 +272,7 @@ def splice_radio_mc(out: Path, marked: list[str], quotes: Any, table: Any) -> No
 
 def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
     """The README lines of section 5 (and their ``table.csv`` rows)."""
-    _f, _pct = q.f, q.pct
+    _f, _pct, g_, i_ = q.f, q.pct, q.g, q.i
     q.section = "s5"
     L = ["## 5. What only a networked simulator shows", ""]
     L += radio_mc_section(q, T, F)
@@ -300,62 +282,47 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
         net = net.copy().assign(_fp=_ms(net["front_period"]))
         g = net.sort_values(["_fp", "loss"]).groupby(["_fp", "loss"], sort=True)
         se = [_tol(d, f"unicycle.cover_{s}_all") for _, d in g for s in ("x", "y", "theta")]
-        L += ["CAN bus: front IR rate x Bernoulli loss (`unicycle_net_sweep.yaml`; the side sensor stays at "
-              f"{q.g(1 / (4 * TS))} Hz; loss hits measurements and wheel commands). Monte-Carlo tolerance of a "
-              f"coverage with {q.i(g.size().min())} runs: +- {_pct(min(se))} to +- {_pct(max(se))}; differences "
-              "between points inside that are noise.", "",
-              "| front period | loss | runs | coverage x / y / theta | RMS y front part [mm] | sigma y end [mm] | "
-              "fused front |", "|---|---|---|---|---|---|---|"]
+        v = {"side_hz": g_(1 / (4 * TS)), "runs": i_(g.size().min()), "tol_lo": _pct(min(se)), "tol_hi": _pct(max(se))}
+        rows = []
         for (fp, lo), d in g:
-            L.append(f"| {q.g(fp)} ms | {q.g(lo)} | {q.i(len(d))} | {_pct(d['unicycle.cover_x_all'].mean())} / "
-                     f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} | "
-                     f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | {_f(d['unicycle.sd_y_end_front'].mean() * 1e3)} | "
-                     f"{_f(d['control.ekf.filter.fused_front'].mean())} |")
+            rows.append(f"| {g_(fp)} ms | {g_(lo)} | {i_(len(d))} | {_pct(d['unicycle.cover_x_all'].mean())} / "
+                        f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} | "
+                        f"{_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | {_f(d['unicycle.sd_y_end_front'].mean() * 1e3)} | "
+                        f"{_f(d['control.ekf.filter.fused_front'].mean())} |")
             T.add("5 CAN", f"front {fp:g} ms, loss {lo}", "coverage y", d["unicycle.cover_y_all"].mean(), "", "")
             T.add("5 CAN", f"front {fp:g} ms, loss {lo}", "RMS y front part [m]", d["unicycle.rmse_y_front"].mean(),
                   "", "")
-        L.append("")
+        L += _text("can_net", rows="\n".join(rows), **v).split("\n") + [""]
     bu = F.get("burst")
     if bu is not None and len(bu):
         bu = bu.copy().assign(_kind=loss_kind(bu["loss_model"]))
-        L += ["CAN bus, the same share of frames lost independently or in bursts (`unicycle_burst_sweep.yaml`):", "",
-              "| loss | runs | lost share | coverage x / y / theta | RMS y front part [mm] | RMS theta all [rad] |",
-              "|---|---|---|---|---|---|"]
+        rows = []
         for kind, d in bu.groupby("_kind"):
-            L.append(f"| {kind} | {q.i(len(d))} | {_pct(d['net.can.loss_rate'].mean())} | "
-                     f"{_pct(d['unicycle.cover_x_all'].mean())} / {_pct(d['unicycle.cover_y_all'].mean())} / "
-                     f"{_pct(d['unicycle.cover_theta_all'].mean())} | {_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | "
-                     f"{_f(d['unicycle.rmse_theta_all'].mean())} |")
+            rows.append(f"| {kind} | {i_(len(d))} | {_pct(d['net.can.loss_rate'].mean())} | "
+                        f"{_pct(d['unicycle.cover_x_all'].mean())} / {_pct(d['unicycle.cover_y_all'].mean())} / "
+                        f"{_pct(d['unicycle.cover_theta_all'].mean())} | {_f(d['unicycle.rmse_y_front'].mean() * 1e3)} | "
+                        f"{_f(d['unicycle.rmse_theta_all'].mean())} |")
             T.add("5 CAN", f"{kind}", "RMS theta all [rad]", d["unicycle.rmse_theta_all"].mean(), "", "")
         x = bu[bu["_kind"] == "Gilbert-Elliott bursts"]["unicycle.rmse_theta_all"]
         y = bu[bu["_kind"] == "Bernoulli"]["unicycle.rmse_theta_all"]
         text, sig = mean_difference(q, x, y)
-        L += ["", f"RMS theta, bursts minus Bernoulli: {text} ({'beyond' if sig else 'within'} two standard errors "
-              f"with {q.i(min(len(x), len(y)))} runs each).", ""]
-    zb = F["zigbee"]
-    L += ["One run of `unicycle_zigbee.yaml` (nodes a few decimetres apart): mean message delay "
-          f"{_f(zb['net.radio.mean_delay_s'] * 1e3)} ms (max {_f(zb['net.radio.max_delay_s'] * 1e3)} ms, CSMA/CA "
-          f"backoffs and {q.i(zb['net.radio.retransmissions'])} retransmissions); {q.i(zb['control.ekf.filter.late'])} "
-          f"of {q.i(zb['control.ekf.filter.fused_front'] + zb['control.ekf.filter.fused_side'])} fused samples "
-          f"arrived after their sample's filter job and were fused at their sample time; "
-          f"{q.i(zb['net.radio.dropped'])} frames lost.", ""]
+        L += _text("can_burst", rows="\n".join(rows), diff=text, sig="beyond" if sig else "within",
+                   runs=i_(min(len(x), len(y)))).split("\n") + [""]
+    zb, dm = F["zigbee"], F["delay_margin"]
+    L += _text("zigbee", mean_ms=_f(zb["net.radio.mean_delay_s"] * 1e3), max_ms=_f(zb["net.radio.max_delay_s"] * 1e3),
+               retries=i_(zb["net.radio.retransmissions"]), late=i_(zb["control.ekf.filter.late"]),
+               fused=i_(zb["control.ekf.filter.fused_front"] + zb["control.ekf.filter.fused_side"]),
+               lost=i_(zb["net.radio.dropped"]), margin_samples=i_(dm[0.03], "margin_samples"),
+               margin_ms=g_(dm[0.03] * TS * 1e3, "margin_ms"), v_fast=g_(0.03), slow_samples=i_(dm[0.015]),
+               v_slow=g_(0.015)).split("\n") + [""]
     T.add("5 radio", "802.15.4 radio, one run", "late samples fused at their sample time",
           zb["control.ekf.filter.late"], "", "")
     # ------------------------------------------------------------ command delay
-    dm = F["delay_margin"]
-    L += [f"Command delay. On the linear error model with u = -K e' and the true error fed back, the loop loses "
-          f"stability at a delay of {q.i(dm[0.03], 'margin_samples')} samples = "
-          f"{q.g(dm[0.03] * TS * 1e3, 'margin_ms')} ms (v_ref = {q.g(0.03)}; {q.i(dm[0.015])} samples at "
-          f"{q.g(0.015)}).", ""]
     rd = F.get("radio_delay")
     if rd is not None and len(rd):
         rd = rd.copy().assign(_ms=_ms(rd["delay"]))
-        L += ["On the radio (`unicycle_radio_delay.yaml`: the LQR law, the EKF node's pre_delay before the radio), "
-              "with the report's IR noise and with accurate sensors (the report's R read as cm^2, R / "
-              f"{q.g(1e4)}; the filter's R the same):", "",
-              "| sensors | delay | runs | RMS e1 [mm] | RMS e2 [mm] | RMS e3 [rad] | max e3 [rad] | runs with "
-              "max e3 > pi/2 | coverage y / theta |", "|---|---|---|---|---|---|---|---|---|"]
-        limits = {}
+        v = {"r_scale": g_(1e4)}
+        rows, limits = [], {}
         d_max = {sens: float(rd[rd["sensors"] == sens]["_ms"].max()) for sens in ("report", "accurate")}
         for sens in ("report", "accurate"):
             d0 = rd[rd["sensors"] == sens]
@@ -363,35 +330,27 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
                 continue
             limits[sens] = stability_limits(d0)
             for dv, d in d0.groupby("_ms", sort=True):
-                L.append(f"| {sens} | {q.g(dv)} ms | {q.i(len(d))} | {_f(d['unicycle.track_rms_e1'].mean() * 1e3)} | "
-                         f"{_f(d['unicycle.track_rms_e2'].mean() * 1e3)} | {_f(d['unicycle.track_rms_e3'].mean())} | "
-                         f"{_f(d['unicycle.track_max_e3'].mean())} | "
-                         f"{_pct(np.mean(lost_runs(d)))} | "
-                         f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} |")
+                rows.append(f"| {sens} | {g_(dv)} ms | {i_(len(d))} | {_f(d['unicycle.track_rms_e1'].mean() * 1e3)} | "
+                            f"{_f(d['unicycle.track_rms_e2'].mean() * 1e3)} | {_f(d['unicycle.track_rms_e3'].mean())} | "
+                            f"{_f(d['unicycle.track_max_e3'].mean())} | {_pct(np.mean(lost_runs(d)))} | "
+                            f"{_pct(d['unicycle.cover_y_all'].mean())} / {_pct(d['unicycle.cover_theta_all'].mean())} |")
                 T.add("5 delay radio", f"{sens} sensors, {dv:g} ms", "RMS e1 [m]", d["unicycle.track_rms_e1"].mean(),
                       "", "")
-        L.append("")
 
         def _lim(sens: str) -> str:
             lim = limits.get(sens)
             if lim is None:
                 return "not run"
-            top = q.g(d_max[sens])
-            deg = (f"reaches {q.g(GROWTH)}x its no-delay value from {q.g(lim['degrade_ms'], f'degrade_ms_{sens}')} ms"
+            top = g_(d_max[sens])
+            deg = (f"reaches {g_(GROWTH)}x its no-delay value from {g_(lim['degrade_ms'], f'degrade_ms_{sens}')} ms"
                    if not math.isnan(lim["degrade_ms"]) else
-                   f"stays below {q.g(GROWTH)}x its no-delay value up to {top} ms")
-            lost = (f"most runs lose the loop from {q.g(lim['lost_ms'], f'lost_ms_{sens}')} ms"
+                   f"stays below {g_(GROWTH)}x its no-delay value up to {top} ms")
+            lost = (f"most runs lose the loop from {g_(lim['lost_ms'], f'lost_ms_{sens}')} ms"
                     if not math.isnan(lim["lost_ms"]) else f"no delay up to {top} ms makes most runs lose the loop")
             return f"the mean RMS e1 {deg}, and {lost}"
 
-        L += [f"- Accurate sensors: {_lim('accurate')} (a run has lost the loop when its heading error passes a "
-              f"quarter turn; the linear margin above: {q.g(dm[0.03] * TS * 1e3)} ms). With accurate readings the "
-              "filter follows the measurements, so the delayed response comes back into the loop.",
-              f"- The report's sensors: {_lim('report')}. The filter predicts with each command at once, so the law's "
-              "loop closes through the filter's model without delay; the measurements, which would carry the "
-              "delayed response back, get a tiny Kalman gain with the report's Q and R. The delay shows up as "
-              "estimation error (the estimate runs ahead of the cart, the theta coverage falls) rather than as "
-              "instability.", ""]
+        v.update(rows="\n".join(rows), accurate=_lim("accurate"), margin=g_(dm[0.03] * TS * 1e3), report=_lim("report"))
+        L += _text("radio_delay", **v).split("\n") + [""]
         for sens, lim in limits.items():
             T.add("5 delay radio", f"{sens} sensors", "delay at which RMS e1 grows 3x [ms]", lim["degrade_ms"],
                   "", "linear margin: " + f"{dm[0.03] * TS * 1e3:g} ms")
@@ -400,36 +359,24 @@ def network_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
     dl = F.get("delay")
     if dl is not None and len(dl):
         dl = dl.copy().assign(_ms=_ms(dl["delay"])).sort_values("_ms")
-        L += ["On the CAN bus with the report's sensors (`unicycle_lqr_delay.yaml`):", "",
-              "| delay | runs | RMS e1 [mm] | RMS e2 [mm] | RMS e3 [rad] | max e3 [rad] | coverage y / theta |",
-              "|---|---|---|---|---|---|---|"]
+        rows = []
         for dv, d in dl.groupby("_ms", sort=True):
-            L.append(f"| {q.g(dv)} ms | {q.i(len(d))} | {_f(d['unicycle.track_rms_e1'].mean() * 1e3)} | "
-                     f"{_f(d['unicycle.track_rms_e2'].mean() * 1e3)} | {_f(d['unicycle.track_rms_e3'].mean())} | "
-                     f"{_f(d['unicycle.track_max_e3'].mean())} | {_pct(d['unicycle.cover_y_all'].mean())} / "
-                     f"{_pct(d['unicycle.cover_theta_all'].mean())} |")
+            rows.append(f"| {g_(dv)} ms | {i_(len(d))} | {_f(d['unicycle.track_rms_e1'].mean() * 1e3)} | "
+                        f"{_f(d['unicycle.track_rms_e2'].mean() * 1e3)} | {_f(d['unicycle.track_rms_e3'].mean())} | "
+                        f"{_f(d['unicycle.track_max_e3'].mean())} | {_pct(d['unicycle.cover_y_all'].mean())} / "
+                        f"{_pct(d['unicycle.cover_theta_all'].mean())} |")
             T.add("5 delay CAN", f"command delay {dv:g} ms", "RMS e3 [rad]", d["unicycle.track_rms_e3"].mean(), "", "")
-        L.append("")
+        L += _text("can_delay", rows="\n".join(rows)).split("\n") + [""]
     L += delay_aware_section(q, T, F)
-    hist = F.get("history")
-    L += ["Late samples are fused at their own sample time by re-running the filter from the stored prior of that "
-          f"sample (up to {q.i(hist, 'history')} samples back); a sample is never fused twice "
-          "(`tests/models/unicycle/test_unicycle_scenario.py` checks both, and that a sensor stream delivered late "
-          "by random amounts ends in the same estimate as an on-time one).", ""]
-    L += ["Not tried: a filter told which wheel commands were lost (an acknowledgement from the drive node), so that "
-          "it predicts with the command the cart got rather than the one it sent.", ""]
+    L += _text("late_samples", history=i_(F.get("history"), "history")).split("\n") + [""]
     sp = F.get("speed")
     if sp:
-        L += ["## Speed", "",
-              f"One netsim run of `unicycle_lqr.yaml` takes {_f(sp['ratio'], 2, 'speed_ratio')}x the time of a "
-              "plain numpy loop of the same EKF and LQR (best of "
-              f"{q.i(sp['repeats'])} each: {_f(sp['netsim_s'])} s against {_f(sp['numpy_s'])} s; "
-              "`tests/models/unicycle/test_unicycle_bench.py`, which writes `speed.json`). "
-              f"{q.i(sp['pool_runs'], 'pool_runs')} Monte-Carlo runs of `unicycle_lqr.yaml` on the local pool took "
-              f"{_f(sp['pool_wall_s'], 3, 'pool_wall_s')} s on {q.i(sp['pool_workers'])} processes of this shared "
-              f"machine: {_f(sp['pool_runs'] / sp['pool_wall_s'], 3, 'pool_runs_per_s')} runs/s"
-              + (f" (load average {_f(sp['load_average'], 2)} at the end)" if "load_average" in sp else "")
-              + ". Both figures depend on the load of the machine, shared with other jobs.", ""]
+        L += _text("speed", ratio=_f(sp["ratio"], 2, "speed_ratio"), repeats=i_(sp["repeats"]),
+                   netsim_s=_f(sp["netsim_s"]), numpy_s=_f(sp["numpy_s"]), pool_runs=i_(sp["pool_runs"], "pool_runs"),
+                   pool_wall_s=_f(sp["pool_wall_s"], 3, "pool_wall_s"), workers=i_(sp["pool_workers"]),
+                   rate=_f(sp["pool_runs"] / sp["pool_wall_s"], 3, "pool_runs_per_s"),
+                   load=(f" (load average {_f(sp['load_average'], 2)} at the end)" if "load_average" in sp else "")
+                   ).split("\n") + [""]
     return L
 
 
@@ -460,40 +407,32 @@ def delay_aware_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
     d = delay_aware_frame(F.get("delay_aware_can"), F.get("delay_aware_radio"))
     if not len(d):
         return []
-    _f, _pct = q.f, q.pct
+    _f, _pct, g_ = q.f, q.pct, q.g
     runs = {net: int(g.groupby(["sensors", "_ms", "filter"]).size().min()) for net, g in d.groupby("network")}
-    L = [DELAY_AWARE_MARK[0],
-         "Filter told the command delay (`unicycle_lqr_delay_aware.yaml`, `unicycle_radio_delay_aware.yaml`): "
-         "the `unicycle_ekf` task's `input_delay` is the pre_delay in whole periods, so the filter predicts each "
-         "period with the command the cart holds rather than the one just computed; the law is unchanged. Each "
-         "delay is run with the filter unaware of it and told it (runs per point: "
-         + ", ".join(f"{q.i(n, f'da_runs_{net}')} on {net}" for net, n in runs.items())
-         + "; the radio study above has more, CPU was scarce when this was added; seeds of their own):", "",
-         "| network | sensors | delay | filter | runs | RMS e1 [mm] | RMS e3 [rad] | max e3 [rad] | runs with max e3 > "
-         "pi/2 | coverage y / theta |", "|---|---|---|---|---|---|---|---|---|---|"]
+    v = {"runs": ", ".join(f"{q.i(n, f'da_runs_{net}')} on {net}" for net, n in runs.items())}
+    rows, limits = [], []
     for (net, sens, ms, filt), g in d.groupby(["network", "sensors", "_ms", "filter"], sort=True):
-        L.append(f"| {net} | {sens} | {q.g(ms)} ms | {filt} | {q.i(len(g))} | "
-                 f"{_f(g['unicycle.track_rms_e1'].mean() * 1e3)} | {_f(g['unicycle.track_rms_e3'].mean())} | "
-                 f"{_f(g['unicycle.track_max_e3'].mean())} | {_pct(np.mean(lost_runs(g)))} | "
-                 f"{_pct(g['unicycle.cover_y_all'].mean())} / {_pct(g['unicycle.cover_theta_all'].mean())} |")
+        rows.append(f"| {net} | {sens} | {g_(ms)} ms | {filt} | {q.i(len(g))} | "
+                    f"{_f(g['unicycle.track_rms_e1'].mean() * 1e3)} | {_f(g['unicycle.track_rms_e3'].mean())} | "
+                    f"{_f(g['unicycle.track_max_e3'].mean())} | {_pct(np.mean(lost_runs(g)))} | "
+                    f"{_pct(g['unicycle.cover_y_all'].mean())} / {_pct(g['unicycle.cover_theta_all'].mean())} |")
         T.add("5 delay-aware", f"{net}, {sens} sensors, {ms:g} ms, {filt}", "RMS e1 [m]",
               g["unicycle.track_rms_e1"].mean(), "", "")
-    L.append("")
     for (net, sens), g in d.groupby(["network", "sensors"], sort=True):
-        top = q.g(float(g["_ms"].max()))
+        top = g_(float(g["_ms"].max()))
         said = []
         for filt in ("unaware", "told the delay"):
             lim = stability_limits(g[g["filter"] == filt])
             key = f"da_{net}_{sens}_{'told' if filt != 'unaware' else 'unaware'}"
-            deg = (f"RMS e1 reaches {q.g(GROWTH)}x its no-delay value from {q.g(lim['degrade_ms'], key + '_degrade')} ms"
-                   if not math.isnan(lim["degrade_ms"]) else f"RMS e1 stays below {q.g(GROWTH)}x up to {top} ms")
-            lost = (f"most runs lose the loop from {q.g(lim['lost_ms'], key + '_lost')} ms"
+            deg = (f"RMS e1 reaches {g_(GROWTH)}x its no-delay value from {g_(lim['degrade_ms'], key + '_degrade')} ms"
+                   if not math.isnan(lim["degrade_ms"]) else f"RMS e1 stays below {g_(GROWTH)}x up to {top} ms")
+            lost = (f"most runs lose the loop from {g_(lim['lost_ms'], key + '_lost')} ms"
                     if not math.isnan(lim["lost_ms"]) else f"no delay up to {top} ms makes most runs lose the loop")
             said.append(f"{filt}: {deg}, {lost}")
             for what, col in (("delay at which RMS e1 grows 3x [ms]", "degrade_ms"),
                               ("delay at which most runs lose the loop [ms]", "lost_ms")):
                 T.add("5 delay-aware", f"{net}, {sens} sensors, {filt}", what, lim[col], "", "")
-        L.append(f"- {net}, {sens} sensors: " + "; ".join(said) + ".")
+        limits.append(f"- {net}, {sens} sensors: " + "; ".join(said) + ".")
     # where the loop with the told filter still holds: is its estimate better (theta band coverage)?
     better = total = 0
     for (net, sens), g in d.groupby(["network", "sensors"], sort=True):
@@ -504,16 +443,8 @@ def delay_aware_section(q: Quotes, T: Any, F: dict[str, Any]) -> list[str]:
                 total += 1
                 better += int(cov["told the delay"] >= cov["unaware"])
     dm = F.get("delay_margin")
-    margin = (f" ({q.g(dm[0.03] * TS * 1e3, 'da_margin_ms')} ms on the linear error model with the true error, "
-              "above)") if dm else ""
-    L += ["", "Told the delay, the filter's estimate follows the cart instead of running ahead of it: at the "
-          f"delays where the loop with the told filter still holds, its theta band coverage is at or above the "
-          f"unaware filter's at {q.i(better, 'da_cover_better')} of {q.i(total, 'da_cover_points')} points. But "
-          "the loop then gets worse, not better: the law is unchanged (u = -K e' on the estimate), and with a "
-          "correct estimate it feeds back the cart's delayed response, so it meets the delay margin of the law "
-          f"itself{margin}. The unaware filter hides the delay from the law: it predicts with each command at once, "
-          "the loop closes through the filter's model without delay (a predictor loop), and with the report's "
-          "tiny Kalman gain on the readings the delayed response hardly comes back into it. Knowing the delay "
-          "pays only with a law that predicts across it (e.g. the law on the model augmented with the commands "
-          "on their way); that is not tried here.", "", DELAY_AWARE_MARK[1], ""]
-    return L
+    v.update(rows="\n".join(rows), limits="\n".join(limits),
+             margin=(f" ({g_(dm[0.03] * TS * 1e3, 'da_margin_ms')} ms on the linear error model with the true error, "
+                     "above)") if dm else "")
+    v.update(better=q.i(better, "da_cover_better"), points=q.i(total, "da_cover_points"))
+    return _text("delay_aware", **v).split("\n") + [""]
