@@ -434,5 +434,6 @@ class RunCache:
             return
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(f"{key}.{os.getpid()}.tmp.npz")
-        np.savez(tmp, **{k: np.asarray(v) for k, v in arrays.items()})
+        named: dict[str, Any] = {k: np.asarray(v) for k, v in arrays.items()}  # Any: the stubs read a key as allow_pickle
+        np.savez(tmp, **named)
         tmp.replace(path.with_suffix(".npz"))

@@ -29,11 +29,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from netsim.casestudy import fmt
+from netsim.casestudy import fill, fmt, load_templates
 from netsim.lazy_import import lazy_module
 
 if TYPE_CHECKING:
@@ -164,6 +165,14 @@ def headline(df: pd.DataFrame, wcs: Sequence[int] = (40, 80)) -> dict[str, float
     return out
 
 
+#: The verdicts' words (``models/cart/claims.md``): ``<claim>.claim``, ``.numbers``, ``.why`` and their parts.
+TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
+
+
+def _t(name: str, **values: str) -> str:
+    return fill(TEMPLATES[name], values, f"cart/claims.md [[{name}]]")
+
+
 def _claim_effort(f2: pd.DataFrame) -> dict[str, str]:
     def s(c: str, w: int) -> float:
         return _mean(f2, "sigma_u_pooled", controller=c, wc=w)
@@ -172,39 +181,33 @@ def _claim_effort(f2: pd.DataFrame) -> dict[str, str]:
     for w in (80, 40):
         lti, ev = min(s(c, w) for c in LTI), max(s(c, w) for c in EVENT)
         ok &= lti > 3 * ev
-        parts.append(f"wc={w}: best LTI {fmt(lti)} vs worst event {fmt(ev)} (x{fmt(lti / ev, 2)})")
-    parts.append(f"Full Event vs Pure PI at 80: {fmt(s('full_event', 80))} vs {fmt(s('pure_pi', 80))}"
-                 f" (x{fmt(s('pure_pi', 80) / s('full_event', 80), 2)})")
-    return dict(claim="Event-based sigma_u far below LTI at high wc (criterion: best LTI > 3 x worst event at wc = 40 and 80)",
-                verdict="reproduced" if ok else "not reproduced", numbers="; ".join(parts), why="")
+        parts.append(_t("effort.part", w=str(w), lti=fmt(lti), ev=fmt(ev), ratio=fmt(lti / ev, 2)))
+    parts.append(_t("effort.full", full=fmt(s("full_event", 80)), pi=fmt(s("pure_pi", 80)),
+                    ratio=fmt(s("pure_pi", 80) / s("full_event", 80), 2)))
+    return dict(claim=_t("effort.claim"), verdict="reproduced" if ok else "not reproduced", numbers="; ".join(parts),
+                why="")
 
 
 def _claim_break(f2: pd.DataFrame) -> dict[str, str]:
     wcs = sorted(int(w) for w in f2.wc.unique())
     lti = [_mean(f2, "sigma_u_pooled", controller="pure_pi", wc=w) for w in wcs]
-    per = {}
-    for c in EVENT:
-        per[c] = break_point(wcs, lti, [_mean(f2, "sigma_u_pooled", controller=c, wc=w) for w in wcs])
+    per = {c: break_point(wcs, lti, [_mean(f2, "sigma_u_pooled", controller=c, wc=w) for w in wcs]) for c in EVENT}
     lo, hi = per["basic_event"]
     ok = lo == 5 and hi == 10
     ept = {w: _mean(f2, "events_per_tfilter", controller="pure_pi", wc=w) for w in wcs}
     rate = PAPER_VREF / PAPER_STEP
     at = {w: rate / (PAPER_R * w) for w in (5, 10, 80)}
-    numbers = (f"Basic Event sigma_u < Pure PI {describe_break(lo, hi)}; "
-               + "; ".join(f"{c}: {describe_break(*per[c])}" for c in EVENT[1:])
-               + "; sigma_u Pure PI / Basic Event: "
-               + ", ".join(f"wc={w}: {fmt(a)} / {fmt(_mean(f2, 'sigma_u_pooled', controller='basic_event', wc=w))}"
-                           for w, a in zip(wcs, lti))
-               + "; events/Tfilter of the Pure PI: " + ", ".join(f"wc={w}: {fmt(ept[w])}" for w in wcs))
-    why = (f"With the paper's own numbers ({fmt(PAPER_VREF)} m/s, {fmt(PAPER_STEP * 1e3, 2)} mm, Tfilter = "
-           f"1/({fmt(PAPER_R)} wc)) there are {fmt(rate)} events/s, i.e. {fmt(at[5])} events per Tfilter at "
-           f"wc = 5 and {fmt(at[10])} at 10, not the {fmt(PAPER_EVENTS_AT_5)} the paper states; one event per "
-           f"Tfilter is only reached near wc = 80 ({fmt(at[80])}). The break point in wc can agree while the "
-           "'one event per Tfilter' reading cannot, with these parameters.")
+    numbers = _t("break.numbers", basic=describe_break(lo, hi),
+                 others="; ".join(f"{c}: {describe_break(*per[c])}" for c in EVENT[1:]),
+                 sigmas=", ".join(f"wc={w}: {fmt(a)} / {fmt(_mean(f2, 'sigma_u_pooled', controller='basic_event', wc=w))}"
+                                  for w, a in zip(wcs, lti)),
+                 events=", ".join(f"wc={w}: {fmt(ept[w])}" for w in wcs))
+    why = _t("break.why", vref=fmt(PAPER_VREF), step=fmt(PAPER_STEP * 1e3, 2), r=fmt(PAPER_R), rate=fmt(rate),
+             at5=fmt(at[5]), at10=fmt(at[10]), paper5=fmt(PAPER_EVENTS_AT_5), at80=fmt(at[80]))
     if not ok:
-        why = f"The break lies {describe_break(lo, hi)}, not between 5 and 10. " + why
-    return dict(claim="Break point (event-based sigma_u < LTI) near one event per Tfilter, between wc = 5 and 10",
-                verdict="partly reproduced" if ok else "not reproduced", numbers=numbers, why=why)
+        why = _t("break.elsewhere", where=describe_break(lo, hi)) + " " + why
+    return dict(claim=_t("break.claim"), verdict="partly reproduced" if ok else "not reproduced", numbers=numbers,
+                why=why)
 
 
 def _claim_instability(f2: pd.DataFrame, inst: pd.DataFrame | None = None) -> dict[str, str]:
@@ -226,29 +229,23 @@ def _claim_instability(f2: pd.DataFrame, inst: pd.DataFrame | None = None) -> di
     others_ratio = pd.concat([ratio80[full], low["v_rms_stop"] / low["vref"].abs()])
     order = [c for c in ("basic_event", "position_prediction", "full_event", "pure_pi", "observer_pi")
              if (runs80.controller == c).any()]
-    counts = ", ".join(f"{c} {int(osc80[runs80.controller == c].sum())}/{int((runs80.controller == c).sum())}"
-                       for c in order)
     seeds = sorted(int(x) for x in runs80.seed.unique())
-    numbers = (f"oscillating runs at wc=80 (seeds {seeds[0]}-{seeds[-1]}): {counts}; "
-               + "; ".join(f"{c} at wc=80: {fmt(100 * frac[c], 3)} % of {int(m.sum())} runs oscillate, reached 1 m "
-                           f"in {fmt(100 * float(runs80.loc[m, 'reached'].mean()), 3)} %, "
-                           f"Ev(80) {fmt(_mean(runs80, 'Ev_jmap', controller=c))} over these runs vs "
-                           f"Ev(40) {fmt(_mean(f2, 'Ev_jmap', controller=c, wc=40))}" for c, m in simp.items())
-               + f"; Full Event at 80 and all at wc <= 40: {fmt(100 * n_osc_others / max(n_others, 1), 3)} % of "
-                 f"{n_others} runs oscillate; "
-                 f"stop-phase RMS v / vref: smallest oscillating {fmt(min_osc)}, largest other "
-                 f"{fmt(float(others_ratio.max()))}, LTI at wc=80 (mean) "
-                 + ", ".join(f"{c} {fmt(float(ratio80[runs80.controller == c].mean()))}" for c in LTI)
-                 + f" (threshold {fmt(OSC_THRESHOLD)})")
-    why = ("Criterion: RMS true velocity over 1.5-2.0 s after the cart reaches 1 m (reference stepped to 0) "
-           f"above {fmt(100 * OSC_THRESHOLD)} % of vref (threshold set after seeing the runs; see the margin "
-           "in the numbers). Over the 0.3-1.0 m window every run tracks (the Ev numbers): the instability shows "
-           "once the reference is zero, as a sustained oscillation about the end position at the high gain "
-           "K = 80 /s. Whether a run oscillates depends on the friction realization (the seed); 'reproduced' "
-           "needs more than half of each simplified estimator's runs to oscillate and none of the others.")
+    numbers = _t(
+        "instability.numbers", first=str(seeds[0]), last=str(seeds[-1]),
+        counts=", ".join(f"{c} {int(osc80[runs80.controller == c].sum())}/{int((runs80.controller == c).sum())}"
+                         for c in order),
+        per_controller="; ".join(_t("instability.controller", c=c, pct=fmt(100 * frac[c], 3), n=str(int(m.sum())),
+                                    reached=fmt(100 * float(runs80.loc[m, "reached"].mean()), 3),
+                                    ev80=fmt(_mean(runs80, "Ev_jmap", controller=c)),
+                                    ev40=fmt(_mean(f2, "Ev_jmap", controller=c, wc=40))) for c, m in simp.items()),
+        others_pct=fmt(100 * n_osc_others / max(n_others, 1), 3), n_others=str(n_others), min_osc=fmt(min_osc),
+        max_other=fmt(float(others_ratio.max())),
+        lti=", ".join(f"{c} {fmt(float(ratio80[runs80.controller == c].mean()))}" for c in LTI),
+        threshold=fmt(OSC_THRESHOLD))
+    why = _t("instability.why", threshold_pct=fmt(100 * OSC_THRESHOLD))
     if not observed:
-        why = "Some runs ended before the stop-phase window; " + why
-    return dict(claim="Basic Event and Position Prediction become unstable at wc = 80",
+        why = _t("instability.unobserved") + " " + why
+    return dict(claim=_t("instability.claim"),
                 verdict="reproduced" if ok else ("partly reproduced" if any(f > 0 for f in frac.values())
                                                  else "not reproduced"),
                 numbers=numbers, why=why)
@@ -263,80 +260,53 @@ def ev_ranking(f2: pd.DataFrame, col: str, wc: int, controllers: Sequence[str]) 
 def _claim_tracking(f2: pd.DataFrame) -> dict[str, str]:
     ctrls = sorted(f2.controller.unique())
     parts, verdict_by = [], {}
+
+    def ev(col: str, c: str, w: int) -> str:
+        return fmt(_mean(f2, col, controller=c, wc=w))
+
     for w in (40, 80):
         best = {col: min(ctrls, key=lambda c: _mean(f2, col, controller=c, wc=w))
                 for col in ("Ev_jmap", "Ev", "Ev_jmap0")}
         verdict_by[w] = best
-        parts.append(f"wc={w}: best by JMAP Ev {best['Ev_jmap']} "
-                     f"({fmt(_mean(f2, 'Ev_jmap', controller=best['Ev_jmap'], wc=w))}), Full Event "
-                     f"{fmt(_mean(f2, 'Ev_jmap', controller='full_event', wc=w))}, Pure PI "
-                     f"{fmt(_mean(f2, 'Ev_jmap', controller='pure_pi', wc=w))}; best by true Ev {best['Ev']} "
-                     f"({fmt(_mean(f2, 'Ev', controller=best['Ev'], wc=w))}), Full Event "
-                     f"{fmt(_mean(f2, 'Ev', controller='full_event', wc=w))}; best by JMAP Ev without "
-                     f"relaxation {best['Ev_jmap0']}")
+        parts.append(_t("tracking.part", w=str(w), best_jmap=best["Ev_jmap"],
+                        best_jmap_ev=ev("Ev_jmap", best["Ev_jmap"], w), full_jmap=ev("Ev_jmap", "full_event", w),
+                        pi_jmap=ev("Ev_jmap", "pure_pi", w), best_true=best["Ev"], best_true_ev=ev("Ev", best["Ev"], w),
+                        full_true=ev("Ev", "full_event", w), best_jmap0=best["Ev_jmap0"]))
     wins = [verdict_by[w]["Ev_jmap"] == "full_event" for w in (40, 80)]
     wins_true = [verdict_by[w]["Ev"] == "full_event" for w in (40, 80)]
     verdict = "reproduced" if all(wins) else ("partly reproduced" if any(wins) else "not reproduced")
     best_true = ", ".join(f"{verdict_by[w]['Ev']} at wc = {w}" for w in (40, 80))
-    if wins == wins_true:
-        change = f"the true-velocity Ev gives the same verdict (best: {best_true})."
-    else:
-        change = (f"the true-velocity Ev (which an experiment cannot measure) gives a different one (best: "
-                  f"{best_true}).")
+    change = _t("tracking.same" if wins == wins_true else "tracking.different", best=best_true)
     stable = [c for c in LTI + EVENT if c not in PAPER_UNSTABLE_80 and c in ctrls]
     rank_true = ev_ranking(f2, "Ev", 80, stable)
-    rank_jmap = ev_ranking(f2, "Ev_jmap", 80, stable)
-    first = rank_true[0][0]
-    ranking = (f"Among the controllers the paper leaves stable at wc = 80 ({', '.join(stable)}), the true Ev "
-               f"ranks {first} first: " + ", ".join(f"{c} {fmt(v)}" for c, v in rank_true)
-               + "; the JMAP Ev ranks " + ", ".join(f"{c} {fmt(v)}" for c, v in rank_jmap) + ".")
+    ranking = _t("tracking.ranking", stable=", ".join(stable), first=rank_true[0][0],
+                 true=", ".join(f"{c} {fmt(v)}" for c, v in rank_true),
+                 jmap=", ".join(f"{c} {fmt(v)}" for c, v in ev_ranking(f2, "Ev_jmap", 80, stable)))
     pj, pt = _mean(f2, "Ev_jmap", controller="pure_pi", wc=80), _mean(f2, "Ev", controller="pure_pi", wc=80)
-    oj, ot = (_mean(f2, "Ev_jmap", controller="observer_pi", wc=80),
-              _mean(f2, "Ev", controller="observer_pi", wc=80))
-    if pj < pt:
-        smooth = (f"The JMAP reconstruction smooths the chattering LTI loop: at wc = 80 the Pure PI's JMAP Ev is "
-                  f"{fmt(pj)} against a true {fmt(pt)} (the Observer PI's {fmt(oj)} against {fmt(ot)}), so by "
-                  "the paper's measure the LTI loops look better than they track.")
-    else:
-        smooth = (f"At wc = 80 the Pure PI's JMAP Ev is {fmt(pj)} against a true {fmt(pt)}: the reconstruction "
-                  "does not smooth it.")
-    return dict(claim="Full Event controller has the best tracking (lowest Ev) at high bandwidth",
-                verdict=verdict, numbers="; ".join(parts),
-                why="Verdict by the paper's measure (JMAP Ev with the one-sample relaxation); " + change + " "
-                    + ranking + " " + smooth)
+    smooth = _t("tracking.smooths" if pj < pt else "tracking.no_smoothing", pj=fmt(pj), pt=fmt(pt),
+                oj=ev("Ev_jmap", "observer_pi", 80), ot=ev("Ev", "observer_pi", 80))
+    return dict(claim=_t("tracking.claim"), verdict=verdict, numbers="; ".join(parts),
+                why=_t("tracking.why", change=change, ranking=ranking, smooth=smooth))
 
 
 def _claims_quant(fq: pd.DataFrame) -> list[dict[str, str]]:
     def sq(c: str, q: int, col: str = "sigma_u_pooled") -> float:
         return _mean(fq, col, controller=c, q=q)
 
-    out = []
     r_pi, r_ob = sq("pure_pi", 6) / sq("pure_pi", 0), sq("observer_pi", 6) / sq("observer_pi", 0)
-    out.append(dict(
-        claim="LTI sigma_u decreases only gradually with finer quantization, the Observer PI more gently",
-        verdict="reproduced" if r_ob < r_pi else "not reproduced",
-        numbers=f"sigma_u(q=6)/sigma_u(q=0): Pure PI {fmt(r_pi)} ({fmt(sq('pure_pi', 0))} -> "
-                f"{fmt(sq('pure_pi', 6))}), Observer PI {fmt(r_ob)} ({fmt(sq('observer_pi', 0))} -> "
-                f"{fmt(sq('observer_pi', 6))})",
-        why="" if r_ob < r_pi else "With Ti' = Ti/4 (floored at 3/80 s) the Observer PI has a higher "
-            "integral gain than the Pure PI, and in our model it reacts to each quantization step at least "
-            "as strongly; the paper may have used the Ti/2, 2 Tfilter variant for this experiment."))
+    out = [dict(claim=_t("quant_lti.claim"), verdict="reproduced" if r_ob < r_pi else "not reproduced",
+                numbers=_t("quant_lti.numbers", r_pi=fmt(r_pi), pi0=fmt(sq("pure_pi", 0)), pi6=fmt(sq("pure_pi", 6)),
+                           r_ob=fmt(r_ob), ob0=fmt(sq("observer_pi", 0)), ob6=fmt(sq("observer_pi", 6))),
+                why="" if r_ob < r_pi else _t("quant_lti.why"))]
     qs = sorted(int(q) for q in fq.q.unique())
     am = {c: min(qs, key=lambda qq: sq(c, qq)) for c in ("position_prediction", "full_event")}
     ok6 = am["full_event"] in (4, 5, 6) and am["position_prediction"] in (3, 4, 5)
     evs = {qq: sq("full_event", qq, "Ev_jmap") for qq in qs}
-    ev5 = evs.get(5, math.nan) / min(evs.values())
-    out.append(dict(
-        claim="Full Event has minimum sigma_u at q = 5 (Position Prediction at q = 4); tracking nearly best at q = 5",
-        verdict="reproduced" if ok6 else "not reproduced",
-        numbers=f"argmin_q sigma_u: Full Event q={am['full_event']}, Position Prediction "
-                f"q={am['position_prediction']}; Full Event sigma_u by q: "
-                + ", ".join(fmt(sq("full_event", qq)) for qq in qs)
-                + f"; JMAP Ev(q=5)/min over q = {fmt(ev5)}",
-        why="" if ok6 else "At fine quantization the events come every control period and the dt >= "
-            "Tfilter limit turns the estimator into the LTI first-order filter; whether sigma_u then rises "
-            "(the paper's 'performs best with some extra quantization') depends on how much timing noise "
-            "the edge stamps carry, which is only the 10 us grid here."))
+    out.append(dict(claim=_t("quant_min.claim"), verdict="reproduced" if ok6 else "not reproduced",
+                    numbers=_t("quant_min.numbers", full=str(am["full_event"]), pp=str(am["position_prediction"]),
+                               by_q=", ".join(fmt(sq("full_event", qq)) for qq in qs),
+                               ev5=fmt(evs.get(5, math.nan) / min(evs.values()))),
+                    why="" if ok6 else _t("quant_min.why")))
     return out
 
 
