@@ -14,9 +14,7 @@ Every number in the README's prose is a placeholder of :data:`TEXT` filled from 
 templates themselves hold no numbers other than labels (equation, case, figure and section numbers),
 which ``tests/models/test_hdd_report.py`` checks, together with the values against fresh runs.
 
-Why this module is long: it is the whole reproduction report of one case study, end to end: the
-variants it runs, the numbers it quotes (each computed from the runs), the tables, the README text and the
-figures, kept in one place so that every quoted number can be traced to the run it comes from.
+The README's words and layout are data, in ``models/hdd_report.md`` (:data:`TEMPLATES`).
 """
 
 from __future__ import annotations

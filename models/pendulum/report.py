@@ -10,7 +10,7 @@ processes, and writes ``reports/pendulum/``:
   motion), ``delay.csv`` (delay sweep against the predicted margin), ``loss.csv``, ``mpc_timing.csv``,
   ``quantised.csv``, ``runs.csv`` (every run), ``quoted.csv`` (every number the prose quotes);
 * ``README.md`` -- each claim of the slides, what we got and why it differs. Every number in its prose is a
-  ``{placeholder}`` of :data:`TEXT` filled from ``quoted.csv`` (``tests/models/test_pendulum_report.py``).
+  ``{placeholder}`` of :data:`TEXT` (``models/pendulum/report.md``) filled from ``quoted.csv`` (``tests/models/test_pendulum_report.py``).
 
 Definitions (over the control samples ``t_k = k Ts``; true angles from the plant's record grid):
 
@@ -23,9 +23,8 @@ Definitions (over the control samples ``t_k = k Ts``; true angles from the plant
 * ``theta_dot_noise``, ``alpha_dot_noise``: std of the velocity estimates in the hold-still run of the
   estimator (the same for both controllers: the estimator alone makes it).
 
-Why this module is long: it holds every case of the study, the tables built from them and the prose templates
-with the function that quotes each of their numbers; the templates and the quoting are kept next to each other
-so that a placeholder and the value it names are edited together.
+The README's words and layout are data, in ``models/pendulum/report.md`` (:data:`TEMPLATES`); :func:`quote`
+computes every value a placeholder names.
 """
 
 from __future__ import annotations

@@ -8,9 +8,7 @@ report's sensors), ``radio_delay`` (802.15.4: command delay, the report's and ac
 command delays with the filter unaware of them and told them, ``input_delay``) feed :func:`delay_aware_section`.
 Every number goes through the :class:`~netsim.models.unicycle.quoting.Quotes`.
 
-Why this module is long: it is one README section of six studies, each a table and the sentences that quote
-it, with the shared run counting (:func:`lost_runs`, :func:`stability_limits`) and the radio study's splice; a
-split would separate each study's text from the helpers every study uses.
+The section's words are data, in ``models/unicycle/readme_net.md`` (:data:`TEMPLATES`).
 """
 
 from __future__ import annotations
