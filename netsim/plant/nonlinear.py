@@ -170,6 +170,8 @@ class NonlinearPlant(Plant):
         self.method = "RK45" if solver is None else str(solver)
         self.rtol, self.atol = rtol, atol
         self.max_step = math.inf if max_step is None else float(max_step)
+        if not self.max_step > 0:
+            raise ConfigError(f"plant {self.name}: solve_ivp max_step must be positive, got {max_step}")
         self._rk_segments = RkSegments.make(self.method, self.n_states, rtol, atol, self.max_step)
 
     def _check_output(self, x: np.ndarray) -> None:

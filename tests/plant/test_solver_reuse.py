@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from netsim.errors import SimulationError
+from netsim.errors import ConfigError, SimulationError
 from netsim.models.pendulum.model import PendulumParams, dynamics
 from netsim.plant import NonlinearPlant
 from netsim.plant.integrator import RkSegments
@@ -92,3 +92,9 @@ def test_rate_noise_and_failures_take_the_same_path_as_solve_ivp():
             plant.advance_to(1 * S)
         messages.append(str(info.value))
     assert messages[0] == messages[1]
+
+
+def test_a_non_positive_max_step_is_refused_when_the_integrator_is_chosen():
+    # scipy's own check (ValueError) now runs when the re-armed solver is built: the plant says it first
+    with pytest.raises(ConfigError, match="max_step must be positive"):
+        NonlinearPlant(lambda t, x, u, p: -x, lambda t, x, u, p: x, 1, 1, 1, max_step=0.0)
