@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
-from netsim.lazy_import import lazy_module
+from netsim.lazy_import import lazy_exports, lazy_module
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -61,12 +61,13 @@ from netsim.results.files import (
     schedule_intervals,
     write_csv,
 )
-from netsim.results.folder import FolderRefused, RunFolder, SweepFolder, read_summary
 from netsim.results.summary import key_metrics
 
 if TYPE_CHECKING:
     from control import TimeResponseData
     from matplotlib.figure import Figure
+
+    from netsim.results.folder import FolderRefused, RunFolder, SweepFolder, read_summary
 from netsim.results.tables import (
     JOB_COLUMNS,
     JOB_SUMMARY_COLUMNS,
@@ -104,6 +105,11 @@ __all__ = [
     "FolderRefused",
     "read_summary",
 ]
+
+
+#: The readers of run and sweep folders, imported at first use: a run only writes its folder (issue 29, start-up).
+__getattr__, __dir__ = lazy_exports(__name__, {name: "netsim.results.folder" for name in
+                                               ("FolderRefused", "RunFolder", "SweepFolder", "read_summary")})
 
 
 def _json_default(obj: Any) -> Any:

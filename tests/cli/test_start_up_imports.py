@@ -49,6 +49,9 @@ def test_netsim_run_of_an_lti_scenario_imports_no_pandas_and_no_design_library(t
     code, modules = _imported("run", "scenarios/dc_servo_ideal.yaml", "--out", str(tmp_path / "run"))
     assert code == 0
     assert _heavy(modules) == []
+    # nor the design module of state feedback, the network classes, or the readers of run folders
+    assert _heavy(modules, ("netsim.programs.state_feedback", "netsim.programs.feedback_design",
+                            "netsim.control.part_specs", "netsim.network.pipeline", "netsim.results.folder")) == []
     # the run folder is complete all the same
     written = sorted(p.name for p in (tmp_path / "run").iterdir())
     assert {"signals.csv", "jobs.csv", "metrics.csv", "meta.json"} <= set(written)
@@ -59,4 +62,4 @@ def test_netsim_run_of_an_lti_scenario_imports_no_pandas_and_no_design_library(t
 def test_netsim_validate_imports_no_pandas_and_no_scipy(scenario):
     code, modules = _imported("validate", scenario)
     assert code == 0
-    assert _heavy(modules, HEAVY + ("scipy",)) == []
+    assert _heavy(modules, HEAVY + ("scipy", "netsim.programs.state_feedback", "netsim.control.part_specs")) == []
