@@ -70,7 +70,6 @@ class Interpreter:
     kill_job: Callable[[Job], None]  # Kernel
     _on_sleep_done: Callable[[Any], None]  # Kernel
     _trace: Callable[[Any, "str | None", int], None]  # Tracing
-    set_speed: Callable[[float], None]  # Kernel
 
     #: ``_OPS[op]`` is the method answering operation ``op`` (filled below the class; EXECUTE is inline).
     _OPS: tuple[Callable[..., Any], ...] = ()
@@ -260,6 +259,18 @@ class Interpreter:
     def _op_set_speed(self, job: Job, req: Request, now: int) -> Any:
         self.set_speed(req.a)
         return None
+
+    def set_speed(self, speed: float) -> None:
+        """Set the CPU speed (TrueTime's ``ttSetCPUScaling``; :mod:`netsim.kernel.speed`). A kernel without speed
+        scaling refuses it: :meth:`netsim.kernel.multicore.MulticoreDispatcher.set_speed` is the real one.
+
+        Raises
+        ------
+        SimulationError
+            Always here: the node has no speed scaling (give ``nodes.<n>.speed``, or ``Kernel(..., speed=1.0)``).
+        """
+        raise SimulationError(f"node '{self.name}': set_speed({speed!r}) on a node without speed scaling; give "
+                              f"the node an initial speed (nodes.{self.name}.speed: 1, or Kernel(..., speed=1.0))")
 
     # ================================================================= helpers
     def _check_generator(self, job: Job, gen: Any) -> None:

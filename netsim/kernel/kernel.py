@@ -66,6 +66,7 @@ from netsim.kernel.interpreter import Interpreter
 from netsim.kernel.job import Job, JobContext
 from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.monitor import monitor_killed
+from netsim.kernel.multicore import MulticoreDispatcher
 from netsim.kernel.node_sync import NodeSync
 from netsim.kernel.policies import Policy, resolve_policy
 from netsim.kernel.records import JobRecord, deadline_verdict
@@ -124,12 +125,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
     """
 
     def __new__(cls, *args: Any, cores: int = 1, speed: float | None = None, **kwargs: Any) -> "Kernel":
-        """A :class:`~netsim.kernel.multicore.MulticoreKernel` for ``cores > 1`` or a ``speed`` (chosen at build time)."""
-        if cls is Kernel and (cores != 1 or speed is not None):
-            from netsim.kernel.multicore import MulticoreKernel
-
-            cls = MulticoreKernel
-        return object.__new__(cls)
+        """A :class:`MulticoreKernel` for ``cores > 1`` or a ``speed`` (its dispatcher chosen at build time)."""
+        return object.__new__(MulticoreKernel if cls is Kernel and (cores != 1 or speed is not None) else cls)
 
     def __init__(self, env: SimEnv, name: str, policy: "str | Policy" = "fp", context_switch: int = 0, *,
                  trace: bool = True, livelock_limit: int = 200_000, cores: int = 1, multicore: str = "global",
@@ -138,8 +135,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         if not isinstance(name, str) or not name:
             raise BuildError(f"kernel name must be a non-empty string, got {name!r}")
         if cores != 1 or speed is not None:  # Kernel(...) makes a MulticoreKernel for these (see __new__)
-            raise BuildError(f"node '{name}': {type(self).__name__} is a subclass of Kernel with one core and no "
-                             "speed scaling; subclass netsim.kernel.multicore.MulticoreKernel for cores/speed")
+            raise BuildError(f"node '{name}': cores and speed need a MulticoreKernel (subclass that one)")
         self.env = env
         self._sim = env.sim
         self.name = name
@@ -201,11 +197,6 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
     def running(self) -> str | None:
         """Name of the task or handler holding the CPU (``None``: idle)."""
         return None if self._running is None else self._running.task_name
-
-    def set_speed(self, speed: float) -> None:
-        """Set the CPU speed (``ttSetCPUScaling``): a SimulationError here, a node without ``speed``."""
-        raise SimulationError(f"node '{self.name}': set_speed({speed!r}) on a node without speed scaling; give "
-                              f"the node an initial speed (nodes.{self.name}.speed: 1, or Kernel(..., speed=1.0))")
 
     def inbox(self, network: str) -> deque[Message]:
         """The node's queue of received, not yet read messages of ``network``."""
@@ -497,3 +488,12 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
     def __repr__(self) -> str:
         return (f"<Kernel {self.name} policy={self.policy.name} tasks={len(self.tasks)} "
                 f"handlers={len(self.handlers)}>")
+
+
+class MulticoreKernel(MulticoreDispatcher, Kernel):
+    """A kernel with several cores and/or speed scaling (:mod:`netsim.kernel.multicore`); ``Kernel(...)`` makes it."""
+
+    def __init__(self, env: SimEnv, name: str, policy: "str | Policy" = "fp", context_switch: int = 0, *,
+                 trace: bool = True, livelock_limit: int = 200_000, **cpu: Any) -> None:
+        super().__init__(env, name, policy, context_switch, trace=trace, livelock_limit=livelock_limit)
+        self._setup_cpu(**cpu)

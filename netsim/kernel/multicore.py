@@ -1,8 +1,8 @@
 """Multiprocessor nodes (m identical cores, global or partitioned scheduling) and CPU speed scaling.
 
-:class:`MulticoreKernel` is what ``Kernel(env, name, cores=m, ...)`` (or ``speed=...``) builds: a
-:class:`~netsim.kernel.kernel.Kernel` whose dispatcher (:class:`MulticoreDispatcher`, chosen at build time)
-places jobs on ``m`` cores. The one-core kernel's dispatcher (:mod:`netsim.kernel.dispatch`) is not touched:
+:class:`~netsim.kernel.kernel.MulticoreKernel` is what ``Kernel(env, name, cores=m, ...)`` (or ``speed=...``)
+builds: a :class:`~netsim.kernel.kernel.Kernel` whose dispatcher (:class:`MulticoreDispatcher` here, chosen at
+build time) places jobs on ``m`` cores. The one-core kernel's dispatcher (:mod:`netsim.kernel.dispatch`) is not touched:
 every node without ``cores``/``speed`` runs exactly as before.
 
 Semantics (those of the one-core kernel, per core, except as said here)
@@ -41,21 +41,35 @@ from netsim.errors import BuildError, SimulationError
 from netsim.kernel.dispatch import NP_RANK
 from netsim.kernel.events import DISPATCH, NORMAL
 from netsim.kernel.job import Job
-from netsim.kernel.kernel import Kernel
 from netsim.kernel.cores import MULTICORE_MODES
 from netsim.kernel.load import PeriodicLoad
 from netsim.kernel.speed import check_levels, speed_fraction, work_done, work_time
 from netsim.kernel.states import READY, RUNNING
 from netsim.kernel.task import Task, check_time, task_error
 
-__all__ = ["MulticoreKernel", "MulticoreDispatcher"]
+__all__ = ["MulticoreDispatcher"]
 
 
 class MulticoreDispatcher:
-    """CPU allocation over ``m`` cores, with speed scaling (mixed into :class:`MulticoreKernel`)."""
+    """CPU allocation over ``m`` cores, with speed scaling (mixed into :class:`~netsim.kernel.kernel.MulticoreKernel`).
+
+    Attributes
+    ----------
+    cores : int
+        Number of cores.
+    multicore : str
+        ``"global"`` or ``"partitioned"``.
+    migration_cost : int
+        Kernel time (ns) a task job pays when it resumes on another core.
+    migrations : int
+        How many times a task job resumed on another core than it last ran on.
+    speed : float
+        The current CPU speed (a fraction of the nominal clock).
+    """
 
     # ================================================================= set-up
-    def _setup_cpu(self: Any, cores: Any, multicore: Any, migration_cost: Any, speed: Any, speed_levels: Any) -> None:
+    def _setup_cpu(self: Any, cores: Any = 1, multicore: Any = "global", migration_cost: Any = 0, speed: Any = None,
+                   speed_levels: Any = None) -> None:
         node = self.name
         if isinstance(cores, bool) or not isinstance(cores, int) or cores < 1:
             raise BuildError(f"node '{node}': cores must be a whole number >= 1, got {cores!r}")
@@ -88,6 +102,10 @@ class MulticoreDispatcher:
         if self._levels is not None and frac not in self._levels:
             levels = ", ".join(str(float(s)) for s in self._levels)
             raise BuildError(f"node '{self.name}': speed {given!r} is not one of speed_levels [{levels}]")
+
+    def __repr__(self: Any) -> str:
+        return (f"<MulticoreKernel {self.name} cores={self.cores} {self.multicore} policy={self.policy.name} "
+                f"speed={self.speed} tasks={len(self.tasks)} handlers={len(self.handlers)}>")
 
     # ================================================================= run-time API
     @property
@@ -458,33 +476,3 @@ class MulticoreDispatcher:
         finally:
             for job, part in parts:
                 job.cpu_time -= part
-
-
-class MulticoreKernel(MulticoreDispatcher, Kernel):
-    """A kernel with ``cores`` cores and/or speed scaling (see the module docstring; parameters as
-    :class:`~netsim.kernel.kernel.Kernel`).
-
-    Attributes
-    ----------
-    cores : int
-        Number of cores.
-    multicore : str
-        ``"global"`` or ``"partitioned"``.
-    migration_cost : int
-        Kernel time (ns) a task job pays when it resumes on another core.
-    migrations : int
-        How many times a task job resumed on another core than it last ran on.
-    speed : float
-        The current CPU speed (a fraction of the nominal clock).
-    """
-
-    def __init__(self, env: Any, name: str, policy: Any = "fp", context_switch: int = 0, *, trace: bool = True,
-                 livelock_limit: int = 200_000, cores: int = 1, multicore: str = "global",
-                 migration_cost: int = 0, speed: float | None = None,
-                 speed_levels: "list[float] | None" = None) -> None:
-        super().__init__(env, name, policy, context_switch, trace=trace, livelock_limit=livelock_limit)
-        self._setup_cpu(cores, multicore, migration_cost, speed, speed_levels)
-
-    def __repr__(self) -> str:
-        return (f"<MulticoreKernel {self.name} cores={self.cores} {self.multicore} policy={self.policy.name} "
-                f"speed={self.speed} tasks={len(self.tasks)} handlers={len(self.handlers)}>")

@@ -10,7 +10,7 @@ import pytest
 from netsim.env import SimEnv
 from netsim.errors import BuildError
 from netsim.kernel import Kernel
-from netsim.kernel.multicore import MulticoreKernel
+from netsim.kernel.kernel import MulticoreKernel
 from netsim.kernel.task import TaskSpec
 from netsim.timebase import MS
 
