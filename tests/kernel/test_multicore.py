@@ -154,3 +154,32 @@ def test_bad_core_counts_and_modes_and_periodic_loads_are_refused():
     k = Kernel(SimEnv(), "cpu", cores=2)
     with pytest.raises(BuildError, match="periodic load is not available"):
         k.create_periodic_load("tick", period=MS, execution=1000)
+
+
+def test_a_job_killed_on_another_core_frees_that_core_for_the_next_ready_job():
+    # Global FP on 2 cores: A (prio 1) and B (prio 2), 10 ms each, take cores 0 and 1 at 0; C (prio 3, 2 ms)
+    # waits. At 3 ms a timer handler (on a core too: it preempts the least urgent, B, for zero time) kills B:
+    # B's record is killed with 3 ms of CPU; C takes the freed core at 3 ms and ends at 3 + 2 = 5 ms.
+    env = SimEnv()
+    k = Kernel(env, "cpu", policy="fp", cores=2)
+    jobs = {}
+
+    def keep(c):
+        def body(job):
+            jobs[job.task_name] = job
+            yield job.execute(c)
+        return body
+
+    def killer(job):
+        yield job.kill(jobs["B"])
+
+    k.create_task("A", keep(10 * MS), period=100 * MS, priority=1)
+    k.create_task("B", keep(10 * MS), period=100 * MS, priority=2)
+    k.create_task("C", keep(2 * MS), period=100 * MS, priority=3)
+    k.create_handler("kill_b", killer)
+    k.create_timer("at3", "kill_b", start=3 * MS)
+    env.run(20 * MS)
+    rec = _records(k)
+    assert rec["B", 0].killed and rec["B", 0].finish == 3 * MS and rec["B", 0].cpu_time == 3 * MS
+    assert (rec["C", 0].start, rec["C", 0].finish) == (3 * MS, 5 * MS)
+    assert rec["A", 0].finish == 10 * MS and rec["A", 0].preemptions == 0
