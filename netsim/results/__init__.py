@@ -43,7 +43,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping, TypeVar, cast
 
 import numpy as np
 
@@ -135,6 +135,14 @@ def _empty_metrics() -> pd.Series:
     return pd.Series(dtype=float, name="value")
 
 
+_T = TypeVar("_T")
+
+
+def _unbuilt(build: Callable[[], _T]) -> _T:
+    """A :class:`Lazy` for a :class:`RunResult` field, typed as the value it turns into when the field is read."""
+    return cast(_T, Lazy(build))
+
+
 class Lazy:
     """A table built on first access: a :class:`RunResult` field holding one calls ``build()`` when read, and
     keeps the table (issue 19: DataFrames only when asked for; the schedule trace, read only by the Gantt
@@ -206,13 +214,13 @@ class RunResult:
         object.__getattribute__(self, "__dict__").update(state)
 
     # the empty tables are Lazy too: a run fills them in, and pandas is imported only when one is read (issue 29)
-    signals: pd.DataFrame = field(default_factory=lambda: Lazy(_empty_signals))
-    jobs: pd.DataFrame = field(default_factory=lambda: Lazy(lambda: pd.DataFrame(columns=JOB_COLUMNS)))
-    messages: pd.DataFrame = field(default_factory=lambda: Lazy(lambda: pd.DataFrame(columns=MESSAGE_COLUMNS)))
-    metrics: pd.Series = field(default_factory=lambda: Lazy(_empty_metrics))
+    signals: pd.DataFrame = field(default_factory=lambda: _unbuilt(_empty_signals))
+    jobs: pd.DataFrame = field(default_factory=lambda: _unbuilt(lambda: pd.DataFrame(columns=JOB_COLUMNS)))
+    messages: pd.DataFrame = field(default_factory=lambda: _unbuilt(lambda: pd.DataFrame(columns=MESSAGE_COLUMNS)))
+    metrics: pd.Series = field(default_factory=lambda: _unbuilt(_empty_metrics))
     meta: dict[str, Any] = field(default_factory=dict)
     scenario: dict[str, Any] | None = None
-    schedule: pd.DataFrame = field(default_factory=lambda: Lazy(lambda: pd.DataFrame(columns=SCHEDULE_COLUMNS)))
+    schedule: pd.DataFrame = field(default_factory=lambda: _unbuilt(lambda: pd.DataFrame(columns=SCHEDULE_COLUMNS)))
     out_dir: Path | None = None
     #: The scenario's trace settings (``output.jobs``, ``messages``, ``schedule``): a table not kept in ``full``
     #: is not written (``jobs.csv`` / ``messages.csv``), its summary is (:mod:`netsim.results.traces`).
@@ -268,7 +276,7 @@ class RunResult:
         if floats is None or floats.ndim != 1 or not all(isinstance(name, str) for name in data):
             self.metrics, self._metric_values = series(), None  # the Series says what is wrong with the values
             return
-        self.metrics = Lazy(series)
+        self.metrics = _unbuilt(series)
         self._metric_values = dict(zip(data, floats.tolist()))
 
     def metric_values(self) -> dict[str, float]:
