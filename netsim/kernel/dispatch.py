@@ -341,3 +341,4 @@ class Dispatcher:
                 ref(job)
             finally:
                 self._busy = busy
+
