@@ -231,3 +231,11 @@ def test_a_job_killed_while_its_hard_server_waits_leaves_the_server_working():
     recs = [r for r in k.job_records if r.task == "A"]
     assert (recs[0].killed, recs[0].finish) == (True, 5 * MS)
     assert (recs[1].start, recs[1].finish) == (10 * MS, 21 * MS)
+
+
+@pytest.mark.parametrize("kernel_kw", [{"cores": 2}, {"speed": 1.0}])
+def test_servers_are_refused_on_a_multicore_or_speed_scaling_node(kernel_kw):
+    # their dispatcher has no server hooks: a served job would run unbudgeted
+    k = Kernel(SimEnv(seed=1), "cpu", policy="edf", **kernel_kw)
+    with pytest.raises(BuildError, match="single-core node without speed scaling"):
+        create_cbs(k, "cbs", 1 * MS, 2 * MS)
