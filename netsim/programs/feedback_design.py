@@ -273,8 +273,9 @@ def _check_sender_widths(p: StateFeedbackParams, scenario: Scenario | None, node
             continue
         senders = [src.sender] if src.sender is not None else list(scenario.networks[src.network].nodes)
         for name in senders:
-            for j, task in enumerate(getattr(scenario.nodes.get(name), "tasks", None) or []):
-                sp = task.params if isinstance(task.params, dict) else {}
+            sender = scenario.nodes.get(name)
+            for j, task in enumerate(sender.tasks if sender is not None else []):
+                sp = task.params
                 channels = sp.get("channels")
                 if (name == node or task.program != "sensor" or sp.get("network") != src.network
                         or sp.get("to") not in (node, "all") or not isinstance(channels, list)
@@ -375,7 +376,7 @@ def _design_rng(scenario: Scenario | None, path: str) -> np.random.Generator:
     validation and in the run, so a design made once serves both)."""
     from netsim.env import stream_seed
 
-    seed = int(getattr(scenario, "seed", 0) or 0) if scenario is not None else 0
+    seed = scenario.seed if scenario is not None else 0
     return np.random.Generator(np.random.PCG64(stream_seed(seed, f"design:{path}")))
 
 
