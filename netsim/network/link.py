@@ -12,14 +12,17 @@ The type ``ideal`` is the same class with its defaults: no delay, no loss, no bi
 
 from __future__ import annotations
 
+from heapq import heappush
+
 from pydantic import Field
 
+from netsim.env import NORMAL
 from netsim.network.delay import ConstantDelay, DelaySpec, make_delay_sampler
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Frame, Network, Transmitter
 from netsim.network.records import DROP_LOST
 from netsim.network.stats import BusyMeter
-from netsim.network.timing import call_later, tx_time_ns
+from netsim.network.timing import tx_time_ns
 from netsim.registry import register
 from netsim.units import Bitrate
 
@@ -68,7 +71,7 @@ class Link(Network["Link.Params"]):
         loss = self._loss
         post = self._post
         sender = frame.sender
-        sim = self.sim
+        heap, ids, deliver = self._heap, self._ids, self._deliver_item  # deliveries pushed inline (netsim.env)
         constant = self._constant
         for copy in frame.copies:
             msg, rec = copy
@@ -85,4 +88,4 @@ class Link(Network["Link.Params"]):
                 if arrival < last:
                     arrival = last
                 self._last_arrival[key] = arrival
-            call_later(sim, arrival - self.sim.now + post[receiver], self._deliver, copy)  # type: ignore[index]
+            heappush(heap, (arrival + post[receiver], NORMAL, next(ids), (deliver, copy)))  # type: ignore[index]

@@ -44,7 +44,7 @@ from netsim.network.records import (
     MessageRecord,
 )
 from netsim.network.stats import BusyMeter
-from netsim.network.timing import call_later, tx_time_ns
+from netsim.network.timing import tx_time_ns
 from netsim.timebase import S
 
 __all__ = ["Frame", "Network", "Transmitter"]
@@ -154,6 +154,11 @@ class Network(abc.ABC, Generic[P]):
         # (wire bits, transmission time) by (payload bits, sender): what wire_bits and _frame_time give, which
         # depend on nothing else (a subclass whose framing also depends on the message must clear this cache)
         self._framing: dict[tuple[int, str], tuple[int, int]] = {}
+        # deliveries and pre-processing ends are call items pushed inline on the loop's heap (netsim.env): no
+        # Call object, no indirection through it
+        _, self._heap, self._ids = self.sim.scheduler()
+        self._deliver_item = self._deliver
+        self._offer_item = self._offer_after_pre
         self._setup()
 
     # ------------------------------------------------------------------------------------------ public API
@@ -263,7 +268,7 @@ class Network(abc.ABC, Generic[P]):
             return
         pre = self._pre[sender]
         if pre:
-            call_later(self.sim, pre, self._offer_after_pre, frame)
+            heappush(self._heap, (now + pre, NORMAL, next(self._ids), (self._offer_item, frame)))
         else:
             self._offer(frame)
 
@@ -375,8 +380,10 @@ class Network(abc.ABC, Generic[P]):
         it besides (a frame waiting for channel access) and fix its own counters."""
 
     # ------------------------------------------------------------------------------------------ helpers
-    def _offer_after_pre(self, frame: Frame) -> None:
-        """The sender's pre-processing delay of ``frame`` is over: offer it, unless the sender halted meanwhile."""
+    def _offer_after_pre(self, item: tuple[Any, Frame]) -> None:
+        """The call item ``(fn, frame)`` of the end of a frame's pre-processing delay: offer the frame, unless the
+        sender halted meanwhile."""
+        frame = item[1]
         if self._dead and frame.sender in self._dead:
             self._drop_frame(frame, DROP_SENDER_DEAD)
             return
@@ -426,6 +433,7 @@ class Network(abc.ABC, Generic[P]):
         post = self._post
         sender = frame.sender
         sim = self.sim
+        deliver = self._deliver_item
         for copy in frame.copies:
             msg, rec = copy
             msg.tx_start_ns = rec.tx_start_ns = start
@@ -434,12 +442,16 @@ class Network(abc.ABC, Generic[P]):
                 self._drop_copy(copy, DROP_LOST)
                 continue
             d = post[msg.receiver]  # type: ignore[index]
+            item = (deliver, copy)
             if d == 0 and sync:
-                self._deliver(copy)
+                deliver(item)
             else:
-                call_later(sim, d, self._deliver, copy)
+                heappush(self._heap, (sim.now + d, NORMAL, next(self._ids), item))
 
-    def _deliver(self, copy: Copy) -> None:
+    def _deliver(self, item: tuple[Any, Copy]) -> None:
+        """Hand a copy to its receiver now: ``item`` is the call item ``(self._deliver_item, copy)``, processed by
+        the event loop at the copy's arrival or called directly when it arrives at once."""
+        copy = item[1]
         msg, rec = copy
         node = msg.receiver
         if self._drop_stale:
@@ -520,7 +532,7 @@ class Transmitter:
         if self.queue.priority:
             # let every frame queued in this instant compete on priority
             self._pending = True
-            call_later(self.sim, 0, self._start, None, priority=ARBITRATE)
+            heappush(self._heap, (self.sim.now, ARBITRATE, next(self._ids), (self._start, None)))
         else:
             self._start(None)
 

@@ -1,0 +1,61 @@
+"""A network's own wake-ups are plain call items on the event loop's heap (issue 29: calls per message).
+
+A delayed delivery, the end of a pre-processing delay and a priority output's arbitration each push one entry
+``(t, priority, id, (fn, arg))`` whose function is the network's own method: no :class:`netsim.env.Call` object and
+no indirection through it, and the entry still does its work at the same instant and row of the same-instant table.
+"""
+
+from __future__ import annotations
+
+from netsim.env import ARBITRATE, NORMAL
+from netsim.network import Message
+from netsim.timebase import US
+
+
+def _only_entry(net):
+    queue = net.sim._queue
+    assert len(queue) == 1
+    return queue[0]
+
+
+def test_a_delayed_copy_is_one_call_item_of_the_network_that_delivers_it(bench):
+    b = bench("link", {"nodes": ["a", "b"], "delay": "100 us"})
+    b.net.send(Message("a", "b", 1.5, 64, tag="y"))
+    t, priority, _, item = _only_entry(b.net)
+    # 100 us = the link's constant delay (no bit rate, no post-processing delay)
+    assert (t, priority) == (100 * US, NORMAL)
+    assert item[0] == b.net._deliver and item[1][0].tag == "y"
+    b.run(200 * US)
+    assert b.deliveries("b") == [(100 * US, "y")]
+
+
+def test_a_post_processing_delay_on_a_wired_medium_is_one_call_item(bench):
+    # 1 Gbit/s Ethernet uplink and downlink of a 512-bit minimum frame: 512 ns each; post delay 7 us
+    b = bench("switched_ethernet", {"nodes": ["a", "b"], "bitrate": "1 Gbit/s", "post_delay": "7 us"})
+    b.net.send(Message("a", "b", 0.0, 64, tag="u"))
+    b.env.sim.run_until(1024)  # both hops done; the delivery waits for the post-processing delay
+    t, priority, _, item = _only_entry(b.net)
+    assert (t, priority) == (1024 + 7 * US, NORMAL) and item[0] == b.net._deliver
+    b.run(20 * US)
+    assert b.deliveries("b") == [(1024 + 7 * US, "u")]
+
+
+def test_the_end_of_a_pre_processing_delay_is_one_call_item(bench):
+    b = bench("link", {"nodes": ["a", "b"], "pre_delay": "3 us"})
+    b.net.send(Message("a", "b", 0.0, 64, tag="p"))
+    t, priority, _, item = _only_entry(b.net)
+    assert (t, priority) == (3 * US, NORMAL) and item[0] == b.net._offer_after_pre
+    b.run(10 * US)
+    assert b.deliveries("b") == [(3 * US, "p")]  # pre delay, then an ideal link
+
+
+def test_a_priority_output_arbitrates_through_one_call_item_at_the_arbitration_row(bench):
+    # a 1 Mbit/s link whose sender queue is a priority queue: the frames queued in an instant compete at ARBITRATE
+    b = bench("link", {"nodes": ["a", "b"], "bitrate": "1 Mbit/s", "queue_discipline": "priority"})
+    b.net.send(Message("a", "b", 0.0, 100, priority=5, tag="low"))
+    b.net.send(Message("a", "b", 0.0, 100, priority=1, tag="high"))
+    t, priority, _, item = _only_entry(b.net)
+    assert (t, priority) == (0, ARBITRATE) and item[0] == b.net._tx["a"]._start
+    b.run(1000 * US)
+    # 100 bits at 1 Mbit/s = 100 us each; the more urgent frame goes first although it was queued second
+    assert b.deliveries("b") == [(100 * US, "high"), (200 * US, "low")]
