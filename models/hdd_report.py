@@ -10,11 +10,8 @@ paper's numbers (section 5 of Cuenca et al.) beside ours and writes into ``repor
   number the prose quotes, with the run it comes from), ``gpi.csv`` (the sweep surface), ``README.md`` and
   figures like the paper's Figs. 6-13.
 
-Every number in the README's prose is a placeholder of :data:`TEXT` filled from ``quoted.csv``; the
-templates themselves hold no numbers other than labels (equation, case, figure and section numbers),
-which ``tests/models/test_hdd_report.py`` checks, together with the values against fresh runs.
-
-The README's words and layout are data, in ``models/hdd_report.md`` (:data:`TEMPLATES`).
+The README's words and layout are data (``models/hdd_report.md``); each number of its prose is a :data:`TEXT`
+placeholder filled from ``quoted.csv``, the only other digits are labels (``tests/models/test_hdd_report.py``).
 """
 
 from __future__ import annotations

@@ -23,8 +23,8 @@ Definitions (over the control samples ``t_k = k Ts``; true angles from the plant
 * ``theta_dot_noise``, ``alpha_dot_noise``: std of the velocity estimates in the hold-still run of the
   estimator (the same for both controllers: the estimator alone makes it).
 
-The README's words and layout are data, in ``models/pendulum/report.md`` (:data:`TEMPLATES`); :func:`quote`
-computes every value a placeholder names.
+Why this module is long: it runs every case of the study, builds the tables from them and computes every value
+a placeholder of the README names (:func:`quote`); the words and layout are data, in ``models/pendulum/report.md``.
 """
 
 from __future__ import annotations
