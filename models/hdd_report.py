@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from netsim.casestudy import Quotes, fill, fmt, load_templates, md_table
+from netsim.casestudy import Quotes, Templates, fmt, md_table
 from netsim.casestudy import sweep as run_study_sweep
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
@@ -119,7 +119,7 @@ VARIANTS = _variants()
 #: The report's templates (``models/hdd_report.md``): the README's layout (``readme``, ``readme_gpi``) and the
 #: prose (:data:`TEXT`), whose numbers are all ``{placeholder}``s filled from the quoted values; the only digits
 #: allowed in the prose are labels matching :data:`LABEL_PATTERNS`.
-TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
+TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
 TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items() if not k.startswith("readme")}
 
 #: Digits a template may hold (labels, not results).
@@ -135,7 +135,7 @@ Quoted = Quotes
 
 def render(key: str, texts: dict[str, str]) -> str:
     """Template ``key`` of :data:`TEMPLATES` filled with ``texts`` (a missing value is an error naming it)."""
-    return fill(TEMPLATES[key], texts, f"hdd_report.md [[{key}]]")
+    return TEMPLATES.fill(key, texts)
 
 
 # ------------------------------------------------------------------------------------------ runs

@@ -32,7 +32,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, TypeVar
 
-__all__ = ["fmt", "Quotes", "fill", "MissingQuote", "placeholders", "unused_quotes", "load_templates",
+__all__ = ["fmt", "Quotes", "fill", "MissingQuote", "placeholders", "unused_quotes", "load_templates", "Templates",
            "digits_outside_labels", "md_table", "splice", "run_all", "log_progress",
            "Progress", "sweep", "RunCache", "scenario_key", "code_fingerprint"]
 
@@ -114,6 +114,19 @@ def unused_quotes(templates: Iterable[str], texts: Iterable[str]) -> list[str]:
     """The keys of ``texts`` that none of ``templates`` names (in the order of ``texts``)."""
     named = {k for t in templates for k in PLACEHOLDER.findall(t)}
     return [k for k in texts if k not in named]
+
+
+class Templates(dict[str, str]):
+    """The named templates of the file ``path`` (:func:`load_templates`), filled by name (:meth:`fill`)."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(load_templates(path))
+        self.where = f"{Path(path).parent.name}/{Path(path).name}"
+
+    def fill(self, name: str, texts: Mapping[str, str] | None = None, /, **more: str) -> str:
+        """Template ``name`` filled with ``texts`` and ``more`` (:func:`fill`; a missing quote names the file and
+        the template)."""
+        return fill(self[name], {**(texts or {}), **more}, f"{self.where} [[{name}]]")
 
 
 def load_templates(path: Path) -> dict[str, str]:

@@ -72,3 +72,16 @@ def test_every_report_template_is_package_data():
     assert re.search(r"^recursive-include models .*\*\.md", (ROOT / "MANIFEST.in").read_text(), re.MULTILINE)
     for t in templates:  # each lies in a package folder, so the per-package "*.md" pattern takes it
         assert (ROOT / t).parent.joinpath("__init__.py").is_file(), t
+
+
+def test_templates_fill_by_name_and_a_missing_quote_names_the_file_and_the_template(tmp_path):
+    from netsim.casestudy import Templates
+
+    (tmp_path / "study").mkdir()
+    f = tmp_path / "study" / "report.md"
+    f.write_text("[[intro]]\n{name} ran {runs} runs\n")
+    t = Templates(f)
+    # "name" is a placeholder like any other: the template's own name is positional
+    assert t.fill("intro", {"runs": "3"}, name="cart") == "cart ran 3 runs"
+    with pytest.raises(MissingQuote, match=r"^study/report\.md \[\[intro\]\]: no quoted value for the placeholder \{runs\}$"):
+        t.fill("intro", name="cart")

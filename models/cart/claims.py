@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from netsim.casestudy import fill, fmt, load_templates
+from netsim.casestudy import Templates, fmt
 from netsim.lazy_import import lazy_module
 
 if TYPE_CHECKING:
@@ -166,11 +166,8 @@ def headline(df: pd.DataFrame, wcs: Sequence[int] = (40, 80)) -> dict[str, float
 
 
 #: The verdicts' words (``models/cart/claims.md``): ``<claim>.claim``, ``.numbers``, ``.why`` and their parts.
-TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
-
-
-def _t(name: str, **values: str) -> str:
-    return fill(TEMPLATES[name], values, f"cart/claims.md [[{name}]]")
+TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
+_t = TEMPLATES.fill
 
 
 def _claim_effort(f2: pd.DataFrame) -> dict[str, str]:

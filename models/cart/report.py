@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from netsim.casestudy import Progress, RunCache, code_fingerprint, fill, fmt as _fmt, load_templates, run_all, scenario_key
+from netsim.casestudy import Progress, RunCache, Templates, code_fingerprint, fmt as _fmt, run_all, scenario_key
 from netsim.casestudy import log_progress as _progress_logger
 from netsim.models.cart.claims import claims as make_claims
 from netsim.models.cart.claims import OSC_THRESHOLD, headline, oscillating, pool_sigma, pooling_difference
@@ -279,11 +279,8 @@ def sensitivity_table(f2: pd.DataFrame, sens: pd.DataFrame) -> pd.DataFrame:
 
 
 #: The report's templates (``models/cart/report.md``): the README's layout and prose, ``{key}`` filled by :func:`_readme`.
-TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
-
-
-def _render(key: str, texts: dict[str, str]) -> str:
-    return fill(TEMPLATES[key], texts, f"cart/report.md [[{key}]]")
+TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
+_render = TEMPLATES.fill
 
 
 def _readme(out: Path, f2: pd.DataFrame, fq: pd.DataFrame, claims: list[dict[str, str]], sens: pd.DataFrame,

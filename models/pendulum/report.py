@@ -39,8 +39,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from netsim.casestudy import (Quotes, fill, fmt as _fmt, load_templates, log_progress, md_table, run_all as _run_pool,
-                              splice)
+from netsim.casestudy import Quotes, Templates, fmt as _fmt, log_progress, md_table, run_all as _run_pool, splice
 from netsim.lazy_import import lazy_module
 from netsim.registry import register
 from netsim.shipped import folder as shipped_scenarios
@@ -303,7 +302,7 @@ def delay_table(runs: pd.DataFrame, noise_margins: dict[str, tuple[float, float]
 #: The report's templates (``models/pendulum/report.md``): the README's layout (``readme*``, ``delay_cost_figure``)
 #: and the prose (:data:`TEXT`), whose numbers are all ``{placeholder}``s filled from the quoted values; the only
 #: digits allowed in the prose are labels matching :data:`LABEL_PATTERNS`.
-TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
+TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
 TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items() if not k.startswith(("readme", "delay_cost_figure"))}
 #: The delay-aware section's first and last lines (``netsim report pendulum_delay_aware`` splices between them).
 DELAY_AWARE_MARK = (TEMPLATES["readme_delay_aware"].split("\n")[0], TEMPLATES["readme_delay_aware"].split("\n")[-1])
@@ -313,7 +312,7 @@ LABEL_PATTERNS = (r"QUBE-Servo \d", r"qube2_rotpen_param", r"y\[k\]", r"x\[k-1\]
 
 def render(key: str, values: dict[str, str]) -> str:
     """The template ``key`` filled with the quoted texts (a missing one is an error naming it)."""
-    return fill(TEMPLATES[key], values, f"pendulum/report.md [[{key}]]")
+    return TEMPLATES.fill(key, values)
 
 
 def fmt(x: float, digits: int = 3) -> str:

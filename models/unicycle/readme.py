@@ -18,18 +18,15 @@ from netsim.models.unicycle.design import LQR_Q, LQR_R, PHASES
 from netsim.models.unicycle.model import (
     ALPHA, BETA, GAMMA, HALF_WHEELBASE, P0, R_REPORT, TS, WALL_FRONT, WALL_SIDE, WHEEL_RADIUS, XI0_HAT,
 )
-from netsim.casestudy import fill, load_templates
+from netsim.casestudy import Templates
 from netsim.models.unicycle.quoting import Quotes
 
 __all__ = ["write_readme"]
 
 
 #: Sections 0-4 of the README (``models/unicycle/readme.md``): prose with ``{name}`` placeholders.
-TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
-
-
-def _section(name: str, values: dict[str, str]) -> str:
-    return fill(TEMPLATES[name], values, f"unicycle/readme.md [[{name}]]")
+TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
+_section = TEMPLATES.fill
 
 
 def write_readme(out: Path, T: Any, F: dict[str, Any]) -> str:

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from netsim.casestudy import fill, load_templates
+from netsim.casestudy import Templates
 from netsim.models.unicycle.model import TS
 from netsim.models.unicycle.quoting import Quotes
 
@@ -31,11 +31,8 @@ __all__ = ["network_section", "loss_kind", "stability_limits", "mean_difference"
            "radio_mc_section", "splice_radio_mc", "loss_params"]
 
 #: The prose of section 5 (``models/unicycle/readme_net.md``): ``{name}`` placeholders filled with quoted texts.
-TEMPLATES = load_templates(Path(__file__).with_suffix(".md"))
-
-
-def _text(name: str, **values: str) -> str:
-    return fill(TEMPLATES[name], values, f"unicycle/readme_net.md [[{name}]]")
+TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
+_text = TEMPLATES.fill
 
 
 def _marks(name: str) -> tuple[str, str]:
