@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any, Generator
 
 from pydantic import Field, model_validator
 
-from netsim.errors import SimulationError
+from netsim.errors import ConfigError, SimulationError
 from netsim.registry import register
 from netsim.units import Duration, StrictModel
 
@@ -63,6 +63,25 @@ class BudgetScheduler:
         self.cpu_last = 0
         self.exhausted_last = 0
         self.budgets: list[tuple[int, int]] = []  # (time, budget set)
+        self._check_server()
+
+    def _check_server(self) -> None:
+        """Refuse, at ``nodes.<n>.tasks[i].params.server``, a server the node does not declare as a cbs: the
+        build checks it (so ``netsim validate`` refuses what the run would), not the first job."""
+        scenario = self.ctx.scenario
+        node = scenario.nodes.get(self.ctx.node) if scenario is not None else None
+        if node is None:  # built outside a scenario (a kernel made in Python): the first job checks
+            return
+        index = next((i for i, t in enumerate(node.tasks) if t.name == self.ctx.task), None)
+        path = None if index is None else f"nodes.{self.ctx.node}.tasks[{index}].params.server"
+        kinds = {s.name: s.type for s in node.servers}
+        kind = kinds.get(self.p.server)
+        if kind == "cbs":
+            return
+        cbs = ", ".join(name for name, k in kinds.items() if k == "cbs") or "none yet: add one"
+        what = (f"node '{self.ctx.node}' has no server '{self.p.server}'" if kind is None
+                else f"server '{self.p.server}' is a {kind}, not a cbs")
+        raise ConfigError(f"{what}; name a cbs of nodes.{self.ctx.node}.servers ({cbs})", path=path)
 
     def _server(self) -> Any:
         srv = self.ctx.kernel.servers.get(self.p.server)

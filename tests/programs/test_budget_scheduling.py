@@ -45,3 +45,32 @@ def test_a_run_records_the_budget_it_sets():
     assert result.status == "ok"
     budget = result.signal("budget_ms")
     assert float(budget.iloc[0]) == 3.0
+
+
+def _problems(raw: dict[str, Any]) -> list[tuple[str, str]]:
+    from netsim.scenario.loader import check_scenario
+
+    return [(p.path, p.message) for p in check_scenario(raw) if p.severity == "error"]
+
+
+def test_validate_refuses_a_server_the_node_does_not_have_at_its_yaml_path():
+    # before: the name was looked up at the tuner's first job only, so validate passed and the run failed
+    raw = copy.deepcopy(SCENARIO)
+    raw["nodes"]["cpu"]["tasks"][1]["params"]["server"] = "cbz"
+    errs = _problems(raw)
+    assert len(errs) == 1
+    path, message = errs[0]
+    assert path == "nodes.cpu.tasks[1].params.server"
+    assert "no server 'cbz'" in message and "(cbs)" in message
+
+
+def test_validate_refuses_a_tbs_named_as_the_budget_schedulers_server():
+    raw = copy.deepcopy(SCENARIO)
+    raw["nodes"]["cpu"]["servers"].append({"name": "tb", "type": "tbs", "utilization": 0.1})
+    raw["nodes"]["cpu"]["tasks"][1]["params"]["server"] = "tb"
+    assert _problems(raw) == [("nodes.cpu.tasks[1].params.server",
+                               "server 'tb' is a tbs, not a cbs; name a cbs of nodes.cpu.servers (cbs)")]
+
+
+def test_validate_passes_the_shipped_form():
+    assert _problems(copy.deepcopy(SCENARIO)) == []
