@@ -377,20 +377,13 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
                    ("chat_kal", "kalman")):
         add(key, t.loc[(e, "lqr"), "u_std"], f"table:{e}/lqr")
     add("n_seeds", len(SEEDS), "report: SEEDS", str(len(SEEDS)))
-    lq = table[table.controller == "lqr"].set_index("estimator")["lqg_cost_per_step"]
-    best = str(lq.idxmin())
-    add("best_lqg", 0.0, "table: argmin lqg_cost_per_step (lqr)", best)
-    add("best_lqg_val", lq.min(), "table")
-    add("kal_lqg", lq["kalman"], "table:kalman/lqr")
-    add("lu_lqg", lq["luenberger"], "table:luenberger/lqr")
-    add("fd_lqg", lq["fd_raw"], "table:fd_raw/lqr")
-    lq1 = table[table.controller == "lqr"].set_index("estimator")["lqg_cost_after_1s"]
-    best1 = str(lq1.idxmin())
-    add("best_lqg1", 0.0, "table: argmin lqg_cost_after_1s (lqr)", best1)
-    add("best_lqg1_val", lq1.min(), "table")
-    add("kal_lqg1", lq1["kalman"], "table:kalman/lqr")
-    add("lu_lqg1", lq1["luenberger"], "table:luenberger/lqr")
-    add("fd_lqg1", lq1["fd_raw"], "table:fd_raw/lqr")
+    lqr_t = table[table.controller == "lqr"].set_index("estimator")
+    for tail, col in (("", "lqg_cost_per_step"), ("1", "lqg_cost_after_1s")):  # whole run; after the first second
+        add(f"best_lqg{tail}", 0.0, f"table: argmin {col} (lqr)", str(lqr_t[col].idxmin()))
+        add(f"best_lqg{tail}_val", lqr_t[col].min(), "table")
+        for tag, e in (("kal", "kalman"), ("lu", "luenberger"), ("fd", "fd_raw")):
+            add(f"{tag}_lqg{tail}", lqr_t.loc[e, col], f"table:{e}/lqr")
+    lq, best1 = lqr_t["lqg_cost_per_step"], str(lqr_t["lqg_cost_after_1s"].idxmin())
     mv = runs[runs.kind == "mpc_vs_lqr"]
     add("mpc_max_u", mv.max_abs_u.max(), "runs: mpc")
     k1 = mv[(mv.estimator == "kalman") & (mv.seed == 1)].iloc[0]
@@ -441,7 +434,6 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
     add("ord_chat_lu_kal", t.u_std_min[("luenberger", "lqr")] / t.u_std_max[("kalman", "lqr")],
         "table: u_std_min / u_std_max")
     add("ord_kal_whole", lq["kalman"] / lq.min(), "table: lqg_cost_per_step kalman / lowest")
-    lqr_t = table[table.controller == "lqr"].set_index("estimator")
     others = lqr_t.drop(index=best1)
     add("ord_lqg1_margin", others.lqg_cost_after_1s_min.min() / lqr_t.loc[best1, "lqg_cost_after_1s_max"],
         "table: lqg_cost_after_1s_min (next) / lqg_cost_after_1s_max (lowest)")
