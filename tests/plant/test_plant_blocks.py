@@ -71,18 +71,44 @@ def test_a_read_advances_only_its_own_part(monkeypatch):
     _, parted = _pair(monkeypatch)
     parted.output_value(1, 7 * MS)
     parted.set_input(2, 1.0, 9 * MS)
-    assert parted._blocks.times == [0, 7 * MS, 9 * MS, 0]
+    assert parted._blocks.times.tolist() == [0, 7 * MS, 9 * MS, 0]
     assert parted.transition_cache_info()["expm"] == 0  # no exponential of the joint model
     assert parted._blocks.expm_count == 2  # one per part and step length
 
 
 def test_identical_servos_share_their_transitions():
-    plant = dc_servo(count=20)  # 20 parts >= MIN_BLOCKS: propagated one at a time
-    for k in range(20):
+    plant = dc_servo(count=40)  # 40 parts >= MIN_BLOCKS: propagated one at a time
+    for k in range(40):
         plant.set_input(k, 1.0 + k, 0)
-    for k in range(20):
+    for k in range(40):
         plant.output_value(k, 5 * MS)
     assert plant._blocks is not None and plant._blocks.expm_count == 1
+
+
+@pytest.mark.parametrize("n", [12, 80])  # parts grouped in Python (fewer than 64 behind) and by numpy
+def test_a_full_advance_of_many_parts_equals_the_joint_plant(monkeypatch, n):
+    # a record grid every 1 ms between reads and writes of a few servos: most parts share one step length at
+    # each grid sample (one batched product), those read or written since take their own
+    monkeypatch.setattr(blocks, "MIN_BLOCKS", 2)
+    parted = dc_servo(count=n)
+    parted.advance_to(0)
+    monkeypatch.setattr(blocks, "MIN_BLOCKS", 10**9)
+    joint = dc_servo(count=n)
+    assert parted._blocks is not None and joint._blocks is None
+    rng = np.random.default_rng(n)
+    for plant in (parted, joint):
+        plant.set_inputs(np.linspace(-1.0, 1.0, n), 0)
+    for ms in range(1, 60):
+        t = ms * MS
+        for dt in sorted(int(d) * US for d in rng.integers(0, 900, 3)):
+            i = int(rng.integers(0, n))
+            v = float(rng.uniform(-1, 1))
+            assert parted.output_value(i, t - MS + dt) == pytest.approx(joint.output_value(i, t - MS + dt),
+                                                                         rel=1e-12, abs=1e-12)
+            parted.set_input(i, v, t - MS + dt)
+            joint.set_input(i, v, t - MS + dt)
+        assert parted.output(t) == pytest.approx(joint.output(t), rel=1e-12, abs=1e-12)  # every part brought to t
+    assert parted.state() == pytest.approx(joint.state(), rel=1e-12, abs=1e-12)
 
 
 def test_an_exact_encoder_listener_brings_every_part_to_one_instant(monkeypatch):
@@ -99,7 +125,7 @@ def test_a_plant_with_a_disturbance_or_few_parts_propagates_jointly():
     few = dc_servo(count=3)  # the shipped three-servo scenarios: joint, as they were pinned
     few.output_value(0, 1 * MS)
     assert few._blocks is None
-    disturbed = dc_servo(count=20)
+    disturbed = dc_servo(count=40)
     disturbed.add_disturbance(0, 0.1)
     disturbed.output_value(0, 1 * MS)
     assert disturbed._blocks is None
@@ -140,7 +166,11 @@ def _loops(n: int) -> dict:
 def test_a_run_of_independent_loops_equals_the_joint_plants_run(monkeypatch):
     import netsim
 
-    parted = netsim.run(_loops(8), write=False)  # 8 servos: MIN_BLOCKS parts, propagated one at a time
+    made = []
+    monkeypatch.setattr(blocks, "MIN_BLOCKS", 2)  # 8 servos propagated one at a time
+    monkeypatch.setattr(blocks.Blocks, "sync", lambda self, t, zu, f=blocks.Blocks.sync: made.append(t) or f(self, t, zu))
+    parted = netsim.run(_loops(8), write=False)
+    assert made  # the run went through the parts (the end of the run brings them all to one instant)
     monkeypatch.setattr(blocks, "MIN_BLOCKS", 10**9)
     joint = netsim.run(_loops(8), write=False)
     assert parted.status == joint.status == "ok"
