@@ -14,16 +14,17 @@ it goes back to the head of the sender's queue).
 
 from __future__ import annotations
 
+from heapq import heappush
 from typing import Any, Literal
 
 from pydantic import Field
 
+from netsim.env import NORMAL
 from netsim.network.params import NetworkParams
 from netsim.network.pipeline import Copy, Frame, Network, Transmitter
 from netsim.network.queues import SendQueue
 from netsim.network.records import DROP_LOST, DROP_NO_RECEIVER, DROP_QUEUE_FULL, DROP_STALE, DROP_SWITCH_FULL
 from netsim.network.stats import BusyMeter
-from netsim.network.timing import call_later
 from netsim.registry import register
 from netsim.units import Time
 
@@ -54,9 +55,9 @@ class SwitchedEthernet(Network["SwitchedEthernet.Params"]):
         self._down: dict[str, Transmitter] = {}
         self.port_queues: dict[str, SendQueue] = {}
         for n in self.nodes:
-            self._up[n] = Transmitter(
-                self, self.queues[n], p.bitrate, self._meter(f"up.{n}"), self._at_switch
-            )
+            # a frame received by the switch is stored at once, or after the switch delay
+            stored = self._at_switch if p.switch_delay else self._store
+            self._up[n] = Transmitter(self, self.queues[n], p.bitrate, self._meter(f"up.{n}"), stored)
             q = self.port_queues[n] = SendQueue(None, "fifo")
             self._down[n] = Transmitter(self, q, p.bitrate, self._meter(f"down.{n}"), self._left_switch)
         mem = p.switch_memory_bits
@@ -77,15 +78,20 @@ class SwitchedEthernet(Network["SwitchedEthernet.Params"]):
         self._up[frame.sender].offer(frame)
 
     def _at_switch(self, frame: Frame, start: int, end: int) -> None:
+        """``frame`` is in the switch (with a switch delay): it is stored when the delay is over."""
         if frame.tx_start_ns is None:
             frame.tx_start_ns = start
-        d = self._switch_delay
-        if d:
-            call_later(self.sim, d, self._store, frame)
-        else:
-            self._store(frame)
+        heappush(self._heap, (end + self._switch_delay, NORMAL, next(self._ids), (self._after_delay, frame)))
 
-    def _store(self, frame: Frame) -> None:
+    def _after_delay(self, item: tuple[Any, Frame]) -> None:
+        """The call item ``(fn, frame)`` of the end of a switch delay."""
+        self._store(item[1])
+
+    def _store(self, frame: Frame, start: int = -1, end: int = -1) -> None:
+        """Store ``frame`` in the switch and forward it to its output ports (``start``: when its uplink
+        transmission began, if the uplink hands it over directly)."""
+        if start >= 0 and frame.tx_start_ns is None:
+            frame.tx_start_ns = start
         bits = frame.wire_bits
         copies = frame.copies
         failed: list[Copy] = []

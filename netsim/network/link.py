@@ -56,18 +56,21 @@ class Link(Network["Link.Params"]):
             for n in self.nodes:
                 m = self.meters[n] = BusyMeter(p.utilization_bin)
                 self._tx[n] = Transmitter(self, self.queues[n], self._rate, m, self._sent)
+        else:  # sending takes no time: a frame handed over is sent at once (one call fewer per frame)
+            self._offer = self._sent  # type: ignore[method-assign]
 
     def _frame_time(self, wire_bits: int, sender: str) -> int:
         return 0 if self._rate is None else tx_time_ns(wire_bits, self._rate)
 
     def _offer(self, frame: Frame) -> None:
-        if self._rate is None:
-            now = self.sim.now
-            self._sent(frame, now, now)
-        else:
-            self._tx[frame.sender].offer(frame)
+        # with a bit rate; without one, _setup makes _sent the offer itself
+        self._tx[frame.sender].offer(frame)
 
-    def _sent(self, frame: Frame, start: int, end: int) -> None:
+    def _sent(self, frame: Frame, start: int = -1, end: int = -1) -> None:
+        """``frame`` occupied the sender's output in ``[start, end]`` (no times: offered without a bit rate, sent
+        now): loss draw, delay, and the delivery of each surviving copy pushed as a call item."""
+        if start < 0:
+            start = end = self.sim.now
         loss = self._loss
         post = self._post
         sender = frame.sender
