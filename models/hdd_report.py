@@ -120,7 +120,8 @@ VARIANTS = _variants()
 #: prose (:data:`TEXT`), whose numbers are all ``{placeholder}``s filled from the quoted values; the only digits
 #: allowed in the prose are labels matching :data:`LABEL_PATTERNS`.
 TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
-TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items() if not k.startswith("readme")}
+TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items() if not k.startswith(("readme", "gpi_why", "gpi_edge",
+                                                                                     "gpi_inside"))}
 
 #: Digits a template may hold (labels, not results).
 LABEL_PATTERNS = (
@@ -365,18 +366,11 @@ def _quote_gpi(q: Quoted, gpi: pd.DataFrame, meta: dict, pre: str = "gpi") -> No
     if "et.played_past_packet" in ok.columns:
         q.add(f"{pre}_past_n", int((ok["et.played_past_packet"] > 0).sum()), "d",
               f"{pre}.csv points with et.played_past_packet > 0")
-    q.add(f"{pre}_why", "the performance term never outweighs the transmission terms (the NUMRE's model is exact, "
-          "there is no noise or disturbance, and h covers every gap, so a few measurements reproduce the TTS "
-          "output), hence GPI falls with every transmission the thresholds save." if ne_share < 1.0 else
-          "the performance term grows where the thresholds are wide and balances the transmission terms.",
+    q.add(f"{pre}_why", render("gpi_why_transmissions" if ne_share < 1.0 else "gpi_why_balance", {}),
           source="W3 max NE vs GPI minimum")
-    edge = []
-    if i in (0, len(xs) - 1):
-        edge.append("sigma_s")
-    if j in (0, len(ys) - 1):
-        edge.append("sigma_c")
-    q.add(f"{pre}_edge", ("The minimum is on the grid's edge in " + " and ".join(edge) + ", so the optimum may lie "
-                       "outside the grid.") if edge else "The minimum is inside the grid.", source="grid edges")
+    edge = [axis for axis, k, n in (("sigma_s", i, len(xs)), ("sigma_c", j, len(ys))) if k in (0, n - 1)]
+    q.add(f"{pre}_edge", render("gpi_edge", {"axes": " and ".join(edge)}) if edge else render("gpi_inside", {}),
+          source="grid edges")
 
 
 # ------------------------------------------------------------------------------------------ output

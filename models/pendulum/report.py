@@ -303,7 +303,8 @@ def delay_table(runs: pd.DataFrame, noise_margins: dict[str, tuple[float, float]
 #: and the prose (:data:`TEXT`), whose numbers are all ``{placeholder}``s filled from the quoted values; the only
 #: digits allowed in the prose are labels matching :data:`LABEL_PATTERNS`.
 TEMPLATES = Templates(Path(__file__).with_suffix(".md"))
-TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items() if not k.startswith(("readme", "delay_cost_figure"))}
+TEXT: dict[str, str] = {k: v for k, v in TEMPLATES.items()
+                        if not k.startswith(("readme", "delay_cost_figure", "da_fails", "da_holds", "dn_"))}
 #: The delay-aware section's first and last lines (``netsim report pendulum_delay_aware`` splices between them).
 DELAY_AWARE_MARK = (TEMPLATES["readme_delay_aware"].split("\n")[0], TEMPLATES["readme_delay_aware"].split("\n")[-1])
 LABEL_PATTERNS = (r"QUBE-Servo \d", r"qube2_rotpen_param", r"y\[k\]", r"x\[k-1\]", r"x\[k\]", r"u\[k-1\]",
@@ -401,8 +402,8 @@ def quote(runs: pd.DataFrame, table: pd.DataFrame, hs: pd.DataFrame, dl: pd.Data
         add(f"dn_{tag}_fail", dt.loc[e, "noise_fails_at_ms"], f"delay:{e} (pendulum_delay_sweep)")
     inside = (dl.noise_stable_up_to_ms <= dl.lqg_margin_ms) & (dl.lqg_margin_ms < dl.noise_fails_at_ms)
     add("dn_bracket", float(inside.sum()), "delay: noise_stable_up_to_ms <= lqg_margin_ms < noise_fails_at_ms",
-        "each prediction lies in its bracket" if inside.all() else
-        f"the prediction lies in its bracket for {int(inside.sum())} of {len(dl)} estimators")
+        render("dn_all_in_bracket" if inside.all() else "dn_some_in_bracket",
+               {"inside": str(int(inside.sum())), "estimators": str(len(dl))}))
     from netsim.models.pendulum.report_sweeps import CI_LEVEL
 
     add("ci_pct", 100 * CI_LEVEL, "report_sweeps: CI_LEVEL", f"{100 * CI_LEVEL:g}")
@@ -548,12 +549,11 @@ def quote_delay_aware(da: pd.DataFrame, margins: pd.DataFrame, dc: pd.DataFrame)
             src = f"delay_aware_margins:{e} {how}"
             add(f"da_{tag}_{name}_ok", r.stable_up_to_ms, src)
             if math.isfinite(r.fails_at_ms):
-                phrase = (f"every run balanced up to {fmt(r.stable_up_to_ms)} ms, the first fallen run at "
-                          f"{fmt(r.fails_at_ms)} ms ({int(r.stable_runs_at_fail)} of {int(r.seed_count)} balanced "
-                          "there)")
+                phrase = render("da_fails", {"ok": fmt(r.stable_up_to_ms), "fail": fmt(r.fails_at_ms),
+                                             "balanced": str(int(r.stable_runs_at_fail)), "runs": str(int(r.seed_count))})
                 add(f"da_{tag}_{name}_fail", r.fails_at_ms, src)
             else:
-                phrase = f"every run balanced at every delay run, up to {fmt(r.largest_delay_ms)} ms"
+                phrase = render("da_holds", {"largest": fmt(r.largest_delay_ms)})
             add(f"da_{tag}_{name}", 0.0, src, phrase)
     add("da_seeds", da[da.estimation == "input_delay"].seed_count.max(), "delay_aware: seed_count")
     add("da_fd_ok", noise_delay_margins(dc)["fd_raw"][0], "delay_cost: fd_raw (noise_delay_margins)")

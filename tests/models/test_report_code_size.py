@@ -26,7 +26,7 @@ LISTED = ("models/hdd_report.py", "models/cart/report.py", "models/cart/claims.p
 #: A module split out of them later is counted too: its name says report, readme, claims or quoting.
 NAMED = re.compile(r"(report|readme|claims|quoting)[a-z_]*\.py$")
 #: The count after issue 28's templates (lines): it may only go down.
-CEILING = 3402
+CEILING = 3396
 TARGET = 2000
 
 
