@@ -46,6 +46,7 @@ from __future__ import annotations
 import copy
 import json
 import logging
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -389,8 +390,6 @@ def _task_entry(node: str, index: int, spec: Any, summary: dict[str, Any], progr
 
 
 def _state_feedback_tasks(scenario: Scenario) -> list[tuple[str, int, Any]]:
-    import sys
-
     from netsim import registry
 
     found = []
@@ -401,25 +400,18 @@ def _state_feedback_tasks(scenario: Scenario) -> list[tuple[str, int, Any]]:
             except ConfigError:  # an unknown program is validate's problem, not a design
                 continue
             found.append((node, i, task, cls))
-    # a subclass of StateFeedbackProgram exists only once its module is imported: a scenario without one does not
-    # import it (nor the control parts it loads, ~0.1 s of `netsim validate` and `run`, issue 29)
-    module = sys.modules.get("netsim.programs.state_feedback")
-    if module is None:
-        return []
-    base = module.StateFeedbackProgram
-    return [(node, i, task) for node, i, task, cls in found if isinstance(cls, type) and issubclass(cls, base)]
+    # no subclass of StateFeedbackProgram exists unless its module was imported (the lookups import the programs'):
+    # a scenario without one imports neither it nor the control parts it loads (issue 29, start-up)
+    base = getattr(sys.modules.get("netsim.programs.state_feedback"), "StateFeedbackProgram", None)
+    return [(n, i, t) for n, i, t, cls in found if base is not None and isinstance(cls, type) and issubclass(cls, base)]
 
 
 def static_designs(scenario: Scenario, plant: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a valid scenario, built as validation builds
     them (:func:`~netsim.programs.feedback_design.task_design`: the designs validation made, nothing simulated)."""
-    tasks = _state_feedback_tasks(scenario)
-    if not tasks:  # nothing to design: the design module is not imported (issue 29, start-up)
-        return {}
-    from netsim.programs.feedback_design import model_source, task_design
-
     out: dict[str, dict[str, Any]] = {}
-    for node, i, task in tasks:
+    for node, i, task in _state_feedback_tasks(scenario):
+        from netsim.programs.feedback_design import model_source, task_design  # only with such tasks (issue 29)
         params = task.validated_params()
         period = task.period if task.release_kind == "periodic" else None
         path = f"nodes.{node}.tasks[{i}]"
@@ -432,14 +424,10 @@ def static_designs(scenario: Scenario, plant: Any, *, margin: bool = True) -> di
 def run_designs(sim: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """``{"node.task": design}`` of every ``state_feedback`` task of a built simulation, read from the programs
     it runs (their estimator and law objects)."""
-    tasks = _state_feedback_tasks(sim.scenario)
-    if not tasks:  # nothing to summarise: the design module is not imported (issue 29, start-up)
-        return {}
-    from netsim.programs.feedback_design import model_source
-
     plant = sim.env.components.get("plant")
     out: dict[str, dict[str, Any]] = {}
-    for node, i, task in tasks:
+    for node, i, task in _state_feedback_tasks(sim.scenario):
+        from netsim.programs.feedback_design import model_source  # only with such tasks (issue 29)
         prog = sim.programs.get(f"{node}.{task.name}")
         if prog is None:
             continue
