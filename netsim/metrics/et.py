@@ -26,6 +26,7 @@ import numpy as np
 from pydantic import Field, field_validator
 
 from netsim.errors import ConfigError
+from netsim.metrics.rows import table_rows
 from netsim.registry import register
 from netsim.timebase import S
 from netsim.units import Duration, StrictModel
@@ -142,14 +143,15 @@ def sample_signal(signals, name: str, times_s: np.ndarray) -> np.ndarray:
 
 
 def count_messages(messages, tag: str, *, delivered: bool = False, before_s: float | None = None) -> int:
-    """Messages sent with ``tag`` (optionally only delivered ones, sent before ``before_s``), from the table."""
+    """Messages sent with ``tag`` (optionally only delivered ones, sent before ``before_s``), from the table (a
+    DataFrame, or the records' columns of :func:`netsim.metrics.rows.table_rows`)."""
     if messages is None or len(messages) == 0:
         return 0
-    sel = messages["tag"].astype(str) == tag
+    sel = np.asarray(messages["tag"]).astype(str) == tag
     if before_s is not None:
-        sel &= messages["sent_s"].to_numpy(float) < before_s
+        sel &= np.asarray(messages["sent_s"], dtype=float) < before_s
     if delivered:
-        sel &= ~messages["dropped"].astype(bool)
+        sel &= ~np.asarray(messages["dropped"]).astype(bool)
     return int(sel.sum())
 
 
@@ -236,8 +238,12 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
     # transmissions of the N_TTS periods [0, N_TTS T) (a run that also executes the instant N_TTS T must
     # not count that extra sample)
     window_s = n_tts * p.period / S
-    n_sc = count_messages(result.messages, p.sensor_tag, before_s=window_s)
-    n_ca = count_messages(result.messages, p.actuator_tag, before_s=window_s)
+    # the records' columns while the messages DataFrame is unbuilt (a run's own result: no pandas table is made)
+    messages = table_rows(result, "messages")
+    if messages is None:
+        messages = result.messages
+    n_sc = count_messages(messages, p.sensor_tag, before_s=window_s)
+    n_ca = count_messages(messages, p.actuator_tag, before_s=window_s)
     uc = utilization(n_sc, n_tts)
     ua = utilization(n_ca, n_tts)
     own_ise = ise(r_k, y_k)
@@ -261,7 +267,7 @@ def et_control(result: Any, params: Any, baseline: Any | None = None) -> dict[st
                     "exactly (ISE = 0, eq 23) but this run does not (ISEP = %.3g), so NE = ISEP/ISE (eq 25) has no "
                     "value; use a reference the time-triggered loop does not track exactly (e.g. a nonzero step)",
                     res["ISEP"])
-    gap = _packet_gap_max(result.messages, p, n_tts, window_s)
+    gap = _packet_gap_max(messages, p, n_tts, window_s)
     res.update(_horizon_measures(sig, p, t_k, window_s, gap))
     if gap is not None:
         res["u_gap_max"] = gap
@@ -281,8 +287,9 @@ def _packet_gap_max(messages, p: EtControlParams, n_tts: int, window_s: float) -
     """
     if messages is None or len(messages) == 0:
         return None
-    sel = (messages["tag"].astype(str) == p.actuator_tag) & (messages["sent_s"].to_numpy(float) < window_s)
-    sent_ns = np.round(messages.loc[sel, "sent_s"].to_numpy(float) * S).astype(np.int64)
+    sent_s = np.asarray(messages["sent_s"], dtype=float)
+    sel = (np.asarray(messages["tag"]).astype(str) == p.actuator_tag) & (sent_s < window_s)
+    sent_ns = np.round(sent_s[sel] * S).astype(np.int64)
     if sent_ns.size == 0:
         return None
     k = np.unique(sent_ns // p.period)
