@@ -8,6 +8,8 @@
   blocking by one lower-priority frame).
 - :mod:`netsim.analysis.lqg`: the expected quadratic cost of a sampled LTI loop under random input-output delay
   and sampling jitter (Jitterbug-style covariance computation; imported on its own, it needs scipy).
+- :mod:`netsim.analysis.platform`: what a node's CPU changes: speed scaling, partitioned and global multicore
+  scheduling (the GFB test for global EDF), CBS/TBS servers, time-triggered slots.
 - :mod:`netsim.analysis.from_scenario`: a scenario's tasks, handlers and CAN message streams as the types above.
 - :mod:`netsim.analysis.loops`: a scenario's PID and static state-feedback loops and the expected ISE of each over
   a run, from :mod:`netsim.analysis.lqg` with the run's timing (imported on its own, as lqg).

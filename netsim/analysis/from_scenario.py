@@ -23,9 +23,11 @@ Mapping rules
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Callable
 
 from netsim.analysis.can import CanMessage, can_analysis
+from netsim.analysis.platform import Speed, stretch
 from netsim.analysis.rta import RTATask, response_times
 from netsim.analysis.sync_terms import NodeSyncAnalysis
 from netsim.timebase import parse_time
@@ -82,7 +84,8 @@ class NodeTasks:
     how: str = ""
 
 
-def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], int | None]) -> NodeTasks:
+def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], int | None],
+               speed: Speed | None = None) -> NodeTasks:
     """The analysis' view of one scenario node.
 
     Parameters
@@ -93,6 +96,9 @@ def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], i
         The node kernel's periodic loads by name (from the scenario or created by programs at build).
     min_gap
         ``min_gap(name)``: the shortest gap (ns) between the releases of a task or handler in the run, or None.
+    speed
+        The speed to map execution times at (:func:`netsim.analysis.platform.slowest_speed`; default 1): each
+        ``C`` becomes ``ceil(C / s)``, context switches and handler latencies unchanged.
     """
     policy = node.policy
     cs = int(node.context_switch)
@@ -100,6 +106,11 @@ def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], i
     notes: dict[str, str] = {}
     skipped: list[tuple[str, str]] = []
     sync = NodeSyncAnalysis(node)  # monitors, mailboxes ...: blocking terms, self-suspension
+    s = speed.value if speed is not None else Fraction(1)
+    scaled = s is not None and s != 1
+    def at_speed(c: int | None) -> int | None:
+        return None if c is None or s is None else stretch(c, s)
+
     for load in loads.values():  # periodic ISR loads
         items.append(RTATask(load.name, int(load.execution), int(load.period), priority=ISR_PRIORITY))
     covered = set(loads) | {load.handler for load in loads.values() if load.handler}
@@ -109,7 +120,7 @@ def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], i
             continue
         timer = getattr(h.trigger, "timer", None) if h.trigger is not None else None
         period = int(timer.period) if timer is not None and timer.period else min_gap(h.name)
-        c = wcet_ns(h)
+        c = at_speed(wcet_ns(h))
         if period is None or c is None:
             blind.append(h.name)
             continue
@@ -118,7 +129,13 @@ def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], i
     retimed = {name: t.name for t in node.tasks if t.program == "feedback_scheduler"
                for name in t.params.get("tasks", []) if isinstance(name, str)}
     for t in node.tasks:
-        c = sync.timing(t, wcet_ns(t))
+        c = at_speed(sync.timing(t, wcet_ns(t)))
+        if speed is not None and speed.value is None:
+            skipped.append((t.name, speed.rule))
+            continue
+        if scaled and node.sync is not None:
+            skipped.append((t.name, "sync objects on a node with speed scaling: blocking terms are not scaled"))
+            continue
         if blind:
             skipped.append((t.name, f"handler {', '.join(blind)}: no period or execution time to analyse"))
             continue
@@ -147,6 +164,8 @@ def node_tasks(node: NodeSpec, loads: dict[str, Any], min_gap: Callable[[str], i
             if period is None:
                 skipped.append((t.name, "fewer than two releases in the run: no period to analyse"))
                 continue
+        if speed is not None and speed.rule:
+            notes[t.name] = f"{notes.get(t.name, how)}; {speed.rule}"
         deadline = int(t.deadline) if t.deadline else period
         if policy in ("fp", "np_fp"):
             prio = float(t.priority if t.priority is not None else 0)

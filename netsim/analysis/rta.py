@@ -222,8 +222,46 @@ def edf_demand(tasks: Iterable[RTATask], t: int) -> int:
     return total
 
 
-def edf_schedulable(tasks: Sequence[RTATask]) -> bool:
-    """Processor-demand test for preemptive EDF on one CPU (exact for synchronous periodic tasks)."""
+def edf_schedulable(tasks: Sequence[RTATask], bandwidth: Fraction = Fraction(0)) -> bool:
+    """Processor-demand test for preemptive EDF on one CPU (exact for synchronous periodic tasks).
+
+    Parameters
+    ----------
+    tasks
+        The task set.
+    bandwidth
+        CPU share reserved by bandwidth servers (CBS ``Qs/Ts``, TBS ``Us``) beside ``tasks``: a server's jobs due
+        in an interval of length ``t`` need at most ``bandwidth * t`` (Abeni & Buttazzo 1998; Spuri & Buttazzo
+        1996), so the test becomes ``dbf(t) + bandwidth * t <= t``. With a bandwidth the test is sufficient; it
+        checks the deadlines up to ``max(D_i - J_i, sum (T_i - D_i + J_i) U_i / (1 - U))`` (Baruah's bound), or
+        one hyperperiod past the largest deadline when ``U = 1``.
+    """
+    if not bandwidth:
+        return _edf_demand_test(tasks)
+    u = sum((Fraction(t.wcet, t.period) for t in tasks), Fraction(bandwidth))
+    if u > 1:
+        return False
+    if any(t.relative_deadline - t.jitter <= 0 for t in tasks):
+        return False
+    late = [t for t in tasks if t.relative_deadline - t.jitter < t.period]
+    if not late:
+        return True  # every deadline at or after its period: U <= 1 suffices (Liu & Layland; the servers' papers)
+    d_max = max(t.relative_deadline - t.jitter for t in tasks)
+    if u < 1:
+        horizon = max(Fraction(d_max), sum((Fraction((t.period - t.relative_deadline + t.jitter) * t.wcet, t.period)
+                                            for t in tasks), Fraction(0)) / (1 - u))
+    else:
+        horizon = Fraction(hyperperiod(t.period for t in tasks) + d_max)
+    for task in late + [t for t in tasks if t not in late]:
+        d = task.relative_deadline - task.jitter
+        while d <= horizon:
+            if edf_demand(tasks, d) + bandwidth * d > d:
+                return False
+            d += task.period
+    return True
+
+
+def _edf_demand_test(tasks: Sequence[RTATask]) -> bool:
     if not tasks:
         return True
     if sum(Fraction(t.wcet, t.period) for t in tasks) > 1:

@@ -24,20 +24,28 @@ For one scenario and its run, one row per checked item:
     (:mod:`netsim.analysis.loops`, from :func:`netsim.analysis.lqg.transient_cost`), fed the sampling offsets and
     input-output delays the run measured (taken as independent from period to period), vs the run's ``<y>.ISE``.
 
+A node's CPU changes the test (:mod:`netsim.analysis.platform`, each rule stated in the row's note): execution
+times at the slowest speed the node can run (speed scaling); each core of a partitioned node on its own (node rows
+``<node>.core<k>``); the GFB density test for global EDF (``not shown schedulable`` when it fails: it is only
+sufficient) and no bound under global fixed priorities; the demand test with the servers' bandwidth reserved and a
+served task's CBS/TBS bound; a time-triggered task's slot (``R <= slot end - activation``).
+
 A simulated value above its bound is flagged ``EXCEEDS``: a bug in the simulator or in the analysis.
 """
 
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from netsim.analysis.can import CanMessage, can_analysis
-from netsim.analysis.from_scenario import interface_delay, message_period, node_tasks, response_bounds
-from netsim.analysis.rta import edf_schedulable, utilization
+from netsim.analysis.from_scenario import NodeTasks, interface_delay, message_period, node_tasks, response_bounds
+from netsim.analysis.platform import UNBOUNDED, gfb_test, migration_charge, served_bound, slot_bound, slowest_speed
+from netsim.analysis.rta import RTATask, edf_schedulable, utilization
 from netsim.cli.analyze_loops import loop_rows
 from netsim.cli.analyze_table import COLUMNS, NS
 from netsim.cli.analyze_table import jobs_of as _jobs_of
@@ -47,7 +55,7 @@ from netsim.cli.analyze_table import row as _row
 if TYPE_CHECKING:
     from netsim.results import RunResult
     from netsim.scenario import Simulation  # the builder's, as netsim.scenario names it
-    from netsim.scenario.schema import Scenario
+    from netsim.scenario.schema import NodeSpec, Scenario
 
 __all__ = ["COLUMNS", "analyze_run"]
 
@@ -65,55 +73,195 @@ def _task_rows(scenario: Scenario, sim: Simulation,
     rows: list[dict] = []
     bounds: dict[tuple[str, str], tuple[int, int]] = {}
     for node_name, node in scenario.nodes.items():
-        policy = node.policy
         kernel = sim.kernels.get(node_name)
         def min_gap(name: str, n: str = node_name) -> int | None:
             return _min_gap_ns(_jobs_of(jobs, n, name)["release_s"])
 
-        mapped = node_tasks(node, dict(getattr(kernel, "loads", {}) or {}), min_gap)
-        items, notes, skipped, sync = mapped.items, mapped.notes, mapped.skipped, mapped.sync
-        task_names = {t.name for t in node.tasks}
-        if policy in ("edf", "np_edf"):
-            tasks = [it for it in items if it.name in task_names]
-            ok = edf_schedulable(tasks) if policy == "edf" else None
-            misses = int(sum(((jobs["node"] == node_name) & (jobs["outcome"].isin(["missed", "killed"]))).tolist()))
-            u = utilization(items)
-            if ok is None:
-                rows.append(_row("node", node_name, "n/a", misses, "misses", "n/a", "non-preemptive EDF: no test"))
-            else:
-                verdict = "EXCEEDS" if ok and misses else "ok"
-                rows.append(_row("node", node_name, "schedulable" if ok else "not schedulable", misses, "misses",
-                                 verdict, f"EDF demand test, U = {u:.3g}"))
-            for t in node.tasks:
-                worst = _jobs_of(jobs, node_name, t.name)["response_s"].max()
-                rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _ms(worst), "ms", "n/a",
-                                 "EDF: no per-task bound"))
-            continue
-        rts = response_bounds(policy, items)
-        how = mapped.how
-        for it in items:
-            if it.name not in task_names or sync.no_bound(it.name):
-                continue
-            bound = rts.get(it.name)
-            js = _jobs_of(jobs, node_name, it.name)
-            worst = js["response_s"].max()
-            unfinished = int((js["response_s"].isna() & (js["outcome"] != "pending")).sum())
-            note = notes.get(it.name, how) + sync.note(it.name)
-            if unfinished:
-                note += f"; {unfinished} jobs unfinished"
-            if bound is None:
-                rows.append(_row("task", f"{node_name}.{it.name}", "unbounded", _ms(worst), "ms", "ok",
-                                 note + "; load at its level >= 1"))
-                continue
-            bounds[(node_name, it.name)] = (bound, it.wcet)
-            exceeds = (not math.isnan(worst) and worst > bound * NS + 1e-12) or (
-                unfinished and _unfinished_past(js, bound))
-            rows.append(_row("task", f"{node_name}.{it.name}", bound * NS * 1e3, _ms(worst), "ms",
-                             "EXCEEDS" if exceeds else "ok", note))
-        for name, why in skipped:
-            rows.append(_row("task", f"{node_name}.{name}", "n/a", _ms(_jobs_of(jobs, node_name, name)["response_s"]
-                                                                       .max()), "ms", "n/a", why))
+        mapped = node_tasks(node, dict(getattr(kernel, "loads", {}) or {}), min_gap, slowest_speed(node, scenario))
+        cores, mode = node.cores or 1, node.multicore or "global"
+        if cores > 1 and mode == "partitioned":  # each core its own uniprocessor; handlers on core 0
+            home = {t.name: t.core or 0 for t in node.tasks}
+            for k in range(cores):
+                group = [it for it in mapped.items if home.get(it.name, 0) == k]
+                names = {t.name for t in node.tasks if home[t.name] == k}
+                rows += _uniprocessor_rows(node_name, node, f"{node_name}.core{k}", group, names, mapped, jobs,
+                                           bounds, f" (partitioned: core {k})")
+            rows += _skipped_rows(node_name, node, mapped, jobs)
+        elif cores > 1:
+            rows += _global_rows(node_name, node, mapped, jobs)
+        elif node.servers:
+            rows += _server_rows(node_name, node, mapped, jobs)
+        elif node.policy == "tt":
+            rows += _table_rows(node_name, node, mapped, jobs, bounds)
+        else:
+            rows += _uniprocessor_rows(node_name, node, node_name, mapped.items, {t.name for t in node.tasks},
+                                       mapped, jobs, bounds, "")
+            rows += _skipped_rows(node_name, node, mapped, jobs)
     return rows, bounds
+
+
+def _misses(jobs: pd.DataFrame, node: str, tasks: set[str] | None = None) -> int:
+    mine = (jobs["node"] == node) & jobs["outcome"].isin(["missed", "killed"])
+    if tasks is not None:
+        mine &= jobs["task"].isin(sorted(tasks))
+    return int(sum(mine.tolist()))
+
+
+def _worst(jobs: pd.DataFrame, node: str, task: str) -> float:
+    return _ms(_jobs_of(jobs, node, task)["response_s"].max())
+
+
+def _uniprocessor_rows(node_name: str, node: NodeSpec, label: str, items: list[RTATask], task_names: set[str],
+                       mapped: NodeTasks, jobs: pd.DataFrame, bounds: dict[tuple[str, str], tuple[int, int]],
+                       where: str) -> list[dict]:
+    """One CPU (a node, or one core of a partitioned node): the EDF node row and per-task rows, or the FP rows."""
+    rows: list[dict] = []
+    policy, notes, sync = node.policy, mapped.notes, mapped.sync
+    if policy in ("edf", "np_edf"):
+        tasks = [it for it in items if it.name in task_names]
+        ok = edf_schedulable(tasks) if policy == "edf" else None
+        misses = _misses(jobs, node_name, None if label == node_name else task_names)
+        u = utilization(items)
+        if ok is None:
+            rows.append(_row("node", label, "n/a", misses, "misses", "n/a", "non-preemptive EDF: no test" + where))
+        else:
+            verdict = "EXCEEDS" if ok and misses else "ok"
+            rows.append(_row("node", label, "schedulable" if ok else "not schedulable", misses, "misses",
+                             verdict, f"EDF demand test, U = {u:.3g}" + where))
+        for t in node.tasks:
+            if t.name in task_names:
+                rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _worst(jobs, node_name, t.name), "ms", "n/a",
+                                 "EDF: no per-task bound"))
+        return rows
+    rts = response_bounds(policy, items)
+    for it in items:
+        if it.name not in task_names or sync.no_bound(it.name):
+            continue
+        note = notes.get(it.name, mapped.how) + sync.note(it.name) + where
+        rows.append(_bound_row(node_name, it.name, rts.get(it.name), it.wcet, note, jobs, bounds))
+    return rows
+
+
+def _bound_row(node_name: str, name: str, bound: int | None, wcet: int, note: str, jobs: pd.DataFrame,
+               bounds: dict[tuple[str, str], tuple[int, int]]) -> dict:
+    """A task's bound (ns; None: unbounded) beside its worst simulated response."""
+    js = _jobs_of(jobs, node_name, name)
+    worst = js["response_s"].max()
+    unfinished = int((js["response_s"].isna() & (js["outcome"] != "pending")).sum())
+    if unfinished:
+        note += f"; {unfinished} jobs unfinished"
+    if bound is None:
+        return _row("task", f"{node_name}.{name}", "unbounded", _ms(worst), "ms", "ok",
+                    note + "; load at its level >= 1")
+    bounds[(node_name, name)] = (bound, wcet)
+    exceeds = (not math.isnan(worst) and worst > bound * NS + 1e-12) or (unfinished and _unfinished_past(js, bound))
+    return _row("task", f"{node_name}.{name}", bound * NS * 1e3, _ms(worst), "ms", "EXCEEDS" if exceeds else "ok", note)
+
+
+def _skipped_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.DataFrame) -> list[dict]:
+    if node.policy in ("edf", "np_edf"):
+        return []  # the EDF rows name every task
+    return [_row("task", f"{node_name}.{name}", "n/a", _worst(jobs, node_name, name), "ms", "n/a", why)
+            for name, why in mapped.skipped]
+
+
+def _global_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.DataFrame) -> list[dict]:
+    """A node with several cores under global scheduling: the GFB test for EDF, else no bound (why)."""
+    m, names = node.cores or 1, {t.name for t in node.tasks}
+    tasks = [it for it in mapped.items if it.name in names]
+    misses = _misses(jobs, node_name)
+    skipped = dict(mapped.skipped)
+    why = ""
+    if node.policy != "edf":
+        why = (f"global {node.policy.upper()} on {m} cores: no bound (the one-core RTA does not hold on several cores "
+               "and no multiprocessor test is implemented)")
+    elif node.handlers:
+        why = "handlers outrank every task on a global node: the GFB test does not apply"
+    elif skipped:
+        why = f"tasks without a bound ({', '.join(sorted(skipped))}): no test"
+    if why:
+        rows = [_row("node", node_name, "n/a", misses, "misses", "n/a", why)]
+    else:
+        charged = migration_charge(tasks, int(node.migration_cost or 0))
+        ok, total, limit = gfb_test(charged, m)
+        extra = (f"; C + {int(node.migration_cost) / 1e6:g} ms per release of another task within D (migrations)"
+                 if node.migration_cost else "")
+        rows = [_row("node", node_name, "schedulable" if ok else "not shown schedulable", misses, "misses",
+                     "EXCEEDS" if ok and misses else "ok",
+                     f"global EDF on {m} cores, GFB test (Goossens, Funk & Baruah 2003; sufficient only): "
+                     f"sum C/min(D,T) = {float(total):.3g} {'<=' if ok else '>'} m - (m-1) max = "
+                     f"{float(limit):.3g}{extra}")]
+    for t in node.tasks:
+        rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _worst(jobs, node_name, t.name), "ms", "n/a",
+                         skipped.get(t.name, f"global {node.policy.upper()}: no per-task bound")))
+    return rows
+
+
+def _server_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.DataFrame) -> list[dict]:
+    """An EDF node with bandwidth servers: the demand test of the tasks outside servers with the servers'
+    bandwidth reserved, and each served task's bound (:func:`~netsim.analysis.platform.served_bound`)."""
+    decl = {s.name: s for s in node.servers}
+    bandwidth = sum((Fraction(int(s.budget), int(s.period)) if s.type == "cbs"
+                     else Fraction(repr(float(s.utilization))) for s in node.servers), Fraction(0))
+    served = {t.name: t.server for t in node.tasks if t.server is not None}
+    free = {t.name for t in node.tasks} - set(served)
+    by_name = {it.name: it for it in mapped.items}
+    tasks = [by_name[n] for n in sorted(free) if n in by_name]
+    skipped = dict(mapped.skipped)
+    misses = _misses(jobs, node_name, free)
+    cs = int(node.context_switch)
+    if node.policy != "edf" or any(n in skipped for n in free) or cs:
+        why = ("context switches are outside the servers' budgets: no test" if cs else
+               "tasks outside servers without a bound: no test" if node.policy == "edf" else "servers need edf")
+        rows = [_row("node", node_name, "n/a", misses, "misses", "n/a", why)]
+        ok = False
+    else:
+        ok = edf_schedulable(tasks, bandwidth=bandwidth)
+        u = utilization(tasks) + float(bandwidth)
+        rows = [_row("node", node_name, "schedulable" if ok else "not schedulable", misses, "misses",
+                     "EXCEEDS" if ok and misses else "ok",
+                     f"EDF demand test of the tasks outside servers, servers' bandwidth {float(bandwidth):.3g} "
+                     f"reserved, U = {u:.3g} (misses: tasks outside servers)")]
+    for t in node.tasks:
+        worst = _worst(jobs, node_name, t.name)
+        if t.name in free:
+            rows.append(_row("task", f"{node_name}.{t.name}", "n/a", worst, "ms", "n/a", "EDF: no per-task bound"))
+            continue
+        it = by_name.get(t.name)
+        if it is None or t.name in skipped:
+            rows.append(_row("task", f"{node_name}.{t.name}", "n/a", worst, "ms", "n/a", skipped.get(t.name, "")))
+            continue
+        shared = sum(1 for v in served.values() if v == t.server)
+        bound, why = served_bound(it, decl[str(t.server)], shared, None if t.wcet is None else int(t.wcet))
+        if bound is not None and bound != UNBOUNDED and not ok:
+            bound, why = None, "the node's demand test with the servers fails: no server guarantee"
+        if bound == UNBOUNDED:
+            rows.append(_row("task", f"{node_name}.{t.name}", "unbounded", worst, "ms", "ok", why))
+        elif bound is None:
+            rows.append(_row("task", f"{node_name}.{t.name}", "n/a", worst, "ms", "n/a", why))
+        else:
+            rows.append(_bound_row(node_name, t.name, bound, it.wcet, why, jobs, {}))
+    return rows
+
+
+def _table_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.DataFrame,
+                bounds: dict[tuple[str, str], tuple[int, int]]) -> list[dict]:
+    """A ``tt`` node: each slotted task's bound from its slots (:func:`~netsim.analysis.platform.slot_bound`)."""
+    rows: list[dict] = []
+    by_name = {it.name: it for it in mapped.items}
+    skipped = dict(mapped.skipped)
+    for t in node.tasks:
+        it = by_name.get(t.name)
+        if it is None:
+            rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _worst(jobs, node_name, t.name), "ms", "n/a",
+                             skipped.get(t.name, "")))
+            continue
+        bound, why = slot_bound(t.name, it.wcet, node)
+        if bound is None:
+            rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _worst(jobs, node_name, t.name), "ms", "n/a", why))
+        else:
+            rows.append(_bound_row(node_name, t.name, bound, it.wcet, why, jobs, bounds))
+    return rows
 
 
 def _unfinished_past(js: pd.DataFrame, bound_ns: int) -> bool:
