@@ -14,7 +14,7 @@ Partitioned cores (``multicore: partitioned``)
     it is; handlers run on core 0, as the kernel runs them (:mod:`netsim.kernel.multicore`).
 Global EDF (``multicore: global``, ``policy: edf``)
     The density test of Goossens, Funk & Baruah (2003), extended to constrained deadlines by Bertogna et al.
-    (2005): with ``lambda_i = C_i / min(D_i, T_i)``, the set is schedulable on ``m`` cores if
+    (2005): with ``lambda_i = C_i / min(D_i - J_i, T_i)``, the set is schedulable on ``m`` cores if
     ``sum lambda_i <= m - (m - 1) max lambda_i`` (:func:`gfb_test`). It is only sufficient: a failed test says
     "not shown schedulable", never "not schedulable". A migration costs ``migration_cost`` at most once per
     release of another task within the job's deadline (global EDF preempts only at releases).
@@ -44,8 +44,8 @@ from netsim.analysis.rta import RTATask
 if TYPE_CHECKING:
     from netsim.scenario.schema import NodeSpec, Scenario
 
-__all__ = ["UNBOUNDED", "Speed", "gfb_test", "migration_charge", "served_bound", "slot_bound", "slowest_speed",
-           "stretch"]
+__all__ = ["UNBOUNDED", "Speed", "bandwidth", "gfb_test", "migration_charge", "served_bound", "slot_bound",
+           "slowest_speed", "stretch"]
 
 
 @dataclass(frozen=True)
@@ -97,10 +97,17 @@ def _foreign_programs(scenario: Scenario | None, node: NodeSpec) -> str:
         try:
             cls = e.plugin()
         except Exception:  # noqa: BLE001 - an unresolvable program is validate's business; assume the worst
-            return str(e.program)
+            return str(getattr(e, "program", "?"))
         if not is_builtin(cls):
-            return str(e.program)
+            return str(getattr(e, "program", "?"))
     return ""
+
+
+def bandwidth(server: Any) -> Fraction:
+    """A server declaration's CPU share: ``budget / period`` for a CBS, ``utilization`` for a TBS (exact)."""
+    if server.type == "cbs":
+        return Fraction(int(server.budget), int(server.period))
+    return Fraction(repr(float(server.utilization))).limit_denominator(1_000_000)
 
 
 def stretch(work: int, speed: Fraction) -> int:
@@ -114,10 +121,12 @@ def gfb_test(tasks: Sequence[RTATask], cores: int) -> tuple[bool, Fraction, Frac
     Returns
     -------
     ok, total, limit
-        ``total = sum C_i / min(D_i, T_i)`` and ``limit = m - (m - 1) max_i C_i / min(D_i, T_i)``;
-        ``ok = total <= limit``.
+        ``total = sum C_i / min(D_i - J_i, T_i)`` and ``limit = m - (m - 1) max_i C_i / min(D_i - J_i, T_i)``
+        (release jitter ``J`` shortens a job's deadline after its arrival); ``ok = total <= limit``.
     """
-    dens = [Fraction(t.wcet, min(t.relative_deadline, t.period)) for t in tasks]
+    if any(t.relative_deadline - t.jitter <= 0 for t in tasks):
+        return False, Fraction(0), Fraction(cores)  # a job may arrive after its deadline
+    dens = [Fraction(t.wcet, min(t.relative_deadline - t.jitter, t.period)) for t in tasks]
     if not dens:
         return True, Fraction(0), Fraction(cores)
     total = sum(dens, Fraction(0))
@@ -171,7 +180,7 @@ def served_bound(item: RTATask, server: Any, shared: int, exec_ns: int | None) -
                             f"every arrival: R <= J + Ts")
         return None, (f"CBS '{server.name}': C = {c / 1e6:g} ms > Qs = {q / 1e6:g} ms or Ts > T - J: a job spans "
                       "several server periods; no bound computed")
-    us = Fraction(repr(float(server.utilization)))
+    us = bandwidth(server)
     if exec_ns is None:
         return None, f"TBS '{server.name}': the task has no wcet"
     if Fraction(exec_ns, item.period) > us:

@@ -44,7 +44,8 @@ import pandas as pd
 
 from netsim.analysis.can import CanMessage, can_analysis
 from netsim.analysis.from_scenario import NodeTasks, interface_delay, message_period, node_tasks, response_bounds
-from netsim.analysis.platform import UNBOUNDED, gfb_test, migration_charge, served_bound, slot_bound, slowest_speed
+from netsim.analysis.platform import (UNBOUNDED, bandwidth, gfb_test, migration_charge, served_bound, slot_bound,
+                                      slowest_speed)
 from netsim.analysis.rta import RTATask, edf_schedulable, utilization
 from netsim.cli.analyze_loops import loop_rows
 from netsim.cli.analyze_table import COLUMNS, NS
@@ -201,8 +202,7 @@ def _server_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.Dat
     """An EDF node with bandwidth servers: the demand test of the tasks outside servers with the servers'
     bandwidth reserved, and each served task's bound (:func:`~netsim.analysis.platform.served_bound`)."""
     decl = {s.name: s for s in node.servers}
-    bandwidth = sum((Fraction(int(s.budget), int(s.period)) if s.type == "cbs"
-                     else Fraction(repr(float(s.utilization))) for s in node.servers), Fraction(0))
+    reserved = sum((bandwidth(s) for s in node.servers), Fraction(0))
     served = {t.name: t.server for t in node.tasks if t.server is not None}
     free = {t.name for t in node.tasks} - set(served)
     by_name = {it.name: it for it in mapped.items}
@@ -216,11 +216,11 @@ def _server_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.Dat
         rows = [_row("node", node_name, "n/a", misses, "misses", "n/a", why)]
         ok = False
     else:
-        ok = edf_schedulable(tasks, bandwidth=bandwidth)
-        u = utilization(tasks) + float(bandwidth)
+        ok = edf_schedulable(tasks, bandwidth=reserved)
+        u = utilization(tasks) + float(reserved)
         rows = [_row("node", node_name, "schedulable" if ok else "not schedulable", misses, "misses",
                      "EXCEEDS" if ok and misses else "ok",
-                     f"EDF demand test of the tasks outside servers, servers' bandwidth {float(bandwidth):.3g} "
+                     f"EDF demand test of the tasks outside servers, servers' bandwidth {float(reserved):.3g} "
                      f"reserved, U = {u:.3g} (misses: tasks outside servers)")]
     for t in node.tasks:
         worst = _worst(jobs, node_name, t.name)
