@@ -16,9 +16,9 @@ def test_a_numbered_port_takes_the_channels_unit_when_the_plant_names_are_known(
                                                          "u.command": "V"}
 
 
-def test_the_carts_position_is_drawn_in_metres():
+def test_the_carts_position_is_drawn_in_metres(tmp_path):
     # scenarios/cart.yaml: enc {type: encoder, output: 0, unit: m}; the cart plant's output 0 is p
-    result = netsim.run("scenarios/cart.yaml", overrides={"duration": "0.05 s"})
+    result = netsim.run("scenarios/cart.yaml", overrides={"duration": "0.05 s"}, out=tmp_path)
     fig = result.plot()
     labels = [ax.get_ylabel() for ax in fig.axes]
     assert any(label.endswith("(m)") for label in labels), labels
