@@ -10,6 +10,8 @@ Mapping rules
 - Execution times count at their largest value: the ``wcet`` field, else the ``execution`` distribution's
   :meth:`~netsim.distributions.Distribution.upper_bound`, plus a sampler's ``after_send``; two context switches
   per job. A task whose execution or release jitter is unbounded gets no bound (said in ``skipped``).
+- On a node with speed scaling, execution times (not context switches or ISR latencies) count at the slowest speed
+  the node can run, ``ceil(C / s)`` (:func:`netsim.analysis.platform.slowest_speed` gives ``s`` and the rule).
 - Periodic ISR loads and handlers enter above every task (priority ``-1e6``); a handler's period is its timer's,
   else the shortest gap between its runs.
 - A ``periodic`` task enters with its period, a ``sporadic`` one with its ``min_interarrival``, any other with the
