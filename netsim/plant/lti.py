@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
@@ -38,6 +38,9 @@ from netsim.plant.disturbance import _Source, _StateNoise
 from netsim.plant.noise import is_entry_form
 from netsim.plant.shared import NEVER, _vector, as_matrix, matvec, psd_factor
 from netsim.timebase import S
+
+#: Ready steps :meth:`LTIPlant.advance_to` keeps (distinct step lengths) before it clears its memo.
+_STEPS_KEPT = 8
 
 if TYPE_CHECKING:
     from netsim.env import SimEnv
@@ -298,8 +301,9 @@ class LTIPlant(PartwiseLTI, _LTIBase):
         self._zu = np.zeros(nz + m)
         self._zu[:nz] = np.concatenate(z0)
         self._cache: OrderedDict[int, tuple[np.ndarray, np.ndarray | None]] = OrderedDict()
-        self._last_h = -1
-        self._last_entry: tuple[np.ndarray, np.ndarray | None] = (np.zeros(0), None)
+        # the steps of the step lengths in use, ready to apply: (z -> G [z; u] product, L) by length (periodic
+        # reads and writes use a few lengths over and over; a run with many lengths clears it now and then)
+        self._steps: dict[int, tuple[Callable[[np.ndarray], np.ndarray], np.ndarray | None]] = {}
         self._rows: dict[tuple[int, int], np.ndarray] = {}
         self.expm_count = 0
         self._y = None  # the state was rebuilt
@@ -366,21 +370,22 @@ class LTIPlant(PartwiseLTI, _LTIBase):
         h = t - self._t
         if h == 0:
             return
-        if h == self._last_h:  # periodic sampling: skip the cache look-up
-            G, L = self._last_entry
-        else:
-            G, L = self._last_entry = self.transition(h)
-            self._last_h = h
-        if self._apply(G, L, t):
+        step = self._steps.get(h)  # periodic sampling: no transition cache look-up, no new bound product
+        if step is None:
+            G, L = self.transition(h)
+            if len(self._steps) >= _STEPS_KEPT:
+                self._steps.clear()
+            step = self._steps[h] = (matvec(G), L)
+        if self._apply(step[0], step[1], t):
             self._notify(t)
 
     def _step(self, t: int) -> bool:
         G, L = self.transition(t - self._t)
-        return self._apply(G, L, t)
+        return self._apply(matvec(G), L, t)
 
-    def _apply(self, G: np.ndarray, L: np.ndarray | None, t: int) -> bool:
-        """``z+ = G [z; u] (+ L w)`` up to ``t``; True when noise was added."""
-        z = matvec(G)(self._zu)
+    def _apply(self, Gz: Callable[[np.ndarray], np.ndarray], L: np.ndarray | None, t: int) -> bool:
+        """``z+ = G [z; u] (+ L w)`` up to ``t`` (``Gz``: the product ``v -> G v``); True when noise was added."""
+        z = Gz(self._zu)
         if L is not None:
             z += matvec(L)(self._rng.standard_normal(self._nz))  # type: ignore[union-attr]
         if not (z.dot(z) <= self._bound2):
