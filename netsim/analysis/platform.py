@@ -18,9 +18,15 @@ Global EDF (``multicore: global``, ``policy: edf``)
     ``sum lambda_i <= m - (m - 1) max lambda_i`` (:func:`gfb_test`). It is only sufficient: a failed test says
     "not shown schedulable", never "not schedulable". A migration costs ``migration_cost`` at most once per
     release of another task within the job's deadline (global EDF preempts only at releases).
-Global fixed priorities
-    No bound: the uniprocessor RTA does not hold on several cores (the critical instant is unknown), and no
-    multiprocessor test is implemented here.
+Global fixed priorities (``fp``, ``rm``, ``dm``)
+    The response-time test of Bertogna & Cirinei (2007; sufficient): a higher-priority task ``i`` with bound
+    ``R_i`` does at most ``W_i(L) = N C_i + min(C_i, L + R_i - C_i - N T_i)``, ``N = floor((L + R_i - C_i) / T_i)``,
+    of work in a window ``L``; a job of ``k`` not done by ``R`` was kept out more than ``R - C_k`` while all ``m``
+    cores ran such work, so ``R`` bounds ``k`` when ``C_k + floor(sum_i min(W_i(R), R - C_k + 1) / m) <= R``
+    (:func:`global_fp_bounds` tries ``R = C_k``, then steps of the set's common time grain, up to ``D_k``). It
+    needs constrained deadlines, no release jitter and distinct priorities; a task with no ``R <= D`` leaves every
+    less urgent one without a bound. A migration costs ``migration_cost`` per release of a more urgent task within
+    the job's deadline.
 Servers (``nodes.<n>.servers``, :mod:`netsim.kernel.servers`)
     The tasks outside servers pass the EDF demand test with each server's bandwidth reserved
     (:func:`~netsim.analysis.rta.edf_schedulable` ``bandwidth=``): then every server deadline is met (isolation,
@@ -35,6 +41,7 @@ Schedule table (``policy: tt``, :mod:`netsim.kernel.timetable`)
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Sequence
@@ -44,8 +51,8 @@ from netsim.analysis.rta import RTATask
 if TYPE_CHECKING:
     from netsim.scenario.schema import NodeSpec, Scenario
 
-__all__ = ["UNBOUNDED", "Speed", "bandwidth", "gfb_test", "migration_charge", "served_bound", "slot_bound",
-           "slowest_speed", "stretch"]
+__all__ = ["UNBOUNDED", "Speed", "bandwidth", "gfb_test", "global_fp_bounds", "migration_charge", "served_bound",
+           "slot_bound", "slowest_speed", "stretch"]
 
 
 @dataclass(frozen=True)
@@ -132,6 +139,50 @@ def gfb_test(tasks: Sequence[RTATask], cores: int) -> tuple[bool, Fraction, Frac
     total = sum(dens, Fraction(0))
     limit = cores - (cores - 1) * max(dens)
     return total <= limit, total, limit
+
+
+def global_fp_bounds(tasks: Sequence[RTATask], cores: int, migration: int = 0) -> tuple[dict[str, int | None], str]:
+    """Response bounds under global preemptive fixed priorities (Bertogna & Cirinei 2007; see the module notes).
+
+    Returns
+    -------
+    bounds, why
+        Task name -> bound (ns) or ``None``; ``why`` is non-empty when the test does not apply at all.
+    """
+    if any(t.jitter or t.blocking for t in tasks):
+        return {t.name: None for t in tasks}, "release jitter or blocking: the test does not apply"
+    if any(t.relative_deadline > t.period for t in tasks):
+        return {t.name: None for t in tasks}, "a deadline beyond its period: the test needs D <= T"
+    order = sorted(tasks, key=lambda t: float(t.priority or 0))
+    if len({t.priority for t in order}) < len(order):
+        return {t.name: None for t in tasks}, "equal priorities: the test needs distinct ones"
+    grain = 0
+    for t in order:
+        grain = math.gcd(grain, t.wcet, t.period, t.relative_deadline)
+    out: dict[str, int | None] = {}
+    done: list[tuple[RTATask, int]] = []  # more urgent tasks with their bounds
+    for k in order:
+        if len(done) < len(out):  # a more urgent task has no bound: neither has this one
+            out[k.name] = None
+            continue
+        c = k.wcet + migration * sum(-(-k.relative_deadline // i.period) + 1 for i, _ in done)
+        step = max(grain, -(-k.relative_deadline // 100_000), 1)
+        found = None
+        r = c
+        while r <= k.relative_deadline:
+            load = 0
+            for i, ri in done:
+                n = (r + ri - i.wcet) // i.period
+                work = n * i.wcet + min(i.wcet, max(0, r + ri - i.wcet - n * i.period))
+                load += min(work, r - c + 1)
+            if c + load // cores <= r:
+                found = r
+                break
+            r = c + (r - c) // step * step + step  # the next point of the grain
+        out[k.name] = found
+        if found is not None:
+            done.append((RTATask(k.name, c, k.period, deadline=k.deadline, priority=k.priority), found))
+    return out, ""
 
 
 def migration_charge(tasks: Sequence[RTATask], cost: int) -> list[RTATask]:

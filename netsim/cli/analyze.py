@@ -44,8 +44,8 @@ import pandas as pd
 
 from netsim.analysis.can import CanMessage, can_analysis
 from netsim.analysis.from_scenario import NodeTasks, interface_delay, message_period, node_tasks, response_bounds
-from netsim.analysis.platform import (UNBOUNDED, bandwidth, gfb_test, migration_charge, served_bound, slot_bound,
-                                      slowest_speed)
+from netsim.analysis.platform import (UNBOUNDED, bandwidth, gfb_test, global_fp_bounds, migration_charge, served_bound,
+                                      slot_bound, slowest_speed)
 from netsim.analysis.rta import RTATask, edf_schedulable, utilization
 from netsim.cli.analyze_loops import loop_rows
 from netsim.cli.analyze_table import COLUMNS, NS
@@ -89,7 +89,7 @@ def _task_rows(scenario: Scenario, sim: Simulation,
                                            bounds, f" (partitioned: core {k})")
             rows += _skipped_rows(node_name, node, mapped, jobs)
         elif cores > 1:
-            rows += _global_rows(node_name, node, mapped, jobs)
+            rows += _global_rows(node_name, node, mapped, jobs, bounds)
         elif node.servers:
             rows += _server_rows(node_name, node, mapped, jobs)
         elif node.policy == "tt":
@@ -166,16 +166,35 @@ def _skipped_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.Da
             for name, why in mapped.skipped]
 
 
-def _global_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.DataFrame) -> list[dict]:
-    """A node with several cores under global scheduling: the GFB test for EDF, else no bound (why)."""
+def _global_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.DataFrame,
+                 bounds: dict[tuple[str, str], tuple[int, int]]) -> list[dict]:
+    """A node with several cores under global scheduling: the GFB test for EDF, the Bertogna-Cirinei response
+    bounds for fixed priorities, else no bound (why)."""
     m, names = node.cores or 1, {t.name for t in node.tasks}
     tasks = [it for it in mapped.items if it.name in names]
-    misses = _misses(jobs, node_name)
     skipped = dict(mapped.skipped)
+    cost = int(node.migration_cost or 0)
+    extra = f"; C + {cost / 1e6:g} ms per release of a{{}} task within D (migrations)" if cost else ""
+    if node.policy in ("fp", "rm", "dm") and not skipped:
+        found, why = global_fp_bounds(mapped.items, m, cost)
+        rows = []
+        for t in node.tasks:
+            it = next(i for i in mapped.items if i.name == t.name)
+            bound = found.get(t.name)
+            if bound is None:
+                rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _worst(jobs, node_name, t.name), "ms", "n/a",
+                                 f"global {node.policy.upper()} on {m} cores: "
+                                 f"{why or 'the Bertogna-Cirinei test finds no R <= D'}"))
+            else:
+                note = (f"global {node.policy.upper()} on {m} cores, Bertogna & Cirinei 2007 RTA (sufficient)"
+                        + extra.format(" more urgent"))
+                rows.append(_bound_row(node_name, t.name, bound, it.wcet, note, jobs, bounds))
+        return rows
+    misses = _misses(jobs, node_name)
     why = ""
     if node.policy != "edf":
-        why = (f"global {node.policy.upper()} on {m} cores: no bound (the one-core RTA does not hold on several cores "
-               "and no multiprocessor test is implemented)")
+        why = (f"global {node.policy.upper()} on {m} cores: no test (the one-core analysis does not hold on several "
+               "cores)")
     elif node.handlers:
         why = "handlers outrank every task on a global node: the GFB test does not apply"
     elif skipped:
@@ -183,15 +202,12 @@ def _global_rows(node_name: str, node: NodeSpec, mapped: NodeTasks, jobs: pd.Dat
     if why:
         rows = [_row("node", node_name, "n/a", misses, "misses", "n/a", why)]
     else:
-        charged = migration_charge(tasks, int(node.migration_cost or 0))
-        ok, total, limit = gfb_test(charged, m)
-        extra = (f"; C + {int(node.migration_cost) / 1e6:g} ms per release of another task within D (migrations)"
-                 if node.migration_cost else "")
+        ok, total, limit = gfb_test(migration_charge(tasks, cost), m)
         rows = [_row("node", node_name, "schedulable" if ok else "not shown schedulable", misses, "misses",
                      "EXCEEDS" if ok and misses else "ok",
                      f"global EDF on {m} cores, GFB test (Goossens, Funk & Baruah 2003; sufficient only): "
                      f"sum C/min(D,T) = {float(total):.3g} {'<=' if ok else '>'} m - (m-1) max = "
-                     f"{float(limit):.3g}{extra}")]
+                     f"{float(limit):.3g}{extra.format('nother')}")]
     for t in node.tasks:
         rows.append(_row("task", f"{node_name}.{t.name}", "n/a", _worst(jobs, node_name, t.name), "ms", "n/a",
                          skipped.get(t.name, f"global {node.policy.upper()}: no per-task bound")))

@@ -102,15 +102,41 @@ def test_partitioned_fp_is_one_rta_per_core_with_handlers_on_core_0() -> None:
     assert not (table["verdict"] == "EXCEEDS").any()
 
 
-def test_global_fixed_priorities_get_no_bound() -> None:
+def test_global_fixed_priorities_by_the_bertogna_cirinei_test() -> None:
     raw = {"name": "global_fp", "duration": "40 ms", "nodes": {"cpu": {
         "policy": "fp", "cores": 2, "tasks": [
             {"name": "a", "program": "idle", "period": "4 ms", "execution": "2 ms", "priority": 1},
-            {"name": "b", "program": "idle", "period": "8 ms", "execution": "3 ms", "priority": 2}]}}}
+            {"name": "b", "program": "idle", "period": "8 ms", "execution": "3 ms", "priority": 2},
+            {"name": "c", "program": "idle", "period": "8 ms", "execution": "4 ms", "priority": 3}]}}}
     table = _table(raw)
-    # the old code applied the one-core RTA (R_b = 7 ms) to a 2-core node
-    assert table.loc[("task", "cpu.b"), "analysis"] == "n/a"
-    assert "no bound" in table.loc[("node", "cpu"), "note"]
+    # m = 2; R is a bound when C + floor(sum_i min(W_i(R), R - C + 1 ns) / 2) <= R, tried at C, C + 1 ms, ...
+    # a: no more urgent task, R_a = 2 ms. b: W_a(3 ms) = 2 ms, min(2 ms, 1 ns) = 1 ns, floor(1/2) = 0: R_b = 3 ms.
+    # c (C = 4): R = 4: 4 ms + floor((1 + 1 ns)/2) = 4 ms + 1 ns > 4 ms. R = 5: W_a = 2 + min(2, 1) = 3 ms,
+    # W_b = 3 ms, both capped at 1 ms + 1 ns: 4 + 1 ms + 1 ns > 5. R = 6: caps 2 ms + 1 ns: 6 ms + 1 ns > 6.
+    # R = 7: W_a = 2 + min(2, 3) = 4 ms -> 3 ms + 1 ns, W_b = 3 ms: floor((6 ms + 1 ns)/2) = 3 ms: 7 <= 7: R_c = 7 ms.
+    # (The old code applied the one-core RTA: R_c unbounded, level load 2/4 + 3/8 + 4/8 > 1.) The run: a takes
+    # core 1 at 4 ms (idle), c runs 2-6 ms on core 0: 6 ms <= 7.
+    assert table.loc[("task", "cpu.a"), "analysis"] == pytest.approx(2.0)
+    assert table.loc[("task", "cpu.b"), "analysis"] == pytest.approx(3.0)
+    assert table.loc[("task", "cpu.c"), "analysis"] == pytest.approx(7.0)
+    assert table.loc[("task", "cpu.c"), "simulated"] == pytest.approx(6.0)
+    assert "Bertogna & Cirinei" in table.loc[("task", "cpu.c"), "note"]
+
+
+def test_dhalls_set_under_global_fp_gets_no_bound_for_the_long_task() -> None:
+    raw = load_scenario(ROOT / "scenarios" / "multicore_dhall.yaml").model_dump(mode="json", exclude_none=True)
+    node = {**raw["nodes"]["global_edf"], "policy": "fp"}
+    node["tasks"] = [{**t, "priority": p} for t, p in zip(node["tasks"], (1, 2, 3))]
+    raw["nodes"] = {"global_fp": node}
+    table = _table(raw)
+    # migration_cost 0.1 ms per release of a more urgent task within D, ceil(D/T) + 1 each:
+    # tau1: none, R = C = 2 ms. tau2: 1 * (ceil(10/10) + 1) = 2 moves: C = 2.2 ms; W_1(2.2) = 2 ms capped at 1 ns,
+    # floor(1/2) = 0: R = 2.2 ms. tau3: 2 * (ceil(11/10) + 1) = 6 moves: C = 10.6 ms; at R = 10.6 both caps are
+    # 1 ns: 10.6 ms + 1 ns > R; the next point (1 ms grain) 11.6 ms > D = 11: no bound (the run misses at 11 ms).
+    assert table.loc[("task", "global_fp.tau1"), "analysis"] == pytest.approx(2.0)
+    assert table.loc[("task", "global_fp.tau2"), "analysis"] == pytest.approx(2.2)
+    assert table.loc[("task", "global_fp.tau3"), "analysis"] == "n/a"
+    assert not (table["verdict"] == "EXCEEDS").any()
 
 
 # ------------------------------------------------------------------ servers
