@@ -27,8 +27,9 @@ For one scenario and its run, one row per checked item:
 A node's CPU changes the test (:mod:`netsim.analysis.platform`, each rule stated in the row's note): execution
 times at the slowest speed the node can run (speed scaling); each core of a partitioned node on its own (node rows
 ``<node>.core<k>``); the GFB density test for global EDF (``not shown schedulable`` when it fails: it is only
-sufficient) and the Bertogna-Cirinei response bounds under global fixed priorities; the demand test with the servers' bandwidth reserved and a
-served task's CBS/TBS bound; a time-triggered task's slot (``R <= slot end - activation``).
+sufficient) and the Bertogna-Cirinei response bounds under global fixed priorities; the demand test with the
+servers' bandwidth reserved and a served task's CBS/TBS bound; a time-triggered task's slot
+(``R <= slot end - activation``).
 
 A simulated value above its bound is flagged ``EXCEEDS``: a bug in the simulator or in the analysis.
 """
