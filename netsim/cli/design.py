@@ -12,9 +12,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from netsim.status import EXIT_INVALID, EXIT_OK
+
+if TYPE_CHECKING:  # pragma: no cover
+    from netsim.scenario.schema import Scenario
 
 __all__ = ["cmd_design", "format_designs", "scenario_designs"]
 
@@ -107,7 +110,7 @@ def format_designs(name: str, designs: dict[str, dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def scenario_designs(scenario: Any, *, margin: bool = True) -> dict[str, dict[str, Any]]:
+def scenario_designs(scenario: Scenario, *, margin: bool = True) -> dict[str, dict[str, Any]]:
     """:func:`static_designs` of a valid scenario, its plant and io channels built as ``netsim validate`` builds
     them (:mod:`netsim.build.dry_run`); what ``netsim design`` prints."""
     from netsim.env import SimEnv
