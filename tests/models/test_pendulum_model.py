@@ -49,6 +49,27 @@ def test_the_registered_plant_integrates_the_same_dynamics():
     assert np.array_equal(plant.A, A) and np.array_equal(plant.B, B)
 
 
+def test_the_plant_rhs_follows_the_params_it_is_called_with():
+    # the plant's right-hand side folds its parameters into floats at build (issue 29); called with another
+    # parameter set it must use that one, as dynamics() does (expected values: dynamics with those params)
+    plant = pm.furuta_pendulum(pm.PendulumParams(disturbance_std=0.0))
+    heavy = pm.PendulumParams(mp=0.05, Dp=0.001)
+    x, u = np.array([0.1, -0.2, 0.05, 0.3]), np.array([1.0])
+    got = plant.f(0.0, x, u, heavy)
+    assert np.array_equal(got, pm.dynamics(0.0, x, u, heavy))
+    assert not np.allclose(got, plant.f(0.0, x, u, plant.params))
+
+
+def test_the_plant_rhs_reads_lists_and_an_empty_input_like_arrays():
+    # lists and a missing input (u = 0 V) take the generic conversion; the values must be those of the
+    # float64-array path the integrators use (expected: the same call with arrays)
+    plant = pm.furuta_pendulum(pm.PendulumParams(disturbance_std=0.0))
+    x = [0.1, -0.2, 0.05, 0.3]
+    assert np.array_equal(plant.f(0.0, x, [1.0], plant.params), plant.f(0.0, np.array(x), np.array([1.0]), None))
+    assert np.array_equal(plant.f(0.0, np.array(x), [], plant.params),
+                          plant.f(0.0, np.array(x), np.array([0.0]), plant.params))
+
+
 def test_linearisation_equals_finite_difference_jacobians():
     p = pm.PendulumParams()
     A, B = pm.linearise(p)
