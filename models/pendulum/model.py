@@ -130,10 +130,17 @@ class PendulumParams(StrictModel):
         return self.mp * self.Lp**2 / 12.0 + self.mp * self.l**2
 
 
-try:  # the gufunc behind np.linalg.solve for one right-hand side: the same LAPACK dgesv call, ~5 us less wrapper
-    from numpy.linalg._umath_linalg import solve1 as _solve1
-except ImportError:  # pragma: no cover - a numpy without the private module: the public function, same bits
-    _solve1 = None
+def _gufunc_solve1() -> Any:
+    """The gufunc behind ``np.linalg.solve`` for one right-hand side (the same LAPACK dgesv call, without the
+    ~5 us of the public function's checks), or None on a numpy without it (then the public function is used)."""
+    try:
+        from numpy.linalg import _umath_linalg
+    except ImportError:  # pragma: no cover - the module is private to numpy
+        return None
+    return getattr(_umath_linalg, "solve1", None)
+
+
+_solve1: Any = _gufunc_solve1()
 
 
 class _Rhs:
