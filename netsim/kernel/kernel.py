@@ -252,7 +252,8 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
             self._invoke(handler, msg, label)
         else:
             self._release(self._get(self.tasks, target, "task"), msg)
-        self._request_dispatch_deferred()
+        # called last in a medium's callback: dispatch now unless an entry of this instant up to DISPATCH waits
+        self._request_dispatch()
 
     def kill_job(self, job: Job) -> None:
         """End ``job`` now: it frees the CPU, its record is marked killed, its task's next job may start."""
@@ -366,7 +367,6 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         job._wake = None
         self._make_ready(job, self._sim.now)
         self._request_dispatch_deferred()
-
 
     # ================================================================= simpy callbacks
     def _on_start(self, _ev: Any) -> None:

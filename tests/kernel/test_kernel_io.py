@@ -138,3 +138,60 @@ def test_unknown_analog_channel_is_reported_with_suggestion():
     k.create_job("t")
     with pytest.raises(SimulationError, match="did you mean 'theta'"):
         env.run(1 * MS)
+
+
+def test_deliver_runs_the_bound_task_at_once_when_nothing_else_is_due_at_the_instant():
+    # issue 29: a message arriving alone at an instant needs no deferred-dispatch entry on the event loop; the
+    # bound task's code runs inside deliver (before: only at the DISPATCH entry, after deliver returned)
+    env = SimEnv()
+    k = Kernel(env, "actuator")
+    k.bind_receive("can", "act")
+    seen = []
+
+    def act(job):
+        msg = yield job.receive("can")
+        seen.append((job.now, msg.payload))
+        yield job.execute(100 * US)
+
+    k.create_task("act", act, priority=1)
+    after_deliver = []
+
+    def arrive():
+        yield env.timeout(2 * MS)
+        k.deliver("can", Message("controller", "actuator", 4.2, 64))
+        after_deliver.append((list(seen), k.running))
+
+    env.process(arrive())
+    env.run(5 * MS)
+    assert after_deliver == [([(2 * MS, 4.2)], "act")]
+    assert k.job_records[0].finish == 2 * MS + 100 * US
+
+
+def test_deliver_waits_for_a_release_due_at_the_same_instant():
+    # releases come before dispatch at an instant: a periodic release queued at the arrival's instant is
+    # processed first, so the more urgent periodic task starts before the message's task reads its inbox
+    env = SimEnv()
+    k = Kernel(env, "n")
+    k.bind_receive("can", "act")
+    starts = []
+
+    def act(job):
+        starts.append(("act", job.now))
+        yield job.receive_newest("can")
+        yield job.execute(10 * US)
+
+    def hi(job):
+        starts.append(("hi", job.now))
+        yield job.execute(50 * US)
+
+    k.create_task("act", act, priority=2)
+    k.create_task("hi", hi, period=1 * MS, offset=1 * MS, priority=1)
+
+    def arrive():
+        yield env.timeout(2 * MS)  # queued at t = 0, before the release at 2 ms (queued at 1 ms)
+        k.deliver("can", Message("s", "n", 1.0, 8))
+
+    env.process(arrive())
+    env.run(2 * MS + 500 * US)
+    assert starts == [("hi", 1 * MS), ("hi", 2 * MS), ("act", 2 * MS + 50 * US)]
+
