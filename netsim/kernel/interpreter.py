@@ -197,6 +197,14 @@ class Interpreter:
         inbox = self._inboxes.get(req.a)
         return inbox.popleft() if inbox else None
 
+    def _op_receive_newest(self, job: Job, req: Request, now: int) -> Any:
+        inbox = self._inboxes.get(req.a)
+        if not inbox:
+            return None
+        newest = inbox.pop()
+        inbox.clear()
+        return newest
+
     def _op_fetch(self, job: Job, req: Request, now: int) -> Any:
         ok, value = req.a.try_get()
         if ok:

@@ -272,6 +272,11 @@ class Job(JobState):
         """The next message of the node's inbox for ``network``; the yield returns it, or ``None``."""
         return Request(rq.RECEIVE, network)
 
+    def receive_newest(self, network: str) -> Request:
+        """Empty the node's inbox for ``network`` in one request; the yield returns the newest message, or
+        ``None`` when it was empty (the older ones are dropped unread, as by a loop of :meth:`receive`)."""
+        return Request(rq.RECEIVE_NEWEST, network)
+
     # ----------------------------------------------------------------- synchronisation
     def fetch(self, mailbox: Mailbox) -> Request:
         """Take the oldest item of ``mailbox``, blocking while it is empty; the yield returns the item."""

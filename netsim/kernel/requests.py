@@ -42,6 +42,7 @@ class Op(IntEnum):
     ENTER = 16
     EXIT = 17
     SET_SPEED = 18
+    RECEIVE_NEWEST = 19
 
 
 # The operations as plain ints (``Request(RECEIVE, "net")`` in programs that prebuild their requests). Requests
@@ -66,6 +67,7 @@ SLEEP = Op.SLEEP.value
 ENTER = Op.ENTER.value
 EXIT = Op.EXIT.value
 SET_SPEED = Op.SET_SPEED.value
+RECEIVE_NEWEST = Op.RECEIVE_NEWEST.value
 
 #: The name of each operation (the name of its ``Job`` method).
 OP_NAMES: dict[int, str] = {op.value: op.name.lower() for op in Op}

@@ -177,13 +177,9 @@ def _run(ctx: ProgramContext, job: Job) -> Generator[Any, Any, None]:
 
 
 def _newest(job: Job, network: str) -> Generator[Any, Any, Any]:
-    """Drain the node's inbox on ``network``; return the newest message (or ``None``)."""
-    newest = None
-    while True:
-        msg = yield job.receive(network)
-        if msg is None:
-            return newest
-        newest = msg
+    """Drain the node's inbox on ``network``; return the newest message (or ``None``): one request,
+    ``job.receive_newest`` (the programs below yield it directly)."""
+    return (yield job.receive_newest(network))
 
 
 def _value(msg: Any) -> float:
@@ -292,7 +288,7 @@ class Controller:
         if p.channel is not None:
             return float((yield job.analog_in(p.channel)))
         if self.in_net is not None:
-            msg = yield from _newest(job, self.in_net)
+            msg = yield job.receive_newest(self.in_net)
             if msg is None:
                 log.warning("%s.%s: no measurement in the inbox at t=%d ns; reusing the last one",
                             self.ctx.node, self.ctx.task, job.now)
@@ -346,7 +342,7 @@ class Actuator:
         self.p = params
 
     def __call__(self, job: Job) -> Body:
-        msg = yield from _newest(job, self.p.network)
+        msg = yield job.receive_newest(self.p.network)
         yield from _run(self.ctx, job)
         if msg is None:
             log.warning("%s.%s: released without a control message at t=%d ns", self.ctx.node, self.ctx.task, job.now)
@@ -402,7 +398,7 @@ class Interference:
     def __call__(self, job: Job) -> Body:
         p = self.p
         if p.rate is None:
-            yield from _newest(job, p.network)  # discard frames addressed to this node
+            yield job.receive_newest(p.network)  # discard frames addressed to this node
             if p.share >= 1.0 or self.rng.random() < p.share:
                 yield job.send(p.network, _destination(p.to), 0.0, p.bits, priority=p.priority, tag=p.tag)
             yield from _run(self.ctx, job)
@@ -412,7 +408,7 @@ class Interference:
         while True:
             gap = max(1, from_seconds(float(self.rng.exponential(1.0 / p.rate))))
             yield job.sleep(gap)
-            yield from _newest(job, p.network)
+            yield job.receive_newest(p.network)
             yield job.send(p.network, _destination(p.to), 0.0, p.bits, priority=p.priority, tag=p.tag)
 
 

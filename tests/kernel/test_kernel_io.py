@@ -195,3 +195,32 @@ def test_deliver_waits_for_a_release_due_at_the_same_instant():
     env.run(2 * MS + 500 * US)
     assert starts == [("hi", 1 * MS), ("hi", 2 * MS), ("act", 2 * MS + 50 * US)]
 
+
+def test_receive_newest_empties_the_inbox_in_one_request_and_returns_its_last_message():
+    # three messages queued at one instant: the one request returns the third and leaves the inbox empty; an
+    # empty inbox gives None
+    env = SimEnv()
+    k = Kernel(env, "ctrl")
+    got = []
+    yields = []
+
+    def body(job):
+        for _ in range(2):
+            req = job.receive_newest("can")
+            yields.append(req)
+            got.append((yield req))
+            got.append(len(k.inbox("can")))
+
+    k.create_task("t", body, priority=1)
+
+    def arrive():
+        yield env.timeout(1 * MS)
+        for payload in "abc":
+            k.deliver("can", Message("s", "ctrl", payload, 8))
+        k.create_job("t")
+
+    env.process(arrive())
+    env.run(2 * MS)
+    assert [m.payload if m is not None else None for m in got[::2]] == ["c", None]
+    assert got[1::2] == [0, 0]
+    assert len(yields) == 2
