@@ -59,6 +59,8 @@ from netsim.results.traces import attach_traces, trace_problems  # noqa: E402
 from netsim.timebase import S  # noqa: E402
 
 if TYPE_CHECKING:
+    from netsim.build.simulation import Simulation
+    from netsim.scenario.problems import Problem
     from netsim.scenario.schema import Scenario
 
 __all__ = [
@@ -165,18 +167,19 @@ def _event_count(env: Any) -> int | None:
     return int(counted()) if counted is not None else None
 
 
-def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = None
+def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = None, sim: Simulation | None = None
              ) -> tuple[RunResult, Any, BaseException | None]:
     """Build and run ``scenario`` (validated); returns (result without metrics, simulation, exception or None).
 
     ``progress(t_ns, t_end_ns)``, when given, is called about every 1 % of simulated time
-    (:meth:`~netsim.build.builder.Simulation.run`). The result's ``meta`` has ``status``, ``error``,
-    ``t_end_s``, ``wall_time_s`` and ``events``.
+    (:meth:`~netsim.build.builder.Simulation.run`). ``sim``: the scenario's build, when it is built already
+    (never run). The result's ``meta`` has ``status``, ``error``, ``t_end_s``, ``wall_time_s`` and ``events``.
     """
-    from netsim.build.builder import build
-
     t0 = time.perf_counter()
-    sim = build(scenario)
+    if sim is None:
+        from netsim.build.builder import build
+
+        sim = build(scenario)
     attach_traces(sim, scenario.output)  # jobs / messages: full | summary | off, schedule: on | off (issue 19)
     failure: BaseException | None = None
     status, error = "ok", ""
@@ -213,8 +216,8 @@ def simulate(scenario: Scenario, progress: Callable[[int, int], None] | None = N
             error = hit[1]
     from netsim.programs.design_summary import run_warnings as design_warnings  # D's hook (issue 26 s4)
 
-    # the unstable-nominal-loop warnings go to meta.json only: loading the scenario logged them already
-    # (validate's dry run, netsim.build.dry_run), and the console showed each twice
+    # the unstable-nominal-loop warnings go to meta.json only: they were logged already, by the run's build check
+    # (_built) or by loading (validate's dry run, netsim.build.dry_run), and the console showed each twice
     said = design_warnings(sim)
     warnings = _unrecorded(scenario, sim.env.recorder)
     # a program's own warnings about its setting (e.g. netsim.models.unicycle's filter and plant disagreeing)
@@ -369,7 +372,11 @@ def run(
         from netsim.plant.described import resolve_plant_object
 
         source = resolve_plant_object(dict(source))
-    scenario = load_scenario(source, overrides=ov or None, allow_plugins=allow_plugins)
+    scenario = load_scenario(source, overrides=ov or None, allow_plugins=allow_plugins, for_run=True)
+    base_sc = scenario.baseline_scenario()
+    base_key = _baseline_key(base_sc) if base_sc is not None else ""
+    cached = _baseline_hit(base_sc, base_key) if base_sc is not None else None
+    sim, base_built = _built(scenario, base_sc if cached is None else None, base_key)  # before the run folder
     needs = trace_problems(scenario)
     if needs:
         from netsim.errors import ConfigError
@@ -383,10 +390,11 @@ def run(
         folder.mkdir(parents=True, exist_ok=True)  # before the run: incomplete (no meta.json) until written
         (folder / "meta.json").unlink(missing_ok=True)  # a folder run again reads incomplete until it is rewritten
 
-    base_sc = scenario.baseline_scenario()
-    baseline = _baseline(base_sc) if base_sc is not None else None
+    baseline = cached
+    if base_sc is not None and baseline is None:
+        baseline = _baseline_run(base_sc, base_key, *base_built)
 
-    result, sim, failure = simulate(scenario, progress)
+    result, sim, failure = simulate(scenario, progress, sim)
     result.scenario = scenario.resolved_dict()
     try:
         if failure is not None and not isinstance(failure, DivergenceError):
@@ -452,11 +460,78 @@ def run(
 #: Baseline results kept per process: key -> {seed or None (any seed): RunResult}.
 _BASELINES: "OrderedDict[str, dict[int | None, RunResult]]" = OrderedDict()
 _BASELINE_CACHE_SIZE = 8
+#: The warnings of each cached baseline's build (an unstable nominal loop), logged again by a run that reuses it.
+_BASELINE_WARNINGS: dict[str, list[Problem]] = {}
 
 
 def clear_baseline_cache() -> None:
     """Forget the baseline results kept in this process."""
     _BASELINES.clear()
+    _BASELINE_WARNINGS.clear()
+
+
+def _built(scenario: Scenario, base_sc: Scenario | None, base_key: str
+           ) -> tuple[Simulation, tuple[Simulation | None, list[Problem] | None]]:
+    """The run's one build of ``scenario`` and of its baseline ``base_sc`` (None: not built here, it is cached or
+    there is none): ``(simulation, (baseline simulation, baseline's build warnings))`` (None, None for the baseline
+    when it is not built or not checked here).
+
+    A scenario loaded for the run (``load_scenario(..., for_run=True)``, which leaves out the dry run) is checked
+    here as the dry run checks it (:func:`_checked`: the kernels' references, an unstable nominal loop), and its build's problems are reported as loading reports them (:class:`~netsim.scenario.loader.
+    RunCheck`): an error raises the same :class:`~netsim.scenario.problems.ScenarioError` (file, line, YAML path),
+    before anything is written; the warnings are logged in loading's order. A scenario loaded otherwise was
+    checked by its dry run already: it is only built.
+
+    Raises
+    ------
+    ScenarioError
+        The scenario or its baseline does not build.
+    """
+    check = scenario._run_check
+    if check is None:
+        from netsim.build.builder import build
+
+        return build(scenario), (None, None)
+    sim, found = _checked(scenario)
+    refused = check.refused(found)
+    if refused is not None:
+        raise refused
+    assert sim is not None  # a build that failed is refused above, or its own error was raised
+    base_sim: Simulation | None = None
+    base_found = list(_BASELINE_WARNINGS.get(base_key, [])) if base_key else []
+    if base_sc is not None:
+        base_sim, base_found = _checked(base_sc)
+        refused = check.refused_baseline(found, base_found)
+        if refused is not None:
+            raise refused
+    check.log_warnings(found, base_found)
+    scenario._run_check = None  # checked: running this Scenario again only builds it
+    return sim, (base_sim, base_found)
+
+
+def _checked(scenario: Scenario) -> tuple[Simulation | None, list[Problem]]:
+    """Build ``scenario`` and check the build as loading's dry run checks it: ``(simulation, problems)``.
+
+    When the build or its check fails, the dry run (:func:`netsim.build.dry_run.build_problems`) is made after all,
+    and its error is the problem returned: what loading refuses is refused with the same path and message. A
+    failure the dry run does not see (in a user's plugin, which it leaves out) stays the run's own, as before: the
+    build's error is raised, and a kernel's reference error is left for the run to meet when it starts.
+    """
+    from netsim.build.builder import build
+    from netsim.build.dry_run import build_problems, built_problems
+    from netsim.errors import ConfigError
+
+    try:
+        sim = build(scenario)
+    except ConfigError:
+        dry = build_problems(scenario)
+        if any(p.is_error for p in dry):
+            return None, dry
+        raise
+    found = built_problems(sim)
+    if any(p.is_error for p in found):  # the dry run's verdict: its error, or its warnings (the run meets the error)
+        return sim, build_problems(scenario)
+    return sim, found
 
 
 def _baseline_key(scenario: Scenario) -> str:
@@ -518,13 +593,26 @@ def _same(result: RunResult, name: str) -> Any:
 def _baseline(base_sc: Any) -> RunResult:
     """The baseline run of a scenario (with its generic metrics), from the cache when possible."""
     key = _baseline_key(base_sc)
+    hit = _baseline_hit(base_sc, key)
+    return hit if hit is not None else _baseline_run(base_sc, key)
+
+
+def _baseline_hit(base_sc: Any, key: str) -> RunResult | None:
+    """The cached baseline run of ``base_sc`` (whose :func:`_baseline_key` is ``key``), or None."""
     entries = _BASELINES.get(key)
     if entries is not None:
         hit = entries.get(None) or entries.get(int(base_sc.seed))
         if hit is not None:
             _BASELINES.move_to_end(key)
             return _shared(hit)
-    baseline, base_sim, base_fail = simulate(base_sc)
+    return None
+
+
+def _baseline_run(base_sc: Any, key: str, sim: Simulation | None = None, warnings: list[Problem] | None = None
+                  ) -> RunResult:
+    """Run the baseline ``base_sc`` (on ``sim``, its build, when given) and cache it under ``key``, with its build's
+    ``warnings``."""
+    baseline, base_sim, base_fail = simulate(base_sc, sim=sim)
     if base_fail is not None and not isinstance(base_fail, DivergenceError):
         raise base_fail
     from netsim.metrics.runtime import generic_metrics
@@ -535,8 +623,11 @@ def _baseline(base_sc: Any) -> RunResult:
     slot = None if not base_sim.used_seed() else int(base_sc.seed)
     _BASELINES.setdefault(key, {})[slot] = baseline
     _BASELINES.move_to_end(key)
+    if warnings is not None:
+        _BASELINE_WARNINGS[key] = list(warnings)
     while len(_BASELINES) > _BASELINE_CACHE_SIZE:
-        _BASELINES.popitem(last=False)
+        old, _ = _BASELINES.popitem(last=False)
+        _BASELINE_WARNINGS.pop(old, None)
     return _shared(baseline)
 
 

@@ -29,9 +29,10 @@ from netsim.errors import ConfigError
 from netsim.scenario.problems import WARNING, Problem
 
 if TYPE_CHECKING:
+    from netsim.build.simulation import Simulation
     from netsim.scenario.schema import Scenario
 
-__all__ = ["build_problems"]
+__all__ = ["build_problems", "built_problems"]
 
 log = logging.getLogger(__name__)
 
@@ -49,15 +50,24 @@ def build_problems(scenario: Scenario) -> list[Problem]:
 
     try:
         sim = build(scenario, dry_run=True)
-        for name, kernel in sim.kernels.items():
-            try:
-                kernel.validate()
-            except ConfigError as exc:
-                raise type(exc)(exc.message, path=exc.path or f"nodes.{name}") from None
     except ConfigError as exc:
         return [Problem(exc.path or "", exc.message)]
+    return built_problems(sim)
+
+
+def built_problems(sim: Simulation) -> list[Problem]:
+    """What :func:`build_problems` checks on a simulation that is built already: each kernel's references (at most
+    one error), else the warnings of an unstable nominal loop.
+
+    A run that builds its scenario once (:func:`netsim.runner.run`, issue 28) checks its own build with this.
+    """
+    for name, kernel in sim.kernels.items():
+        try:
+            kernel.validate()
+        except ConfigError as exc:
+            return [Problem(exc.path or f"nodes.{name}", exc.message)]
     if sim.plant is None:
         return []
     from netsim.programs.design_summary import nominal_warnings_at  # issue 26 s4: unstable nominal loops
 
-    return [Problem(at, text, severity=WARNING) for at, text in nominal_warnings_at(scenario, sim.plant)]
+    return [Problem(at, text, severity=WARNING) for at, text in nominal_warnings_at(sim.scenario, sim.plant)]

@@ -115,22 +115,24 @@ def _cmd_run(args: argparse.Namespace) -> int:
         check_out_dir(args.out)  # a bad --out is refused before anything runs
     if args.seed is not None:
         overrides["seed"] = args.seed  # applied to the raw tree with the --set values: one validation
-    try:
-        scenario = load_scenario(args.file, overrides or None)
+    try:  # the build is checked by run's one build (issue 28): its problems come from run(), as loading's do here
+        scenario = load_scenario(args.file, overrides or None, for_run=True)
+        from netsim.runner import run
+
+        show = not (args.no_progress or args.quiet) and sys.stderr.isatty()
+        window = _plot_window(getattr(args, "plot_window", None))
+        with _RunProgress(scenario.name, enabled=show) as progress:
+            if window is None:
+                result = run(scenario, out=args.out, plot=args.plot, progress=progress.callback)
+            else:  # --plot-window implies --plot: the figures are drawn here with that window
+                result = run(scenario, out=args.out, plot=False, progress=progress.callback)
     except ScenarioError as exc:
+        if getattr(exc, "run_folder", None) is not None:  # raised by the simulation, after the folder was written
+            raise
         _print_problems(exc.problems, sys.stderr)
         n = len(exc.errors)
         _err(f"{args.file}: {n} problem{'s' if n != 1 else ''}; nothing was run")
         return EXIT_INVALID
-    from netsim.runner import run
-
-    show = not (args.no_progress or args.quiet) and sys.stderr.isatty()
-    window = _plot_window(getattr(args, "plot_window", None))
-    with _RunProgress(scenario.name, enabled=show) as progress:
-        if window is None:
-            result = run(scenario, out=args.out, plot=args.plot, progress=progress.callback)
-        else:  # --plot-window implies --plot: the figures are drawn here with that window
-            result = run(scenario, out=args.out, plot=False, progress=progress.callback)
     meta = getattr(result, "meta", {}) or {}
     status = str(meta.get("status", "ok"))
     out_dir = getattr(result, "out_dir", None) or meta.get("out_dir")

@@ -10,7 +10,8 @@ is a problem to place (:class:`LineIndex` parses the text a second time, keeping
 Validation runs in three layers that all run even when an earlier one finds problems: the base schema
 (:mod:`netsim.scenario.schema`, once), every plugin's own ``Params`` model, and the cross references
 (:mod:`netsim.scenario.validate`); a scenario that passes them then goes through build's own kernel and network
-checks (:mod:`netsim.build.dry_run`: the run's own build on a dry-run environment, once). A scenario with ``baseline: {overrides: ...}`` has its baseline
+checks (:mod:`netsim.build.dry_run`: the run's own build on a dry-run environment, once; loaded for a run, the
+scenario leaves those checks to the run's one build, :class:`RunCheck`). A scenario with ``baseline: {overrides: ...}`` has its baseline
 validated the same way, once, while it loads; :meth:`Scenario.baseline_scenario` returns it.
 
 A mapping from Python is made plain first (:mod:`netsim.scenario.python_values`: numpy arrays and scalars as lists
@@ -64,6 +65,7 @@ __all__ = [
     "dump_resolved",
     "scenario_hash",
     "shadow_verdict",
+    "RunCheck",
 ]
 
 log = logging.getLogger(__name__)
@@ -208,8 +210,9 @@ def _raw_tree(source: Source, overrides: Mapping[str, Any] | None
                                                  f"{type(source).__name__}")]
 
 
-def _validate(raw: dict[str, Any], line_of: Any) -> tuple[list[Problem], Scenario | None]:
-    """The one validation of a raw tree: schema, plugin parameters and cross references, then build's checks.
+def _validate(raw: dict[str, Any], line_of: Any, build: bool = True) -> tuple[list[Problem], Scenario | None]:
+    """The one validation of a raw tree: schema, plugin parameters and cross references, then build's checks
+    (with ``build`` False they are left to the run's one build, :class:`RunCheck`).
 
     Returns the problems (with paths, no lines) and the scenario when there is no error.
     """
@@ -229,6 +232,8 @@ def _validate(raw: dict[str, Any], line_of: Any) -> tuple[list[Problem], Scenari
         if path in validated:
             spec.attach_validated(validated[path])
     scenario._raw = raw
+    if not build:
+        return problems, scenario
     from netsim.build.dry_run import build_problems
 
     problems += build_problems(scenario)  # the run's build on a dry-run environment, nothing simulated
@@ -237,7 +242,8 @@ def _validate(raw: dict[str, Any], line_of: Any) -> tuple[list[Problem], Scenari
     return problems, scenario
 
 
-def _baseline(raw: dict[str, Any], main_valid: bool) -> tuple[list[Problem], list[Problem], Scenario | None]:
+def _baseline(raw: dict[str, Any], main_valid: bool, build: bool = True
+              ) -> tuple[list[Problem], list[Problem], Scenario | None]:
     """The baseline of ``raw`` (``baseline.overrides`` applied, no baseline), validated once.
 
     Returns the errors to report at ``baseline.overrides``, the baseline's warnings, and the baseline scenario.
@@ -268,32 +274,87 @@ def _baseline(raw: dict[str, Any], main_valid: bool) -> tuple[list[Problem], lis
                 if any(parts[: len(k)] == k for k in keys):
                     errors.append(Problem(where, f"override gives {p.path}: {p.message}"))
         return errors, [], None
-    problems, scenario = _validate(base_raw, None)
+    problems, scenario = _validate(base_raw, None, build)
     if scenario is not None:  # an override of a preset the scenario spells out (issue 26)
         hidden, changed = shadowed_overrides(base_raw, scenario, applied)
         if changed:
-            problems, scenario = _validate(base_raw, None)
+            problems, scenario = _validate(base_raw, None, build)
         errors += [Problem(where, f"'{p.path}': {p.message}") for p in hidden]
-    errors += [Problem(where, f"override gives {p.path}: {p.message}" if p.path else f"override gives: {p.message}")
-               for p in problems if p.severity == ERROR]
+    errors += [_override_gives(p) for p in problems if p.severity == ERROR]
     warnings = [p for p in problems if p.severity != ERROR]
     return errors, warnings, None if errors else scenario
 
 
-def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None
-            ) -> tuple[list[Problem], Scenario | None, list[Problem]]:
+def _override_gives(p: Problem) -> Problem:
+    """A problem of the baseline scenario as the scenario's own error at ``baseline.overrides``."""
+    return Problem("baseline.overrides", f"override gives {p.path}: {p.message}" if p.path
+                   else f"override gives: {p.message}")
+
+
+class RunCheck:
+    """What loading for a run (``load_scenario(..., for_run=True)``) leaves to the run's one build (issue 28).
+
+    Loading for a run validates everything but the build; :func:`netsim.runner.run` then builds the scenario (and
+    its baseline) once, checks that build (:func:`netsim.build.dry_run.built_problems`) and hands its problems
+    here, which turns them into what loading with its dry run gives: the same error (file, line, YAML path, message, the
+    warnings found so far beside it) and the same warnings logged in the same order.
+    """
+
+    def __init__(self, problems: list[Problem], index: LineIndex, file: str | None,
+                 base_warnings: list[Problem]) -> None:
+        self._problems = problems  # the scenario's (warnings only), with paths and no lines
+        self._index = index
+        self._file = file
+        self._base_warnings = base_warnings  # the baseline's validation warnings, not yet compared
+
+    def _located(self, problems: list[Problem]) -> list[Problem]:
+        located = [shorten_problem(p.located(self._index.line_of(p.path), self._file)) for p in problems]
+        return sort_problems(located)
+
+    def refused(self, found: list[Problem]) -> ScenarioError | None:
+        """The error loading gives for the scenario's build problems ``found`` (None: it built)."""
+        if not any(p.severity == ERROR for p in found):
+            return None
+        return ScenarioError(self._located([*self._problems, *found]))
+
+    def refused_baseline(self, found: list[Problem], base_found: list[Problem]) -> ScenarioError | None:
+        """The error loading gives when the baseline's build has problems ``base_found`` (None: it built)."""
+        errors = [_override_gives(p) for p in base_found if p.severity == ERROR]
+        if not errors:
+            return None
+        return ScenarioError(self._located([*self._problems, *found, *errors]))
+
+    def warnings(self, found: list[Problem], base_found: list[Problem]) -> list[Problem]:
+        """Every warning loading would log, in its order: the scenario's (with the build's ``found``), located and
+        sorted, then the baseline's (with its build's ``base_found``) that the scenario has not said already."""
+        said = {(p.path, p.message) for p in [*self._problems, *found]}
+        base = [p for p in [*self._base_warnings, *base_found] if p.severity != ERROR]
+        return [*self._located([*self._problems, *found]), *[p for p in base if (p.path, p.message) not in said]]
+
+    def log_warnings(self, found: list[Problem], base_found: list[Problem]) -> None:
+        """Log :meth:`warnings` as :func:`load_scenario` logs a scenario's warnings."""
+        for p in self.warnings(found, base_found):
+            log.warning("%s", p.describe(tag=False))
+
+
+def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None,
+            build: bool = True) -> tuple[list[Problem], Scenario | None, list[Problem]]:
     """:func:`_gather_all` with the caller's permission and the scenario file's folder known to plugin parameters
     that name code files (:func:`netsim.trust.validating`: an FMU plant)."""
     from netsim.trust import validating
 
     file = os.fspath(source) if isinstance(source, (str, os.PathLike)) else None
     with validating(allow_plugins, Path(file).resolve().parent if file else None):
-        return _gather_all(source, overrides, allow_plugins)
+        return _gather_all(source, overrides, allow_plugins, build)
 
 
-def _gather_all(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None
-                ) -> tuple[list[Problem], Scenario | None, list[Problem]]:
-    """Every problem of ``source`` (located), the scenario when there is no error, and its baseline's warnings."""
+def _gather_all(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None,
+                build: bool = True) -> tuple[list[Problem], Scenario | None, list[Problem]]:
+    """Every problem of ``source`` (located), the scenario when there is no error, and its baseline's warnings.
+
+    With ``build`` False the build's checks are left to the run (the scenario gets its :class:`RunCheck`, and
+    the baseline's warnings are its own, not yet compared with the scenario's).
+    """
     if isinstance(source, Scenario) and not overrides:
         return [], source, []
     raw, file, index, read_problems = _raw_tree(source, overrides)
@@ -319,18 +380,21 @@ def _gather_all(source: Source, overrides: Mapping[str, Any] | None, allow_plugi
         # the names the file registers are unknown until it runs: listing them as unknown would only be noise
         return done(problems), None, []
 
-    found, scenario = _validate(raw, index.line_of)
+    found, scenario = _validate(raw, index.line_of, build)
     if scenario is not None and applied:  # an override of a preset the file spells out (issue 26)
         hidden, changed = shadowed_overrides(raw, scenario, applied)
         if changed:  # siblings that spelled out the old preset were removed: the new one fills them
-            found, scenario = _validate(raw, index.line_of)
+            found, scenario = _validate(raw, index.line_of, build)
         found += hidden
         if hidden:
             scenario = None
     problems += found
     valid = scenario is not None and not any(p.severity == ERROR for p in problems)
-    base_errors, base_warnings, base_scenario = _baseline(raw, valid)
+    base_errors, base_warnings, base_scenario = _baseline(raw, valid, build)
     problems += base_errors
+    if not build and valid and not base_errors:
+        assert scenario is not None
+        scenario._run_check = RunCheck(list(problems), index, file, base_warnings)
     said = {(p.path, p.message) for p in problems}
     base_warnings = [p for p in base_warnings if (p.path, p.message) not in said]  # not twice in the log
     if not valid or base_errors:
@@ -409,7 +473,7 @@ def check_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *
 
 
 def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
-                  allow_plugins: bool | None = None) -> Scenario:
+                  allow_plugins: bool | None = None, for_run: bool = False) -> Scenario:
     """Load and validate a scenario (and its baseline, if it has one); warnings are logged.
 
     Parameters
@@ -423,6 +487,11 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
     allow_plugins : bool, optional
         Whether the plugin files the scenario's ``plugins:`` names may run (None: the user's settings,
         :func:`netsim.trust.plugins_allowed`; a scenario naming a file that is not allowed does not load).
+    for_run : bool, optional
+        True when the scenario is loaded to be run (``netsim run``, :func:`netsim.runner.run`): the dry run of
+        the build is left out, and the run's own build (made once, before the run folder) reports the build's
+        problems as loading would and logs the warnings then (:class:`RunCheck`). A Scenario given as
+        ``source`` without ``overrides`` is returned as it is.
 
     Returns
     -------
@@ -441,9 +510,11 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
     >>> scenario.seed, scenario.name                                                  # doctest: +SKIP
     (3, 'dc_servo_can')
     """
-    problems, scenario, base_warnings = _gather(source, overrides, allow_plugins)
+    problems, scenario, base_warnings = _gather(source, overrides, allow_plugins, build=not for_run)
     if scenario is None:
         raise ScenarioError(problems or [Problem("", "invalid scenario")])
+    if scenario._run_check is not None:  # logged by the run, with its build's warnings
+        return scenario
     for p in [*problems, *base_warnings]:
         log.warning("%s", p.describe(tag=False))
     return scenario

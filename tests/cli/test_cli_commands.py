@@ -143,8 +143,27 @@ def _sweep_result(n_failed=0, interrupted=False, n_diverged=0):
                                  describe=lambda: "sweep s: summary and optimum")
 
 
+def _fake_run_sweep(monkeypatch, result) -> _Calls:
+    """Replace the ``run_sweep`` the command imports (``from netsim.sweep import run_sweep``) with a recorder.
+
+    Only that attribute is replaced: the rest of the package stays importable (the command also imports
+    ``netsim.sweep.executor`` for ``--scheduler``; a plain module standing in for ``netsim.sweep`` broke that
+    import when this test ran alone).
+    """
+    import netsim.sweep
+
+    rec = _Calls()
+
+    def fn(*args, **kwargs):
+        rec.calls.append((args, kwargs))
+        return result
+
+    monkeypatch.setattr(netsim.sweep, "run_sweep", fn)
+    return rec
+
+
 def test_sweep_passes_its_options_and_prints_the_description(tmp_path, monkeypatch, capsys):
-    rec = _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result())
+    rec = _fake_run_sweep(monkeypatch, _sweep_result())
     path = write(tmp_path, "sw.yaml", "sweep: s\n")
     assert main(["sweep", str(path), "--workers", "3", "--scheduler", "tcp://h:8786", "--overwrite"]) == 0
     (args, kwargs), = rec.calls
@@ -156,13 +175,13 @@ def test_sweep_passes_its_options_and_prints_the_description(tmp_path, monkeypat
 
 def test_sweep_exit_codes_for_failures_and_interruption(tmp_path, monkeypatch, capsys):
     path = write(tmp_path, "sw.yaml", "sweep: s\n")
-    _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(n_failed=2))
+    _fake_run_sweep(monkeypatch, _sweep_result(n_failed=2))
     assert main(["sweep", str(path)]) == 1
     assert "3 of 5 sweep runs ok, 2 failed" in capsys.readouterr().err
-    _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(n_diverged=1))
+    _fake_run_sweep(monkeypatch, _sweep_result(n_diverged=1))
     assert main(["sweep", str(path)]) == 1  # a diverged point is not ok, as for `netsim run`
     assert "3 of 4 sweep runs ok, 1 diverged" in capsys.readouterr().err
-    _fake_module(monkeypatch, "sweep", "run_sweep", _sweep_result(interrupted=True))
+    _fake_run_sweep(monkeypatch, _sweep_result(interrupted=True))
     assert main(["sweep", str(path)]) == 130
     assert "run the same command again to resume" in capsys.readouterr().err
 
