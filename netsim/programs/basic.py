@@ -40,6 +40,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Callable, ClassVar, Generator
 from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from netsim.control.pid import PID, PIDParams
+from netsim.kernel.requests import ANALOG_IN, RECEIVE_NEWEST, Request
 from netsim.registry import register
 from netsim.units import QuietDefaultsModel, StrictModel, Time
 
@@ -170,12 +171,6 @@ class ProgramContext:
 Body = Generator[Any, Any, None]
 
 
-def _run(ctx: ProgramContext, job: Job) -> Generator[Any, Any, None]:
-    """``execute`` the task's execution time, if it has one."""
-    if ctx.execution is not None:
-        yield job.execute(ctx.execution)
-
-
 def _newest(job: Job, network: str) -> Generator[Any, Any, Any]:
     """Drain the node's inbox on ``network``; return the newest message (or ``None``): one request,
     ``job.receive_newest`` (the programs below yield it directly)."""
@@ -200,7 +195,8 @@ class Idle:
         self.ctx = ctx
 
     def __call__(self, job: Job) -> Body:
-        yield from _run(self.ctx, job)
+        if self.ctx.execution is not None:
+            yield self.ctx.execute_request
 
 
 @register("program", "sampler", "analog_in(channel), execute, send to `to` on `network` (or post to shared[key])")
@@ -226,13 +222,15 @@ class Sampler:
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
         self.p = params
+        self._ain = Request(ANALOG_IN, params.channel)  # job.analog_in(channel), built once
 
     def __call__(self, job: Job) -> Body:
         p = self.p
-        y = yield job.analog_in(p.channel)
+        y = yield self._ain
         if p.record_as:
             self.ctx.record(p.record_as, y, job.now)
-        yield from _run(self.ctx, job)
+        if self.ctx.execution is not None:
+            yield self.ctx.execute_request
         if p.network is not None:
             yield job.send(p.network, _destination(p.to), float(y), p.bits, priority=p.priority, tag=p.tag)
         else:
@@ -282,27 +280,32 @@ class Controller:
         self.y_last = 0.0
         # measurement source: explicit channel, else inbox of input_network / network, else shared[key]
         self.in_net = params.input_network or (params.network if params.channel is None else None)
+        # the measurement request, built once: job.analog_in(channel) or job.receive_newest(in_net)
+        self._measure_request = (Request(ANALOG_IN, params.channel) if params.channel is not None
+                                 else Request(RECEIVE_NEWEST, self.in_net) if self.in_net is not None else None)
 
-    def _measure(self, job: Job) -> Generator[Any, Any, float]:
+    def _measurement(self, job: Job, answer: Any) -> float:
+        """The measurement from the answer to the measurement request (``None``: shared[key])."""
         p = self.p
         if p.channel is not None:
-            return float((yield job.analog_in(p.channel)))
+            return float(answer)
         if self.in_net is not None:
-            msg = yield job.receive_newest(self.in_net)
-            if msg is None:
+            if answer is None:
                 log.warning("%s.%s: no measurement in the inbox at t=%d ns; reusing the last one",
                             self.ctx.node, self.ctx.task, job.now)
                 return self.y_last
-            return _value(msg)
+            return _value(answer)
         return float(job.shared.get(p.key, self.y_last))
 
     def __call__(self, job: Job) -> Body:
         p = self.p
-        y = yield from self._measure(job)
+        req = self._measure_request
+        y = self._measurement(job, None if req is None else (yield req))
         self.y_last = y
         r = self.ref(job.now)
         u = self.pid.step(r, y)
-        yield from _run(self.ctx, job)
+        if self.ctx.execution is not None:
+            yield self.ctx.execute_request
         if p.output_channel is not None:
             yield job.analog_out(p.output_channel, u)
         else:  # Params requires a network when there is no output_channel
@@ -340,10 +343,12 @@ class Actuator:
     def __init__(self, ctx: ProgramContext, params: Params) -> None:
         self.ctx = ctx
         self.p = params
+        self._rx = Request(RECEIVE_NEWEST, params.network)  # job.receive_newest(network), built once
 
     def __call__(self, job: Job) -> Body:
-        msg = yield job.receive_newest(self.p.network)
-        yield from _run(self.ctx, job)
+        msg = yield self._rx
+        if self.ctx.execution is not None:
+            yield self.ctx.execute_request
         if msg is None:
             log.warning("%s.%s: released without a control message at t=%d ns", self.ctx.node, self.ctx.task, job.now)
             return
@@ -401,7 +406,8 @@ class Interference:
             yield job.receive_newest(p.network)  # discard frames addressed to this node
             if p.share >= 1.0 or self.rng.random() < p.share:
                 yield job.send(p.network, _destination(p.to), 0.0, p.bits, priority=p.priority, tag=p.tag)
-            yield from _run(self.ctx, job)
+            if self.ctx.execution is not None:
+                yield self.ctx.execute_request
             return
         from netsim.timebase import from_seconds
 
@@ -436,7 +442,8 @@ class PeriodicController:
         r = self.ref(job.now)
         y = yield job.analog_in(p.channel)
         u = self.pid.step(r, float(y))
-        yield from _run(self.ctx, job)
+        if self.ctx.execution is not None:
+            yield self.ctx.execute_request
         yield job.analog_out(p.output_channel, u)
         if p.record_as:
             self.ctx.record(p.record_as, u, job.now)
