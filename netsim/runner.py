@@ -312,7 +312,9 @@ def run(
     ----------
     source
         Scenario file path, raw mapping, or validated :class:`~netsim.scenario.schema.Scenario` (the CLI loads
-        the file with ``--seed`` and ``--set`` applied and passes the Scenario: one validation per run). In a
+        the file with ``--seed`` and ``--set`` applied and ``for_run=True`` and passes the Scenario: one
+        validation and one build per run; a Scenario loaded without ``for_run`` had its dry run while loading,
+        and is built once more here). A file or mapping is loaded for the run: built once. In a
         mapping, ``plant`` may be a python-control ``StateSpace`` or ``TransferFunction`` (or
         ``{system: <it>, x0: ...}``): its matrices are copied once into the ``plant: {type: ss|tf}`` form
         (:func:`netsim.plant.described.plant_spec_from_system`); a ``NonlinearIOSystem`` runs its ``updfcn``
@@ -347,7 +349,8 @@ def run(
     Raises
     ------
     ScenarioError
-        The scenario does not validate (every problem listed).
+        The scenario does not validate or does not build (every problem listed, as loading lists them); nothing
+        is written.
     ConfigError
         The run folder cannot be written (``out`` is a file ...); checked before anything runs.
     NetsimError
