@@ -11,8 +11,8 @@ Validation runs in three layers that all run even when an earlier one finds prob
 (:mod:`netsim.scenario.schema`, once), every plugin's own ``Params`` model, and the cross references
 (:mod:`netsim.scenario.validate`); a scenario that passes them then goes through build's own kernel and network
 checks (:mod:`netsim.build.dry_run`: the run's own build on a dry-run environment, once; loaded for a run, the
-scenario leaves those checks to the run's one build, :class:`RunCheck`). A scenario with ``baseline: {overrides: ...}`` has its baseline
-validated the same way, once, while it loads; :meth:`Scenario.baseline_scenario` returns it.
+scenario leaves those checks to the run's one build, :class:`RunCheck`). A scenario with
+``baseline: {overrides: ...}`` has its baseline validated the same way, once, while it loads; :meth:`Scenario.baseline_scenario` returns it.
 
 A mapping from Python is made plain first (:mod:`netsim.scenario.python_values`: numpy arrays and scalars as lists
 and numbers, python-control systems as the plant or model forms), so validation, the resolved scenario and the hash
