@@ -53,6 +53,7 @@ class KernelBuilder:
     _sim: Any
     _inboxes: dict[str, deque[Any]]
     _bindings: dict[str, str]
+    _routes: dict[str, tuple]
     _ain: dict[str, Callable[[int], Any]]
     _aout: dict[str, Callable[[int, Any], None]]
     _schedule_first_release: Callable[[Task], None]
@@ -118,6 +119,7 @@ class KernelBuilder:
         self.policy.check(node, checked)
         task = Task(checked, body, data)
         self.tasks[name] = task
+        self._routes.clear()
         if checked.self_released:
             self._schedule_first_release(task)
         return task
@@ -152,6 +154,7 @@ class KernelBuilder:
         check_body(node, name, body)
         handler = Handler(spec.checked(node), body, data)
         self.handlers[name] = handler
+        self._routes.clear()
         return handler
 
     def create_timer(self, name: str, handler: str, *, period: int | None = None, start: int = 0,
@@ -293,6 +296,20 @@ class KernelBuilder:
                              f"got {target!r}")
         self._bindings[network] = target
         self._inboxes.setdefault(network, deque())
+        self._routes.clear()
+
+    def _route(self, network: str) -> tuple[deque[Any], Handler | None, Task | None, str]:
+        """Where a message arriving on ``network`` goes, looked up once and kept by ``deliver`` until a binding,
+        task or handler is added: its inbox, the bound handler or task (``None``, ``None``: unbound), and the
+        invoker label of a handler's jobs."""
+        inbox = self._inboxes.get(network)
+        if inbox is None:
+            inbox = self._inboxes[network] = deque()
+        target = self._bindings.get(network)
+        handler = None if target is None else self.handlers.get(target)
+        task = None if target is None or handler is not None else self._get(self.tasks, target, "task")
+        route = self._routes[network] = (inbox, handler, task, f"network:{network}")
+        return route
 
     def attach_network(self, net: Any) -> None:
         """Make ``net`` (with ``.name`` and ``.send(msg)``) available to ``job.send``."""

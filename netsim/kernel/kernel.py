@@ -157,7 +157,7 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         self.networks: dict[str, Any] = {}
         self._inboxes: dict[str, deque[Message]] = {}
         self._bindings: dict[str, str] = {}
-        self._net_labels: dict[str, str] = {}  # invoker label of each network's receptions
+        self._routes: dict[str, tuple] = {}  # per network: (inbox, handler, task, label); building.py _route
         self._ain: dict[str, Callable[[int], Any]] = {}
         self._aout: dict[str, Callable[[int, Any], None]] = {}
         self._ready: list[tuple[Any, int, Job]] = []
@@ -237,21 +237,17 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
         """Receiver protocol: ``msg`` arrived on ``network`` now (queued, then the bound target is run)."""
         if self.halted:
             return
-        inbox = self._inboxes.get(network)
-        if inbox is None:
-            inbox = self._inboxes[network] = deque()
+        route = self._routes.get(network)
+        if route is None:
+            route = self._route(network)
+        inbox, handler, task, label = route
         inbox.append(msg)
-        target = self._bindings.get(network)
-        if target is None:
-            return
-        handler = self.handlers.get(target)
         if handler is not None:
-            label = self._net_labels.get(network)
-            if label is None:
-                label = self._net_labels[network] = f"network:{network}"
             self._invoke(handler, msg, label)
+        elif task is not None:
+            self._release(task, msg)
         else:
-            self._release(self._get(self.tasks, target, "task"), msg)
+            return  # no bound target: the message only waits in the inbox
         # called last in a medium's callback: dispatch now unless an entry of this instant up to DISPATCH waits
         self._request_dispatch()
 

@@ -224,3 +224,42 @@ def test_receive_newest_empties_the_inbox_in_one_request_and_returns_its_last_me
     assert [m.payload if m is not None else None for m in got[::2]] == ["c", None]
     assert got[1::2] == [0, 0]
     assert len(yields) == 2
+
+
+class _CountingDict(dict):
+    """A dict that counts its ``get`` calls (how often deliver looks a target up)."""
+
+    gets = 0
+
+    def get(self, *args):
+        type(self).gets += 1
+        return super().get(*args)
+
+
+def test_deliver_looks_its_target_up_once_per_network_and_again_after_a_new_binding():
+    env = SimEnv()
+    k = Kernel(env, "n")
+    k.handlers = _CountingDict(k.handlers)
+    seen = []
+
+    def rx(job):
+        msg = yield job.receive("can")
+        seen.append((job.now, msg.payload, job.invoker))
+
+    k.create_handler("rx", rx)
+
+    def arrive():
+        yield env.timeout(1 * MS)
+        k.deliver("can", Message("s", "n", "unbound", 8))  # only queued
+        k.bind_receive("can", "rx")
+        for payload in "abc":
+            yield env.timeout(1 * MS)
+            k.deliver("can", Message("s", "n", payload, 8))
+
+    env.process(arrive())
+    env.run(5 * MS)
+    # the binding made after the first message counts from the next one; rx reads the inbox in order, so the
+    # first job reads the unbound message (queued at 1 ms), each later job the one before its own
+    assert seen == [(2 * MS, "unbound", "network:can"), (3 * MS, "a", "network:can"), (4 * MS, "b", "network:can")]
+    # one handler look-up for the three bound deliveries (before: one per delivery)
+    assert _CountingDict.gets == 1
