@@ -481,7 +481,7 @@ def _built(scenario: Scenario, base_sc: Scenario | None, base_key: str
 
     A scenario loaded for the run (``load_scenario(..., for_run=True)``, which leaves out the dry run) is checked
     here as the dry run checks it (:func:`_checked`: the kernels' references, an unstable nominal loop), and its
-    build's problems are reported as loading reports them (:class:`~netsim.scenario.loader.RunCheck`): an error
+    build's problems are reported as loading reports them (:class:`~netsim.build.dry_run.RunCheck`): an error
     raises the same :class:`~netsim.scenario.problems.ScenarioError` (file, line, YAML path), before anything is
     written; the warnings are logged in loading's order. A scenario loaded otherwise was
     checked by its dry run already: it is only built.

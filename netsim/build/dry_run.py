@@ -26,15 +26,18 @@ import logging
 from typing import TYPE_CHECKING
 
 from netsim.errors import ConfigError
-from netsim.scenario.problems import WARNING, Problem
+from netsim.scenario.problems import ERROR, WARNING, Problem, ScenarioError, sort_problems
 
 if TYPE_CHECKING:
     from netsim.build.simulation import Simulation
+    from netsim.scenario.loader import LineIndex
     from netsim.scenario.schema import Scenario
 
-__all__ = ["build_problems", "built_problems"]
+__all__ = ["build_problems", "built_problems", "RunCheck", "override_gives"]
 
 log = logging.getLogger(__name__)
+#: The warnings a run's build check logs are loading's: they go out under the loader's name, as they did.
+_LOADER_LOG = logging.getLogger("netsim.scenario.loader")
 
 
 def build_problems(scenario: Scenario) -> list[Problem]:
@@ -71,3 +74,57 @@ def built_problems(sim: Simulation) -> list[Problem]:
     from netsim.programs.design_summary import nominal_warnings_at  # issue 26 s4: unstable nominal loops
 
     return [Problem(at, text, severity=WARNING) for at, text in nominal_warnings_at(sim.scenario, sim.plant)]
+
+
+def override_gives(p: Problem) -> Problem:
+    """A problem of the baseline scenario as the scenario's own error at ``baseline.overrides``."""
+    return Problem("baseline.overrides", f"override gives {p.path}: {p.message}" if p.path
+                   else f"override gives: {p.message}")
+
+
+class RunCheck:
+    """What loading for a run (``load_scenario(..., for_run=True)``) leaves to the run's one build (issue 28).
+
+    Loading for a run validates everything but the build; :func:`netsim.runner.run` then builds the scenario (and
+    its baseline) once, checks that build (:func:`built_problems`) and hands its problems here, which turns them
+    into what loading with its dry run gives: the same error (file, line, YAML path, message, the warnings found so
+    far beside it) and the same warnings logged in the same order (under the loader's logger name).
+    """
+
+    def __init__(self, problems: list[Problem], index: LineIndex, file: str | None,
+                 base_warnings: list[Problem]) -> None:
+        self._problems = problems  # the scenario's (warnings only), with paths and no lines
+        self._index = index
+        self._file = file
+        self._base_warnings = base_warnings  # the baseline's validation warnings, not yet compared
+
+    def _located(self, problems: list[Problem]) -> list[Problem]:
+        from netsim.scenario.messages import shorten_problem
+
+        located = [shorten_problem(p.located(self._index.line_of(p.path), self._file)) for p in problems]
+        return sort_problems(located)
+
+    def refused(self, found: list[Problem]) -> ScenarioError | None:
+        """The error loading gives for the scenario's build problems ``found`` (None: it built)."""
+        if not any(p.severity == ERROR for p in found):
+            return None
+        return ScenarioError(self._located([*self._problems, *found]))
+
+    def refused_baseline(self, found: list[Problem], base_found: list[Problem]) -> ScenarioError | None:
+        """The error loading gives when the baseline's build has problems ``base_found`` (None: it built)."""
+        errors = [override_gives(p) for p in base_found if p.severity == ERROR]
+        if not errors:
+            return None
+        return ScenarioError(self._located([*self._problems, *found, *errors]))
+
+    def warnings(self, found: list[Problem], base_found: list[Problem]) -> list[Problem]:
+        """Every warning loading would log, in its order: the scenario's (with the build's ``found``), located and
+        sorted, then the baseline's (with its build's ``base_found``) that the scenario has not said already."""
+        said = {(p.path, p.message) for p in [*self._problems, *found]}
+        base = [p for p in [*self._base_warnings, *base_found] if p.severity != ERROR]
+        return [*self._located([*self._problems, *found]), *[p for p in base if (p.path, p.message) not in said]]
+
+    def log_warnings(self, found: list[Problem], base_found: list[Problem]) -> None:
+        """Log :meth:`warnings` as :func:`load_scenario` logs a scenario's warnings."""
+        for p in self.warnings(found, base_found):
+            _LOADER_LOG.warning("%s", p.describe(tag=False))

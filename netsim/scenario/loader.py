@@ -11,8 +11,9 @@ Validation runs in three layers that all run even when an earlier one finds prob
 (:mod:`netsim.scenario.schema`, once), every plugin's own ``Params`` model, and the cross references
 (:mod:`netsim.scenario.validate`); a scenario that passes them then goes through build's own kernel and network
 checks (:mod:`netsim.build.dry_run`: the run's own build on a dry-run environment, once; loaded for a run, the
-scenario leaves those checks to the run's one build, :class:`RunCheck`). A scenario with
-``baseline: {overrides: ...}`` has its baseline validated the same way, once, while it loads; :meth:`Scenario.baseline_scenario` returns it.
+scenario leaves those checks to the run's one build, :class:`~netsim.build.dry_run.RunCheck`). A scenario
+with ``baseline: {overrides: ...}`` has its baseline validated the same way, once, while it loads;
+:meth:`Scenario.baseline_scenario` returns it.
 
 A mapping from Python is made plain first (:mod:`netsim.scenario.python_values`: numpy arrays and scalars as lists
 and numbers, python-control systems as the plant or model forms), so validation, the resolved scenario and the hash
@@ -25,6 +26,10 @@ Top-level keys starting with ``x-`` are ignored, so a file can hold YAML anchors
     x-task: &task {program: sampler, priority: 1, execution: 0.5 ms}
     nodes:
       a: {tasks: [{<<: *task, name: s1, period: 10 ms}]}
+
+Why this module is long: loading is one pass over one raw tree (read, overrides, plugin files, the validation
+layers, the baseline, shadowed presets, and what a run's build is left to check), and every step reports through
+the same line index; kept together, the order of the steps reads in one place.
 
 Examples
 --------
@@ -65,7 +70,6 @@ __all__ = [
     "dump_resolved",
     "scenario_hash",
     "shadow_verdict",
-    "RunCheck",
 ]
 
 log = logging.getLogger(__name__)
@@ -212,7 +216,7 @@ def _raw_tree(source: Source, overrides: Mapping[str, Any] | None
 
 def _validate(raw: dict[str, Any], line_of: Any, build: bool = True) -> tuple[list[Problem], Scenario | None]:
     """The one validation of a raw tree: schema, plugin parameters and cross references, then build's checks
-    (with ``build`` False they are left to the run's one build, :class:`RunCheck`).
+    (with ``build`` False they are left to the run's one build: :class:`~netsim.build.dry_run.RunCheck`).
 
     Returns the problems (with paths, no lines) and the scenario when there is no error.
     """
@@ -280,61 +284,11 @@ def _baseline(raw: dict[str, Any], main_valid: bool, build: bool = True
         if changed:
             problems, scenario = _validate(base_raw, None, build)
         errors += [Problem(where, f"'{p.path}': {p.message}") for p in hidden]
-    errors += [_override_gives(p) for p in problems if p.severity == ERROR]
+    from netsim.build.dry_run import override_gives
+
+    errors += [override_gives(p) for p in problems if p.severity == ERROR]
     warnings = [p for p in problems if p.severity != ERROR]
     return errors, warnings, None if errors else scenario
-
-
-def _override_gives(p: Problem) -> Problem:
-    """A problem of the baseline scenario as the scenario's own error at ``baseline.overrides``."""
-    return Problem("baseline.overrides", f"override gives {p.path}: {p.message}" if p.path
-                   else f"override gives: {p.message}")
-
-
-class RunCheck:
-    """What loading for a run (``load_scenario(..., for_run=True)``) leaves to the run's one build (issue 28).
-
-    Loading for a run validates everything but the build; :func:`netsim.runner.run` then builds the scenario (and
-    its baseline) once, checks that build (:func:`netsim.build.dry_run.built_problems`) and hands its problems
-    here, which turns them into what loading with its dry run gives: the same error (file, line, YAML path, message, the
-    warnings found so far beside it) and the same warnings logged in the same order.
-    """
-
-    def __init__(self, problems: list[Problem], index: LineIndex, file: str | None,
-                 base_warnings: list[Problem]) -> None:
-        self._problems = problems  # the scenario's (warnings only), with paths and no lines
-        self._index = index
-        self._file = file
-        self._base_warnings = base_warnings  # the baseline's validation warnings, not yet compared
-
-    def _located(self, problems: list[Problem]) -> list[Problem]:
-        located = [shorten_problem(p.located(self._index.line_of(p.path), self._file)) for p in problems]
-        return sort_problems(located)
-
-    def refused(self, found: list[Problem]) -> ScenarioError | None:
-        """The error loading gives for the scenario's build problems ``found`` (None: it built)."""
-        if not any(p.severity == ERROR for p in found):
-            return None
-        return ScenarioError(self._located([*self._problems, *found]))
-
-    def refused_baseline(self, found: list[Problem], base_found: list[Problem]) -> ScenarioError | None:
-        """The error loading gives when the baseline's build has problems ``base_found`` (None: it built)."""
-        errors = [_override_gives(p) for p in base_found if p.severity == ERROR]
-        if not errors:
-            return None
-        return ScenarioError(self._located([*self._problems, *found, *errors]))
-
-    def warnings(self, found: list[Problem], base_found: list[Problem]) -> list[Problem]:
-        """Every warning loading would log, in its order: the scenario's (with the build's ``found``), located and
-        sorted, then the baseline's (with its build's ``base_found``) that the scenario has not said already."""
-        said = {(p.path, p.message) for p in [*self._problems, *found]}
-        base = [p for p in [*self._base_warnings, *base_found] if p.severity != ERROR]
-        return [*self._located([*self._problems, *found]), *[p for p in base if (p.path, p.message) not in said]]
-
-    def log_warnings(self, found: list[Problem], base_found: list[Problem]) -> None:
-        """Log :meth:`warnings` as :func:`load_scenario` logs a scenario's warnings."""
-        for p in self.warnings(found, base_found):
-            log.warning("%s", p.describe(tag=False))
 
 
 def _gather(source: Source, overrides: Mapping[str, Any] | None, allow_plugins: bool | None = None,
@@ -352,8 +306,8 @@ def _gather_all(source: Source, overrides: Mapping[str, Any] | None, allow_plugi
                 build: bool = True) -> tuple[list[Problem], Scenario | None, list[Problem]]:
     """Every problem of ``source`` (located), the scenario when there is no error, and its baseline's warnings.
 
-    With ``build`` False the build's checks are left to the run (the scenario gets its :class:`RunCheck`, and
-    the baseline's warnings are its own, not yet compared with the scenario's).
+    ``build`` False: the build's checks are left to the run (:class:`~netsim.build.dry_run.RunCheck`, with the
+    baseline's warnings not yet compared with the scenario's).
     """
     if isinstance(source, Scenario) and not overrides:
         return [], source, []
@@ -392,8 +346,9 @@ def _gather_all(source: Source, overrides: Mapping[str, Any] | None, allow_plugi
     valid = scenario is not None and not any(p.severity == ERROR for p in problems)
     base_errors, base_warnings, base_scenario = _baseline(raw, valid, build)
     problems += base_errors
-    if not build and valid and not base_errors:
-        assert scenario is not None
+    if not build and valid and not base_errors and scenario is not None:
+        from netsim.build.dry_run import RunCheck
+
         scenario._run_check = RunCheck(list(problems), index, file, base_warnings)
     said = {(p.path, p.message) for p in problems}
     base_warnings = [p for p in base_warnings if (p.path, p.message) not in said]  # not twice in the log
@@ -488,10 +443,10 @@ def load_scenario(source: Source, overrides: Mapping[str, Any] | None = None, *,
         Whether the plugin files the scenario's ``plugins:`` names may run (None: the user's settings,
         :func:`netsim.trust.plugins_allowed`; a scenario naming a file that is not allowed does not load).
     for_run : bool, optional
-        True when the scenario is loaded to be run (``netsim run``, :func:`netsim.runner.run`): the dry run of
-        the build is left out, and the run's own build (made once, before the run folder) reports the build's
-        problems as loading would and logs the warnings then (:class:`RunCheck`). A Scenario given as
-        ``source`` without ``overrides`` is returned as it is.
+        True to run it (``netsim run``, :func:`netsim.runner.run`): no dry run; the run's one build, before the run
+        folder, reports the build's problems as loading would and logs the warnings
+        (:class:`~netsim.build.dry_run.RunCheck`). A Scenario given as ``source`` without ``overrides`` is returned
+        as it is.
 
     Returns
     -------

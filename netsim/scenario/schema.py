@@ -732,7 +732,7 @@ class Scenario(SpecModel):
     _source: str | None = PrivateAttr(default=None)
     _raw: Any = PrivateAttr(default=None)
     _baseline: Any = PrivateAttr(default=None)
-    _run_check: Any = PrivateAttr(default=None)  # loaded for a run: the build's checks (loader.RunCheck)
+    _run_check: Any = PrivateAttr(default=None)  # loaded for a run: the build's checks (build.dry_run.RunCheck)
 
     @property
     def source(self) -> str | None:
