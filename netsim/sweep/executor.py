@@ -288,19 +288,16 @@ def _die_with(parent: int) -> None:
             os._exit(1)
 
 
-#: Modules every worker of a local pool imports for its first point (the runner, and pandas, which the baseline's
-#: signal table brings in), imported once in the parent before the pool forks so the workers inherit them: about
-#: 0.15-0.3 s of CPU less per worker (issue 29). The parent imports pandas anyway, for ``summary.csv``.
+#: Modules every pool worker imports for its first point (pandas comes with the baseline's signal table), imported
+#: once in the parent before the pool forks: 0.15-0.3 s CPU less per worker (issue 29; the parent needs pandas anyway).
 PRELOAD = ("pandas", "netsim.runner")
 
 
 def _preload() -> None:
     """Import :data:`PRELOAD` in this process (a module that is not installed is left out)."""
-    import importlib
-
     for name in PRELOAD:
         with contextlib.suppress(ImportError):
-            importlib.import_module(name)
+            __import__(name)
 
 
 def _init_worker(parent: int | None = None) -> None:
