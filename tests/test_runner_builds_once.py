@@ -177,3 +177,13 @@ def test_the_builds_warnings_are_logged_once_in_loadings_order(tmp_path: Path, c
         "nodes.rip.tasks[1].deadline: deadline 15 ms " + overlap.format(10)]
     assert not any("nominal closed loop" in s for s in said[4:])
     assert builds == [("pendulum_hold_still", False), ("pendulum_hold_still", False)]
+
+
+def test_netsim_analyze_builds_a_scenario_once(tmp_path: Path, builds: list[tuple[str, bool]]) -> None:
+    # before: [("dc_servo_can", True), ("dc_servo_can", False), ("dc_servo_can", False)]: analyze loaded with the
+    # dry run, ran (one build), then built an unrun copy for the analysis tables (netsim.cli.analyze.analyze_run);
+    # now the loading's dry run is gone: the run's build, then the analysis' copy
+    assert main(["analyze", "dc_servo_can", "--out", str(tmp_path / "run"), "--set", "duration=100 ms"]) == 0
+    assert builds == [("dc_servo_can", False), ("dc_servo_can", False)]
+    assert (tmp_path / "run" / "analysis.csv").is_file()
+

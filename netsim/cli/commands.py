@@ -173,18 +173,21 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
         check_out_dir(args.out)
     if args.seed is not None:
         overrides["seed"] = args.seed
-    try:
-        scenario = load_scenario(args.file, overrides or None)
+    try:  # one build, in run() (issue 28), as `netsim run` does
+        scenario = load_scenario(args.file, overrides or None, for_run=True)
+        from netsim.runner import run
+
+        result = run(scenario, out=args.out)
     except ScenarioError as exc:
+        if getattr(exc, "run_folder", None) is not None:  # raised by the simulation, after the folder was written
+            raise
         _print_problems(exc.problems, sys.stderr)
         n = len(exc.errors)
         _err(f"{args.file}: {n} problem{'s' if n != 1 else ''}; nothing was run")
         return EXIT_INVALID
     from netsim.cli.analyze import analyze_run
-    from netsim.runner import run
     from netsim.safe_write import write_atomic
 
-    result = run(scenario, out=args.out)
     meta = getattr(result, "meta", {}) or {}
     status = str(meta.get("status", "ok"))
     table = analyze_run(scenario, result)

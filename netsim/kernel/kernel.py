@@ -248,8 +248,9 @@ class Kernel(KernelBuilder, Dispatcher, Interpreter, Tracing, Arrivals):
             self._release(task, msg)
         else:
             return  # no bound target: the message only waits in the inbox
-        # called last in a medium's callback: dispatch now unless an entry of this instant up to DISPATCH waits
-        self._request_dispatch()
+        # deferred: a medium may act after deliver in the same callback (the pipeline delivers every copy of a
+        # frame, CAN arbitrates after delivering), and a receiver's zero-time code must run after all of it
+        self._request_dispatch_deferred()
 
     def kill_job(self, job: Job) -> None:
         """End ``job`` now: it frees the CPU, its record is marked killed, its task's next job may start."""

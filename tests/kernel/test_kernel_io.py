@@ -140,9 +140,11 @@ def test_unknown_analog_channel_is_reported_with_suggestion():
         env.run(1 * MS)
 
 
-def test_deliver_runs_the_bound_task_at_once_when_nothing_else_is_due_at_the_instant():
-    # issue 29: a message arriving alone at an instant needs no deferred-dispatch entry on the event loop; the
-    # bound task's code runs inside deliver (before: only at the DISPATCH entry, after deliver returned)
+def test_deliver_leaves_the_bound_task_for_after_the_media_callback():
+    # a medium may act after deliver within the same callback (the pipeline delivers every copy of a frame in
+    # one loop; CAN requests arbitration after delivering), so the receiver's zero-time code must not run inside
+    # deliver: it runs at the instant's DISPATCH entry, after the callback returned. (Dispatching inside deliver
+    # saves calls per period, but a zero-time reply would then run before the medium's own remaining actions.)
     env = SimEnv()
     k = Kernel(env, "actuator")
     k.bind_receive("can", "act")
@@ -163,7 +165,8 @@ def test_deliver_runs_the_bound_task_at_once_when_nothing_else_is_due_at_the_ins
 
     env.process(arrive())
     env.run(5 * MS)
-    assert after_deliver == [([(2 * MS, 4.2)], "act")]
+    assert after_deliver == [([], None)]  # nothing of the receiver ran inside deliver
+    assert seen == [(2 * MS, 4.2)]  # it read the message at the same instant, afterwards
     assert k.job_records[0].finish == 2 * MS + 100 * US
 
 
