@@ -72,7 +72,9 @@ class Speed:
 
 
 def _frac(x: float) -> Fraction:
-    return Fraction(repr(float(x))).limit_denominator(1_000_000)  # as netsim.kernel.speed reads a speed
+    from netsim.kernel.speed import speed_fraction  # the kernel's own reading of a speed, so the two cannot drift
+
+    return speed_fraction(x, "speed")
 
 
 def slowest_speed(node: NodeSpec, scenario: Scenario | None = None) -> Speed:

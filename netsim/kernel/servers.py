@@ -307,7 +307,7 @@ class TotalBandwidthServer(Server):
         wcet = job._task.spec.wcet
         share = self.share
         # d_k = max(r_k, d_k-1) + C_k / Us, rounded up to the ns
-        self.deadline = max(self.kernel.now, self.deadline) + math.ceil(wcet * share.denominator / share.numerator)
+        self.deadline = max(self.kernel.now, self.deadline) + -(-wcet * share.denominator // share.numerator)  # integers
         self._rank(job)
         self._log("deadline", job, 0)
 

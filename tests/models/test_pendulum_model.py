@@ -242,3 +242,39 @@ def test_mpc_equals_lqr_when_unconstrained_and_respects_the_limit(d):
     assert np.all(np.abs(us) <= pm.U_MAX + 1e-9)
     assert np.sum(np.abs(us) >= pm.U_MAX - 1e-6) >= 2  # the limit is active in the transient
     assert np.max(np.abs(x)) < 1e-2  # and the loop is balanced
+
+
+def test_the_rhs_matches_the_equations_of_motion_worked_out_at_two_states():
+    # independent of the code's 2x2 solve: at rest with the pendulum horizontal (alpha = pi/2, no velocities,
+    # no voltage) the mass matrix is diagonal and the only torque is gravity's on the pendulum:
+    # alpha'' = mp l g / J0 = mp (Lp/2) g / (mp Lp^2 / 3) = 3 g / (2 Lp), theta'' = 0
+    from netsim.models.pendulum.model import PendulumParams, dynamics
+
+    p = PendulumParams()
+    d = dynamics(0.0, np.array([0.0, 0.0, np.pi / 2, 0.0]), np.array([0.0]), p)
+    assert d[1] == pytest.approx(0.0, abs=1e-12)
+    assert d[3] == pytest.approx(3 * p.g / (2 * p.Lp), rel=1e-12)
+    # upright at rest (alpha = 0) with v volts: tau = km v / Rm, M = [[Jr + mp Lr^2, mp l Lr], [mp l Lr, J0]],
+    # right-hand side [tau, 0]; Cramer's rule: theta'' = tau J0 / det, alpha'' = -tau mp l Lr / det
+    v = 2.0
+    tau = p.km * v / p.Rm
+    m11, m12, m22 = p.mr * p.Lr**2 / 12 + p.mp * p.Lr**2, p.mp * (p.Lp / 2) * p.Lr, p.mp * p.Lp**2 / 3
+    det = m11 * m22 - m12 * m12
+    d = dynamics(0.0, np.zeros(4), np.array([v]), p)
+    assert d[1] == pytest.approx(tau * m22 / det, rel=1e-12)
+    assert d[3] == pytest.approx(-tau * m12 / det, rel=1e-12)
+
+
+def test_the_private_numpy_solver_the_rhs_calls_equals_np_linalg_solve_bit_for_bit():
+    # models/pendulum/model.py calls numpy.linalg._umath_linalg.solve1 (private to numpy) for speed; the golden
+    # traces rely on it giving np.linalg.solve's bits: a numpy that changes it must fail here, not drift silently
+    from netsim.models.pendulum import model
+
+    if model._solve1 is None:  # the module falls back to np.linalg.solve itself: nothing private is used
+        assert model._gufunc_solve1() is None
+        return
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        M = rng.standard_normal((2, 2)) + 2 * np.eye(2)
+        b = rng.standard_normal(2)
+        assert model._solve1(M, b, signature="dd->d").tolist() == np.linalg.solve(M, b).tolist()
