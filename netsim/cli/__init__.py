@@ -163,6 +163,10 @@ def _main(argv: Sequence[str] | None) -> int:
         _partial_folder(exc)
         return EXIT_FAILED
     except Exception as exc:  # a bug: the traceback is wanted, and where the partial results are
+        if _interrupts:  # unless a SIGTERM landed in C code that wrapped its KeyboardInterrupt (see _interrupts)
+            _err("interrupted")
+            _partial_folder(exc)
+            return EXIT_INTERRUPTED
         _partial_folder(exc)
         raise
     finally:
@@ -187,6 +191,12 @@ def _drop_stdout() -> None:
         pass
 
 
+#: Signals turned into KeyboardInterrupt during this process's commands. An interrupt raised inside C code can come
+#: out as another exception (pydantic-core building a schema during a lazy import wraps it in a SchemaError): with
+#: a signal on record, such an exception is an interruption, not a bug.
+_interrupts: list[int] = []
+
+
 def _terminate_as_interrupt() -> Any:
     """Make SIGTERM stop a command like Ctrl-C (what was simulated is kept); returns the previous handler.
 
@@ -199,6 +209,7 @@ def _terminate_as_interrupt() -> Any:
         return None
 
     def _raise(signum: int, frame: Any) -> None:
+        _interrupts.append(signum)
         raise KeyboardInterrupt(f"signal {signum}")
 
     try:

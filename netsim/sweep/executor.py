@@ -288,18 +288,6 @@ def _die_with(parent: int) -> None:
             os._exit(1)
 
 
-#: Modules every pool worker imports for its first point (pandas comes with the baseline's signal table), imported
-#: once in the parent before the pool forks: 0.15-0.3 s CPU less per worker (issue 29; the parent needs pandas anyway).
-PRELOAD = ("pandas", "netsim.runner")
-
-
-def _preload() -> None:
-    """Import :data:`PRELOAD` in this process (a module that is not installed is left out)."""
-    for name in PRELOAD:
-        with contextlib.suppress(ImportError):
-            __import__(name)
-
-
 def _init_worker(parent: int | None = None) -> None:
     """Pool worker start: single-threaded BLAS, ignore Ctrl-C (the parent stops the sweep cleanly), and die at
     SIGTERM (the handler the forked worker inherits from the CLI would turn it into an interrupted run that
@@ -450,8 +438,6 @@ def open_executor(
     import multiprocessing
 
     ctx = multiprocessing.get_context("fork") if "fork" in multiprocessing.get_all_start_methods() else None
-    if ctx is not None:
-        _preload()  # forked workers inherit these modules instead of each importing them
     pool = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(),))
     try:
         yield pool, n, f"process pool ({n} workers)"
